@@ -1,0 +1,33 @@
+"""nlgrd: nonlinear dynamics of geared rotor systems.
+
+Finite-element shafts, rigid disks, linear bearings and couplings (linear model);
+a spur gear mesh with backlash excited by the loaded static transmission error;
+multi-harmonic balance with describing functions reduced by receptances.
+Reference: Maliha, Doğruer & Özgüven (2004), J. Mech. Des. 126:534-541.
+"""
+
+from nlgrd.assembly import LinearModel, assemble
+from nlgrd.bearing import Bearing
+from nlgrd.coupling import Coupling
+from nlgrd.disk import Disk
+from nlgrd.errors import ModelError
+from nlgrd.materials import STEEL, Material
+from nlgrd.shaft import Shaft, ShaftElement
+from nlgrd.system import DofMap, RotorSystem
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Bearing",
+    "Coupling",
+    "Disk",
+    "DofMap",
+    "LinearModel",
+    "Material",
+    "ModelError",
+    "RotorSystem",
+    "STEEL",
+    "Shaft",
+    "ShaftElement",
+    "assemble",
+]

@@ -1,0 +1,186 @@
+"""The ``nlgrd`` command line.
+
+Every sub-command reads a TOML model file (see :mod:`nlgrd.model_file`) and writes
+CSV tables and PNG figures next to each other in ``--out`` (default: the current
+directory). Bad input prints one line ``nlgrd: error: FILE: KEY: message`` and exits
+with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from nlgrd.errors import ModelError
+
+EPILOG = """\
+examples:
+  nlgrd modes data/models/two_shaft.toml
+  nlgrd modes data/models/two_shaft.toml --rpm 3000 --n-modes 12 --out reports/two_shaft
+  nlgrd campbell data/models/two_shaft.toml --rpm 0:10000:101 --orders 1,25
+
+Units: speeds in rpm on the command line, everything in the model file in SI
+(m, kg, N, s, rad). Shafts, nodes and DOFs are numbered from 0.
+"""
+
+
+def parse_range(text: str, name: str = "--rpm") -> np.ndarray:
+    """Parse ``START:STOP:COUNT`` (or a single value) into an array."""
+    parts = text.split(":")
+    try:
+        if len(parts) == 1:
+            return np.array([float(parts[0])])
+        if len(parts) == 3:
+            start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
+            if count < 2:
+                raise ValueError
+            return np.linspace(start, stop, count)
+    except ValueError:
+        pass
+    raise ModelError(name, f"expected START:STOP:COUNT (COUNT >= 2) or one number, got {text!r}")
+
+
+def _out_path(args, model_path: str, suffix: str) -> Path:
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    return out / f"{Path(model_path).stem}_{suffix}"
+
+
+def _save_figure(fig, path: Path) -> None:
+    tmp = path.with_suffix(".tmp.png")
+    fig.savefig(tmp, dpi=100)
+    tmp.replace(path)
+
+
+def _write_csv(frame, path: Path) -> None:
+    tmp = path.with_suffix(".tmp.csv")
+    frame.to_csv(tmp, index=False)
+    tmp.replace(path)
+
+
+def cmd_modes(args) -> int:
+    """Modal analysis: table on screen, CSV and mode-shape PNG."""
+    from nlgrd.model_file import load_model
+    from nlgrd.modal import modal_analysis
+
+    system = load_model(args.model)
+    rpm = parse_range(args.rpm)[0]
+    res = modal_analysis(system, speed=rpm * np.pi / 30, n_modes=args.n_modes, damped=not args.undamped)
+    df = res.to_frame()
+    print(f"{args.model}: {system.n_dofs} DOFs, speed {rpm:g} rpm, {res.n_rigid_body} rigid-body mode(s) not listed")
+    cols = ["mode", "natural_frequency [Hz]", "damping_ratio [-]", "kind", "whirl"]
+    print(df[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    csv = _out_path(args, args.model, "modes.csv")
+    _write_csv(df, csv)
+    png = _out_path(args, args.model, "modes.png")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = min(6, len(res.eigenvalues))
+    fig, axes = plt.subplots((n + 1) // 2, 2, figsize=(11, 3 * ((n + 1) // 2)), squeeze=False)
+    for i, ax in enumerate(axes.ravel()):
+        if i < n:
+            res.plot(i, ax=ax)
+        else:
+            ax.set_visible(False)
+    fig.tight_layout()
+    _save_figure(fig, png)
+    print(f"wrote {csv} and {png}")
+    return 0
+
+
+def cmd_campbell(args) -> int:
+    """Campbell diagram: CSV of frequencies, CSV of critical speeds, PNG."""
+    from nlgrd.modal import campbell
+    from nlgrd.model_file import load_model
+
+    system = load_model(args.model)
+    rpm = parse_range(args.rpm)
+    try:
+        orders = {f"{float(o):g}x": float(o) for o in args.orders.split(",")}
+    except ValueError:
+        raise ModelError("--orders", f"expected comma-separated numbers, got {args.orders!r}") from None
+
+    def progress(i, n):
+        if sys.stderr.isatty() or i == n:
+            print(f"\rcampbell: {i}/{n} speeds", end="\n" if i == n else "", file=sys.stderr, flush=True)
+
+    res = campbell(system, rpm * np.pi / 30, n_modes=args.n_modes, orders=orders, progress=progress)
+    csv = _out_path(args, args.model, "campbell.csv")
+    _write_csv(res.to_frame(), csv)
+    crit = _out_path(args, args.model, "critical_speeds.csv")
+    _write_csv(res.critical_frame(), crit)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    ax = res.plot()
+    png = _out_path(args, args.model, "campbell.png")
+    ax.figure.tight_layout()
+    _save_figure(ax.figure, png)
+    print(res.critical_frame().to_string(index=False, float_format=lambda v: f"{v:.5g}"))
+    print(f"wrote {csv}, {crit} and {png}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``nlgrd``."""
+    p = argparse.ArgumentParser(
+        prog="nlgrd",
+        description="Nonlinear dynamics of geared rotor systems (finite-element shafts, "
+        "spur gear mesh with backlash, harmonic balance).",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+    m = sub.add_parser(
+        "modes",
+        help="natural frequencies, damping, whirl and mode shapes of the linear system",
+        description="Modal analysis at one speed. Prints a table of modes and writes "
+        "MODEL_modes.csv and MODEL_modes.png (first six mode shapes).",
+    )
+    m.add_argument("model", help="model file (TOML)")
+    m.add_argument("--rpm", default="0", help="reference (pinion) speed [rpm], default 0")
+    m.add_argument("--n-modes", type=int, default=12, help="number of modes to list (default 12)")
+    m.add_argument("--undamped", action="store_true", help="real modes of K and M only (no damping, no gyroscopics)")
+    m.add_argument("--out", default=".", help="output folder (default: current directory)")
+    m.set_defaults(func=cmd_modes)
+    c = sub.add_parser(
+        "campbell",
+        help="Campbell diagram and critical speeds over a speed range",
+        description="Damped natural frequencies against speed, with critical speeds where "
+        "a mode crosses an excitation order. Writes MODEL_campbell.csv, "
+        "MODEL_critical_speeds.csv and MODEL_campbell.png.",
+    )
+    c.add_argument("model", help="model file (TOML)")
+    c.add_argument("--rpm", default="0:10000:51", help="speed range START:STOP:COUNT [rpm] (default 0:10000:51)")
+    c.add_argument("--n-modes", type=int, default=10, help="modes to follow (default 10)")
+    c.add_argument("--orders", default="1", help="excitation orders per pinion revolution, e.g. 1,25 (default 1)")
+    c.add_argument("--out", default=".", help="output folder (default: current directory)")
+    c.set_defaults(func=cmd_campbell)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; returns the exit status (2 on bad input)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return args.func(args)
+    except ModelError as err:
+        print(f"nlgrd: error: {err}", file=sys.stderr)
+        return 2
+    except OSError as err:
+        print(f"nlgrd: error: {err.filename or ''}: {err.strerror or err}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
