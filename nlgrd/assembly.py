@@ -238,7 +238,7 @@ def assemble(system: RotorSystem, mesh_stiffness: bool = True, mesh_damping: boo
     meshes = []
     for g in system.gear_pairs:
         w = g.projection(system)
-        link = MeshLink(w, g.mesh_stiffness, g.damping_coefficient(system))
+        link = MeshLink(w, g.stiffness(), g.damping_coefficient(system))
         meshes.append(link)
         idx = np.flatnonzero(w)
         ww = np.outer(w[idx], w[idx])

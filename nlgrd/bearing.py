@@ -7,9 +7,17 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from nlgrd.errors import ModelError, check_finite, check_positive
+from nlgrd.errors import ModelError, check_finite, check_positive, check_real
 
 _COEFFS = ("kyy", "kyz", "kzy", "kzz", "cyy", "cyz", "czy", "czz")
+
+
+def _numbers(key: str, values) -> tuple[float, ...]:
+    if not isinstance(values, (list, tuple, np.ndarray)):
+        raise ModelError(key, f"must be a list of numbers, got {values!r}")
+    for i, x in enumerate(values):
+        check_real(f"{key}[{i}]", x)
+    return tuple(float(x) for x in values)
 
 
 @dataclass(frozen=True)
@@ -64,7 +72,7 @@ class Bearing:
             check_positive(key, getattr(self, key), allow_zero=True)
         n = None
         if self.speeds is not None:
-            object.__setattr__(self, "speeds", tuple(float(s) for s in self.speeds))
+            object.__setattr__(self, "speeds", _numbers("speeds", self.speeds))
             check_finite("speeds", self.speeds)
             n = len(self.speeds)
             if n < 2 or np.any(np.diff(self.speeds) <= 0):
@@ -76,7 +84,7 @@ class Bearing:
                     raise ModelError(key, "is a table but the bearing has no 'speeds'")
                 if len(v) != n:
                     raise ModelError(key, f"has {len(v)} values but 'speeds' has {n}")
-                object.__setattr__(self, key, tuple(float(x) for x in v))
+                object.__setattr__(self, key, _numbers(key, v))
             elif isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)):
                 raise ModelError(key, f"must be a number or a list of numbers, got {v!r}")
             check_finite(key, getattr(self, key))
@@ -92,11 +100,21 @@ class Bearing:
 
     def stiffness(self, speed: float = 0.0) -> NDArray:
         """2x2 stiffness on (uy, uz) [N/m] at shaft speed ``speed`` [rad/s]."""
-        return np.array([[self._at("kyy", speed), self._at("kyz", speed)], [self._at("kzy", speed), self._at("kzz", speed)]])
+        return np.array(
+            [
+                [self._at("kyy", speed), self._at("kyz", speed)],
+                [self._at("kzy", speed), self._at("kzz", speed)],
+            ]
+        )
 
     def damping(self, speed: float = 0.0) -> NDArray:
         """2x2 damping on (uy, uz) [N s/m] at shaft speed ``speed`` [rad/s]."""
-        return np.array([[self._at("cyy", speed), self._at("cyz", speed)], [self._at("czy", speed), self._at("czz", speed)]])
+        return np.array(
+            [
+                [self._at("cyy", speed), self._at("cyz", speed)],
+                [self._at("czy", speed), self._at("czz", speed)],
+            ]
+        )
 
     @property
     def speed_dependent(self) -> bool:

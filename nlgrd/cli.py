@@ -63,14 +63,17 @@ def _write_csv(frame, path: Path) -> None:
 
 def cmd_modes(args) -> int:
     """Modal analysis: table on screen, CSV and mode-shape PNG."""
-    from nlgrd.model_file import load_model
     from nlgrd.modal import modal_analysis
+    from nlgrd.model_file import load_model
 
     system = load_model(args.model)
     rpm = parse_range(args.rpm)[0]
     res = modal_analysis(system, speed=rpm * np.pi / 30, n_modes=args.n_modes, damped=not args.undamped)
     df = res.to_frame()
-    print(f"{args.model}: {system.n_dofs} DOFs, speed {rpm:g} rpm, {res.n_rigid_body} rigid-body mode(s) not listed")
+    print(
+        f"{args.model}: {system.n_dofs} DOFs, speed {rpm:g} rpm, "
+        f"{res.n_rigid_body} rigid-body mode(s) not listed"
+    )
     cols = ["mode", "natural_frequency [Hz]", "damping_ratio [-]", "kind", "whirl"]
     print(df[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     csv = _out_path(args, args.model, "modes.csv")
@@ -146,7 +149,9 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("model", help="model file (TOML)")
     m.add_argument("--rpm", default="0", help="reference (pinion) speed [rpm], default 0")
     m.add_argument("--n-modes", type=int, default=12, help="number of modes to list (default 12)")
-    m.add_argument("--undamped", action="store_true", help="real modes of K and M only (no damping, no gyroscopics)")
+    m.add_argument(
+        "--undamped", action="store_true", help="real modes of K and M only (no damping, no gyroscopics)"
+    )
     m.add_argument("--out", default=".", help="output folder (default: current directory)")
     m.set_defaults(func=cmd_modes)
     c = sub.add_parser(
@@ -157,9 +162,13 @@ def build_parser() -> argparse.ArgumentParser:
         "MODEL_critical_speeds.csv and MODEL_campbell.png.",
     )
     c.add_argument("model", help="model file (TOML)")
-    c.add_argument("--rpm", default="0:10000:51", help="speed range START:STOP:COUNT [rpm] (default 0:10000:51)")
+    c.add_argument(
+        "--rpm", default="0:10000:51", help="speed range START:STOP:COUNT [rpm] (default 0:10000:51)"
+    )
     c.add_argument("--n-modes", type=int, default=10, help="modes to follow (default 10)")
-    c.add_argument("--orders", default="1", help="excitation orders per pinion revolution, e.g. 1,25 (default 1)")
+    c.add_argument(
+        "--orders", default="1", help="excitation orders per pinion revolution, e.g. 1,25 (default 1)"
+    )
     c.add_argument("--out", default=".", help="output folder (default: current directory)")
     c.set_defaults(func=cmd_campbell)
     return p

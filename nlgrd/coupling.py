@@ -63,7 +63,16 @@ class Coupling:
                 raise ModelError(key, f"must be a non-negative integer, got {v!r}")
         if (self.shaft_b is None) != (self.node_b is None):
             raise ModelError("node_b", "give both shaft_b and node_b, or neither (ground)")
-        for key in ("k_torsion", "c_torsion", "k_lateral", "c_lateral", "k_tilt", "c_tilt", "k_axial", "c_axial"):
+        for key in (
+            "k_torsion",
+            "c_torsion",
+            "k_lateral",
+            "c_lateral",
+            "k_tilt",
+            "c_tilt",
+            "k_axial",
+            "c_axial",
+        ):
             check_positive(key, getattr(self, key), allow_zero=True)
         check_real("ratio", self.ratio)
 

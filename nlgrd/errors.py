@@ -27,6 +27,9 @@ class ModelError(ValueError):
         self.file = file
         super().__init__(str(self))
 
+    def __reduce__(self):
+        return (ModelError, (self.key, self.message, self.file))
+
     def __str__(self) -> str:
         where = f"{self.file}: " if self.file else ""
         return f"{where}{self.key}: {self.message}" if self.key else f"{where}{self.message}"

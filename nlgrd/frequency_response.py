@@ -225,7 +225,9 @@ def static_deflection(
     if R.shape[1]:
         net = R.T @ f
         if np.any(np.abs(net) > 1e-9 * max(np.linalg.norm(f), 1e-300) * np.linalg.norm(R, axis=0)):
-            raise ModelError("loads", "loads have a net component on a rigid-body mode; the system would drift")
+            raise ModelError(
+                "loads", "loads have a net component on a rigid-body mode; the system would drift"
+            )
         MR = model.M @ R
         K = (K + sp.csc_matrix(MR @ MR.T) * float(np.max(np.abs(K.diagonal())))).tocsc()
     q = spla.spsolve(K.tocsc(), f)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from nlgrd.errors import ModelError, check_positive
+from nlgrd.errors import ModelError, check_positive, check_real
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,7 @@ class Material:
         check_positive("young_modulus", self.young_modulus)
         check_positive("viscous_damping", self.viscous_damping, allow_zero=True)
         check_positive("loss_factor", self.loss_factor, allow_zero=True)
+        check_real("poisson_ratio", self.poisson_ratio)
         if not (-1.0 < self.poisson_ratio < 0.5):
             raise ModelError("poisson_ratio", f"must lie in (-1, 0.5), got {self.poisson_ratio!r}")
 

@@ -179,7 +179,7 @@ class ModalResult:
         )
 
     def plot(self, mode: int = 0, ax=None):
-        """Plot one mode shape (0-based) along the shafts; see :func:`nlgrd.plotting.rotor.plot_mode_shape`."""
+        """Plot one mode shape (0-based); see :func:`nlgrd.plotting.rotor.plot_mode_shape`."""
         from nlgrd.plotting.rotor import plot_mode_shape
 
         return plot_mode_shape(self, mode, ax=ax)

@@ -100,6 +100,9 @@ class ShaftElement:
     mass_matrix: str = "blended"
 
     def __post_init__(self):
+        for key in ("shear", "rotary_inertia"):
+            if not isinstance(getattr(self, key), bool):
+                raise ModelError(key, f"must be true or false, got {getattr(self, key)!r}")
         if self.mass_matrix not in ("blended", "consistent"):
             raise ModelError("mass_matrix", f"must be 'blended' or 'consistent', got {self.mass_matrix!r}")
         check_positive("length", self.length)
@@ -306,6 +309,8 @@ class Shaft:
         **kwargs,
     ) -> Shaft:
         """A uniform shaft of ``n_elements`` equal elements; ``kwargs`` go to :class:`Shaft`."""
+        if isinstance(n_elements, bool) or not isinstance(n_elements, (int, np.integer)) or n_elements < 1:
+            raise ModelError("n_elements", f"must be a whole number >= 1, got {n_elements!r}")
         el = ShaftElement(length / n_elements, outer_diameter, inner_diameter, material)
         return cls(elements=(el,) * n_elements, **kwargs)
 

@@ -84,7 +84,7 @@ class DofMap:
         rows = []
         for s, shaft in enumerate(self.shafts):
             for n, x in enumerate(shaft.node_positions):
-                for d, dn in enumerate(DOF_NAMES):
+                for dn in DOF_NAMES:
                     rows.append((self.index(s, n, dn), s, n, dn, float(x)))
         return rows
 
@@ -144,16 +144,29 @@ class RotorSystem:
         for i, g in enumerate(self.gear_pairs):
             self._check_node(dm, f"gear_pairs[{i}]", g.pinion_shaft, g.pinion_node, "", "pinion_")
             self._check_node(dm, f"gear_pairs[{i}]", g.gear_shaft, g.gear_node, "", "gear_")
+            for key, shaft in (("input_node", g.pinion_shaft), ("output_node", g.gear_shaft)):
+                node = getattr(g, key, None)
+                if node is not None:
+                    self._check_node(dm, f"gear_pairs[{i}]", shaft, node, "", key.replace("node", ""))
+            try:
+                if hasattr(g, "check"):
+                    g.check(self)
+            except ModelError as err:
+                raise err.within(f"gear_pairs[{i}]") from None
 
     @staticmethod
-    def _check_node(dm: DofMap, where: str, shaft: int, node: int, suffix: str = "", prefix: str = "") -> None:
+    def _check_node(
+        dm: DofMap, where: str, shaft: int, node: int, suffix: str = "", prefix: str = ""
+    ) -> None:
         if not 0 <= shaft < len(dm.shafts):
             raise ModelError(
                 f"{where}.{prefix}shaft{suffix}", f"shaft {shaft} out of range 0..{len(dm.shafts) - 1}"
             )
         n = dm.shafts[shaft].n_nodes
         if not 0 <= node < n:
-            raise ModelError(f"{where}.{prefix}node{suffix}", f"node {node} out of range 0..{n - 1} of shaft {shaft}")
+            raise ModelError(
+                f"{where}.{prefix}node{suffix}", f"node {node} out of range 0..{n - 1} of shaft {shaft}"
+            )
 
     @cached_property
     def dofs(self) -> DofMap:

@@ -122,7 +122,9 @@ def test_torsion_free_free_and_fixed_free():
     assert free.n_rigid_body == 1  # the free torsional rotation
     assert np.all(np.abs(f_free / ref_free - 1) < 1e-3), f_free / ref_free - 1
     clamp = Coupling(0, 0, k_torsion=1e6 * STEEL.shear_modulus * np.pi * D**4 / 32 / L)
-    fixed = modal_analysis(RotorSystem((shaft,), bearings=lateral, couplings=(clamp,)), n_modes=60, damped=False)
+    fixed = modal_analysis(
+        RotorSystem((shaft,), bearings=lateral, couplings=(clamp,)), n_modes=60, damped=False
+    )
     f_fixed = fixed.natural_frequencies[np.array(fixed.kinds) == "torsional"][:3]
     ref_fixed = (2 * np.arange(1, 4) - 1) * c / (4 * L)
     assert np.all(np.abs(f_fixed / ref_fixed - 1) < 1e-3), f_fixed / ref_fixed - 1
@@ -208,7 +210,9 @@ def test_campbell_finds_forward_critical_speed():
 def test_matrix_properties():
     """M, K symmetric positive semi-definite; G skew-symmetric; on a stepped two-shaft model
     with disks, bearings and couplings (round-off tolerance 1e-12 of the largest entry)."""
-    s0 = Shaft((ShaftElement(0.1, 0.05), ShaftElement(0.15, 0.06, 0.02), ShaftElement(0.1, 0.05)), speed_ratio=1)
+    s0 = Shaft(
+        (ShaftElement(0.1, 0.05), ShaftElement(0.15, 0.06, 0.02), ShaftElement(0.1, 0.05)), speed_ratio=1
+    )
     s1 = Shaft((ShaftElement(0.12, 0.04),) * 3, y=0.1, speed_ratio=-2.0)
     sys_ = RotorSystem(
         (s0, s1),
@@ -245,6 +249,8 @@ def test_static_deflection_rejects_unbalanced_torque_on_free_train():
     from nlgrd.errors import ModelError
 
     shaft = Shaft.uniform(1.0, 0.05, 4)
-    sys_ = RotorSystem((shaft,), bearings=(Bearing(0, 0, kyy=1e9, kzz=1e9, kxx=1e9), Bearing(0, 4, kyy=1e9, kzz=1e9)))
+    sys_ = RotorSystem(
+        (shaft,), bearings=(Bearing(0, 0, kyy=1e9, kzz=1e9, kxx=1e9), Bearing(0, 4, kyy=1e9, kzz=1e9))
+    )
     with pytest.raises(ModelError, match="rigid-body"):
         static_deflection(sys_, {(0, 2, "θx"): 10.0})
