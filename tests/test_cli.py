@@ -1,0 +1,89 @@
+"""The command line: outputs of `modes` and `campbell`, and one-line errors (exit 2)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from nlgrd.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+TWO_SHAFT = ROOT / "data" / "models" / "two_shaft.toml"
+
+GOOD_HEAD = """version = 1
+[[shafts]]
+name = "s"
+[[shafts.elements]]
+count = 4
+length = 0.1
+outer_diameter = 0.05
+"""
+
+BAD = {
+    "missing field": ("version = 1\n[[shafts]]\n[[shafts.elements]]\nlength = 0.1\n", "outer_diameter"),
+    "unknown key": (GOOD_HEAD + "colour = 1\n", "colour"),
+    "wrong type": (GOOD_HEAD.replace("0.05", '"thick"'), "outer_diameter"),
+    "negative diameter": (GOOD_HEAD.replace("0.05", "-0.05"), "outer_diameter"),
+    "inner >= outer": (GOOD_HEAD + "inner_diameter = 0.06\n", "inner_diameter"),
+    "negative mass": (
+        GOOD_HEAD
+        + "[[disks]]\nshaft = 0\nnode = 1\nmass = -1.0\ndiametral_inertia = 0.1\npolar_inertia = 0.1\n",
+        "mass",
+    ),
+    "nan": (GOOD_HEAD.replace("0.05", "nan"), "outer_diameter"),
+    "node out of range": (GOOD_HEAD + "[[bearings]]\nshaft = 0\nnode = 9\nkyy = 1e8\n", "node"),
+    "bearing not finite": (GOOD_HEAD + "[[bearings]]\nshaft = 0\nnode = 0\nkyz = inf\n", "kyz"),
+    "toml syntax": (GOOD_HEAD + "[[bearings\n", "line"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_input_prints_one_line_and_exits_2(case, tmp_path, capsys):
+    """Every bad-input case: exit status 2, one line on stderr naming file and key."""
+    text, key = BAD[case]
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    assert main(["modes", str(path), "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith("nlgrd: error:") and "bad.toml" in err and key in err, err
+
+
+def test_no_traceback_from_the_installed_command(tmp_path):
+    """The real process: exit 2, no 'Traceback' on stderr."""
+    path = tmp_path / "bad.toml"
+    path.write_text(GOOD_HEAD.replace("0.05", "-1"))
+    proc = subprocess.run(
+        [sys.executable, "-m", "nlgrd.cli", "modes", str(path)], capture_output=True, text=True, cwd=tmp_path
+    )
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_bad_range_is_one_line(capsys, tmp_path):
+    """A malformed --rpm range is a one-line error too."""
+    assert main(["campbell", str(TWO_SHAFT), "--rpm", "0:10", "--out", str(tmp_path)]) == 2
+    assert "--rpm" in capsys.readouterr().err
+
+
+def test_modes_writes_table_csv_and_png(tmp_path, capsys):
+    """`nlgrd modes` prints a table and writes CSV and PNG; CSV frequencies ascending."""
+    assert main(["modes", str(TWO_SHAFT), "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "natural_frequency [Hz]" in out and "DOFs" in out
+    df = pd.read_csv(tmp_path / "two_shaft_modes.csv")
+    assert (df["damped_frequency [Hz]"].diff().dropna() >= 0).all()
+    assert (tmp_path / "two_shaft_modes.png").stat().st_size > 10_000
+
+
+def test_campbell_writes_outputs(tmp_path):
+    """`nlgrd campbell` writes the diagram, its CSV and the critical speeds."""
+    assert main(["campbell", str(TWO_SHAFT), "--rpm", "0:20000:21", "--out", str(tmp_path)]) == 0
+    df = pd.read_csv(tmp_path / "two_shaft_campbell.csv")
+    assert df["speed [rpm]"].nunique() == 21
+    crit = pd.read_csv(tmp_path / "two_shaft_critical_speeds.csv")
+    assert len(crit) >= 1 and (tmp_path / "two_shaft_campbell.png").exists()
