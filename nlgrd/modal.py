@@ -239,7 +239,9 @@ def modal_analysis(
         finite = np.isfinite(lam_all)
         lam_all, vec_all = lam_all[finite], vec_all[:, finite]
         rigid = np.abs(lam_all) < scale
-        n_rigid = int(np.sum(rigid) // 2)
+        from nlgrd.frequency_response import rigid_body_modes
+
+        n_rigid = int(rigid_body_modes(model).shape[1])
         osc = (~rigid) & (np.imag(lam_all) > 1e-9 * np.maximum(np.abs(lam_all), 1.0))
         lam, vec = lam_all[osc], vec_all[:n, osc]
         order = np.argsort(np.imag(lam))
