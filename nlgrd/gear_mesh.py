@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError, check_positive
 from nlgrd.gear_geometry import GearGeometry
+from nlgrd.transmission_error import ProfileModification
 
 
 @dataclass(frozen=True)
@@ -56,8 +57,18 @@ class GearMesh:
         Nodes of the pinion shaft and the gear shaft where the driving and the load
         torque enter; default the pinion and gear nodes.
     lste_file : str, optional
-        CSV of the loaded static transmission error (see :mod:`nlgrd.lste_file`); None
-        computes it from the geometry at W_0.
+        File of the loaded static transmission error (CSV of samples or of Fourier
+        coefficients, or TOML; see :mod:`nlgrd.lste_file`), relative to the model file;
+        None computes it from the geometry and ``modifications`` at W_0.
+    modifications : ProfileModification, optional
+        Tip relief of pinion and gear, used when the LSTE is computed.
+    lste_points : int
+        Samples per mesh cycle of the computed LSTE.
+
+    Notes
+    -----
+    The mean of the LSTE is removed (e_0 = 0): the static deflection of the mesh comes
+    from the mean load acting on k_h and is not counted twice.
     """
 
     pinion_shaft: int
@@ -73,6 +84,8 @@ class GearMesh:
     input_node: int | None = None
     output_node: int | None = None
     lste_file: str | None = None
+    modifications: ProfileModification | None = None
+    lste_points: int = 256
 
     def __post_init__(self):
         for key in ("pinion_shaft", "pinion_node", "gear_shaft", "gear_node", "input_node", "output_node"):
@@ -91,6 +104,12 @@ class GearMesh:
             check_positive("mesh_stiffness", self.mesh_stiffness)
         if self.mesh_damping is not None:
             check_positive("mesh_damping", self.mesh_damping, allow_zero=True)
+        if (
+            isinstance(self.lste_points, bool)
+            or not isinstance(self.lste_points, int)
+            or self.lste_points < 16
+        ):
+            raise ModelError("lste_points", f"must be an integer >= 16, got {self.lste_points!r}")
         if self.driver not in ("pinion", "gear"):
             raise ModelError("driver", f"must be 'pinion' or 'gear', got {self.driver!r}")
 
@@ -201,6 +220,24 @@ class GearMesh:
             return float(self.mesh_stiffness)
         return float(_computed_stiffness(self.geometry, self.static_load))
 
+    def lste_result(self):
+        """The loaded static transmission error computed from the geometry at W_0 (LSTEResult)."""
+        if self.static_load <= 0:
+            raise ModelError("torque", "a positive torque is needed to compute the LSTE from the geometry")
+        return _lste_cached(self.geometry, self.static_load, self.modifications, self.lste_points)
+
+    def excitation(self, n_harmonics: int = 30):
+        """The LSTE as a :class:`~nlgrd.lste_file.MeshExcitation`, mean removed [m].
+
+        From ``lste_file`` when given, else computed from the geometry.
+        """
+        from nlgrd.lste_file import read_excitation
+
+        if self.lste_file:
+            ex = read_excitation(self.lste_file, teeth_pinion=self.geometry.teeth_pinion)
+            return ex.without_mean()
+        return self.lste_result().excitation(n_harmonics)
+
     def damping_coefficient(self, system) -> float:
         """Mesh damping coefficient c_m [N s/m]."""
         if self.mesh_damping is not None:
@@ -211,10 +248,23 @@ class GearMesh:
 
 
 def _computed_stiffness(geometry: GearGeometry, load: float) -> float:
-    from nlgrd.transmission_error import loaded_static_transmission_error
-
     if load <= 0:
         raise ModelError(
             "torque", "a positive torque is needed to compute the mesh stiffness from the geometry"
         )
-    return loaded_static_transmission_error(geometry, load).k_mean
+    return _lste_cached(geometry, load, None, 256).k_mean
+
+
+_LSTE_CACHE: dict = {}
+
+
+def _lste_cached(geometry, load, modifications, points):
+    """LSTE results are costly (tooth compliance integrals); models are frozen, so cache."""
+    from nlgrd.transmission_error import loaded_static_transmission_error
+
+    key = (geometry, load, modifications, points)
+    if key not in _LSTE_CACHE:
+        _LSTE_CACHE[key] = loaded_static_transmission_error(
+            geometry, load, modifications=modifications, points_per_cycle=points
+        )
+    return _LSTE_CACHE[key]

@@ -168,7 +168,21 @@ def load_model(path: str | os.PathLike) -> RotorSystem:
         raise ModelError("", f"not UTF-8 text: {exc.reason} at byte {exc.start}", name) from None
     except OSError as exc:
         raise ModelError("", f"cannot read the file: {exc.strerror or exc}", name) from None
-    return model_from_dict(data, file=name)
+    system = model_from_dict(data, file=name)
+    return _resolve_lste_files(system, os.path.dirname(os.path.abspath(name)))
+
+
+def _resolve_lste_files(system: RotorSystem, base: str) -> RotorSystem:
+    """Make relative ``lste_file`` paths of gear pairs relative to the model file's folder."""
+    pairs = []
+    changed = False
+    for g in system.gear_pairs:
+        path = getattr(g, "lste_file", None)
+        if path and not os.path.isabs(path):
+            g = dataclasses.replace(g, lste_file=os.path.join(base, path))
+            changed = True
+        pairs.append(g)
+    return dataclasses.replace(system, gear_pairs=tuple(pairs)) if changed else system
 
 
 def model_from_dict(data: Mapping[str, Any], file: str | None = None) -> RotorSystem:

@@ -584,6 +584,12 @@ class TipReliefSweep:
             }
         )
 
+    def plot(self, ax=None, design_deflection: float | None = None):
+        """See :func:`nlgrd.plotting.gear.plot_tip_relief_sweep`."""
+        from nlgrd.plotting.gear import plot_tip_relief_sweep
+
+        return plot_tip_relief_sweep(self, ax=ax, design_deflection=design_deflection)
+
 
 def tip_relief_sweep(
     geometry: GearGeometry,

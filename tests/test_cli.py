@@ -87,3 +87,19 @@ def test_campbell_writes_outputs(tmp_path):
     assert df["speed [rpm]"].nunique() == 21
     crit = pd.read_csv(tmp_path / "two_shaft_critical_speeds.csv")
     assert len(crit) >= 1 and (tmp_path / "two_shaft_campbell.png").exists()
+
+
+def test_lste_writes_csv_and_png(tmp_path, capsys):
+    """`nlgrd lste` on the geared example: CSV with the LSTE and a PNG; summary printed."""
+    assert main(["lste", str(TWO_SHAFT), "--out", str(tmp_path)]) == 0
+    assert "mean mesh stiffness" in capsys.readouterr().out
+    df = pd.read_csv(tmp_path / "two_shaft_lste.csv")
+    assert len(df) >= 64 and any("lste" in c for c in df.columns)
+    assert (tmp_path / "two_shaft_lste.png").stat().st_size > 10_000
+
+
+def test_lste_without_gear_pair_is_one_line(capsys, tmp_path):
+    """A model without gear pairs: one-line error, exit 2."""
+    single = ROOT / "data" / "models" / "single_shaft.toml"
+    assert main(["lste", str(single), "--out", str(tmp_path)]) == 2
+    assert "gear_pairs" in capsys.readouterr().err

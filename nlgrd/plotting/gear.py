@@ -85,3 +85,20 @@ def plot_load_sharing(result, ax=None):
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     return ax
+
+
+def plot_tip_relief_sweep(sweep, ax=None, design_deflection: float | None = None):
+    """Peak-to-peak LSTE against the tip-relief amount (µm), with the optimum marked."""
+    ax = _ax(ax)
+    ax.plot(sweep.amounts * 1e6, sweep.fluctuation_pp * 1e6, "-o", ms=3, label=f"{sweep.shape} tip relief")
+    ax.axvline(sweep.optimum * 1e6, color="C1", ls="--", label=f"minimum at {sweep.optimum * 1e6:.1f} µm")
+    if design_deflection is not None:
+        ax.axvline(
+            design_deflection * 1e6, color="k", ls=":", label=f"W / k_pair = {design_deflection * 1e6:.1f} µm"
+        )
+    ax.set_xlabel("tip relief on pinion and gear [µm]")
+    ax.set_ylabel("LSTE peak-to-peak [µm]")
+    ax.set_title(f"tip-relief sweep at W = {sweep.mesh_load:.0f} N")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    return ax
