@@ -157,7 +157,8 @@ def cmd_lste(args) -> int:
     png = _out_path(args, args.model, "lste.png")
     _save_figure(fig, png)
     print(
-        f"gear pair {args.pair}: W_0 = {mesh.static_load:.1f} N, contact ratio {mesh.geometry.contact_ratio:.4f}, "
+        f"gear pair {args.pair}: W_0 = {mesh.static_load:.1f} N, "
+        f"contact ratio {mesh.geometry.contact_ratio:.4f}, "
         f"mean mesh stiffness {res.k_mean:.4g} N/m, LSTE peak-to-peak {res.fluctuation_pp * 1e6:.3f} um"
     )
     print(f"wrote {csv} and {png}")

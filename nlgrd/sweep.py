@@ -1,0 +1,380 @@
+"""Frequency sweeps up and down by natural continuation (each point starts from the last).
+
+Up and down sweeps land on different branches where the response is multivalued;
+the difference between them shows the jumps (model.md §3). Non-converged points are
+kept, flagged and listed (:meth:`SweepResult.failures`), with NaN outputs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike, NDArray
+
+from nlgrd.describing_functions import BacklashMesh
+from nlgrd.harmonic_balance import (
+    HarmonicSolution,
+    ReducedModel,
+    floquet_multipliers,
+    solve,
+)
+from nlgrd.nonlinear_results import METRIC_NAMES, MeshMetrics, metrics_from_harmonics
+
+_UNITS = {
+    "dte_mean": ("dte_mean [um]", 1e6),
+    "dte_rms": ("dte_rms [um]", 1e6),
+    "dte_p2p": ("dte_p2p [um]", 1e6),
+    "force_max": ("force_max [N]", 1.0),
+    "force_min": ("force_min [N]", 1.0),
+    "dslr": ("dslr [-]", 1.0),
+    "contact_loss_fraction": ("contact_loss_fraction [-]", 1.0),
+    "back_contact": ("back_contact", None),
+}
+
+
+@dataclass(frozen=True)
+class Jump:
+    """A jump of a swept branch between two consecutive points.
+
+    ``omega_from`` is the last point on the branch left, ``omega_to`` the first on the
+    new one [rad/s]; the fold lies between them. ``omega`` is their midpoint.
+    """
+
+    direction: str
+    omega_from: float
+    omega_to: float
+    value_from: float
+    value_to: float
+
+    @property
+    def omega(self) -> float:
+        """Midpoint estimate of the jump frequency [rad/s]."""
+        return 0.5 * (self.omega_from + self.omega_to)
+
+
+def find_jumps(
+    omega: NDArray, value: NDArray, direction: str, rel_tol: float = 0.15, ratio: float = 4.0
+) -> list[Jump]:
+    """Jumps in one sweep direction: steps much larger than their neighbours.
+
+    A step i -> i+1 (in sweep order) is a jump when |Δv| exceeds ``rel_tol`` times the
+    range of v over the sweep and ``ratio`` times both neighbouring steps.
+    """
+    v = np.asarray(value, dtype=float)
+    ok = np.isfinite(v)
+    w, v = np.asarray(omega, dtype=float)[ok], v[ok]
+    if v.size < 2:
+        return []
+    dv = np.abs(np.diff(v))
+    rng = np.ptp(v) + 1e-300
+    out = []
+    for i, step in enumerate(dv):
+        left = dv[i - 1] if i > 0 else 0.0
+        right = dv[i + 1] if i + 1 < dv.size else 0.0
+        if step > rel_tol * rng and step > ratio * left and step > ratio * right:
+            out.append(Jump(direction, float(w[i]), float(w[i + 1]), float(v[i]), float(v[i + 1])))
+    return out
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """A frequency sweep: one row per point, in sweep order (up points first, then down).
+
+    Attributes
+    ----------
+    omega : ndarray
+        Mesh frequency [rad/s].
+    direction : ndarray of str
+        "up" or "down" (or "curve" for a continuation).
+    harmonics : ndarray (n_points, n_nl, 2H+1)
+        Real harmonics of the nonlinear coordinates [m]; NaN where not converged.
+    converged : ndarray of bool
+    residual : ndarray
+        Relative residual (HB) or final period-to-period difference (time domain) [-].
+    iterations : ndarray of int
+        Solver iterations (HB) or simulated periods (time domain).
+    stable : ndarray of bool
+        Floquet stability (|μ| < 1 + 1e-6); False where unknown (see ``floquet_max``).
+    floquet_max : ndarray
+        Largest Floquet multiplier modulus [-]; NaN where not computed.
+    metrics : dict of str -> ndarray
+        The :data:`~nlgrd.nonlinear_results.METRIC_NAMES` per point (SI).
+    amplitudes : ndarray (n_points, H+1)
+        DTE harmonic amplitudes |δ_k| [m].
+    source : str
+        "harmonic balance (H=5, exact)", "time integration", ...
+    branch_switch : ndarray of bool
+        The point was reached only after the previous branch folded (Newton failed
+        from the previous solution and the arc-length jump found the new branch).
+    """
+
+    omega: NDArray
+    direction: NDArray
+    harmonics: NDArray
+    converged: NDArray
+    residual: NDArray
+    iterations: NDArray
+    stable: NDArray
+    floquet_max: NDArray
+    metrics: dict
+    amplitudes: NDArray
+    source: str = ""
+    branch_switch: NDArray | None = None
+
+    def __post_init__(self):
+        if self.branch_switch is None:
+            object.__setattr__(self, "branch_switch", np.zeros(self.omega.size, dtype=bool))
+
+    def __len__(self) -> int:
+        return self.omega.size
+
+    @property
+    def stability_known(self) -> NDArray:
+        """Where Floquet multipliers were computed."""
+        return np.isfinite(self.floquet_max)
+
+    def __getattr__(self, name: str):
+        metrics = self.__dict__.get("metrics", {})
+        if name in metrics:
+            return metrics[name]
+        raise AttributeError(name)
+
+    def select(self, direction: str) -> SweepResult:
+        """The points of one sweep direction."""
+        keep = self.direction == direction
+        return SweepResult(
+            self.omega[keep],
+            self.direction[keep],
+            self.harmonics[keep],
+            self.converged[keep],
+            self.residual[keep],
+            self.iterations[keep],
+            self.stable[keep],
+            self.floquet_max[keep],
+            {k: v[keep] for k, v in self.metrics.items()},
+            self.amplitudes[keep],
+            self.source,
+            self.branch_switch[keep],
+        )
+
+    def failures(self) -> NDArray:
+        """Frequencies [rad/s] of the points that did not converge."""
+        return self.omega[~self.converged]
+
+    def jumps(
+        self,
+        quantities: str | Sequence[str] = ("dte_rms", "contact_loss_fraction", "force_max"),
+        rel_tol: float = 0.1,
+        ratio: float = 3.0,
+    ) -> list[Jump]:
+        """Jumps of each sweep direction, in sweep order.
+
+        A step is a jump when any of ``quantities`` jumps by the test of
+        :func:`find_jumps` (a jump onto or off a contact-loss branch shows most clearly in
+        the contact-loss fraction), or when the solver had to leave the folded branch
+        (``branch_switch``). The reported values are those of the first quantity.
+        """
+        qs = (quantities,) if isinstance(quantities, str) else tuple(quantities)
+        out = []
+        for d in dict.fromkeys(self.direction.tolist()):
+            part = self.select(d)
+            steps: set[int] = set(np.nonzero(part.branch_switch[1:])[0].tolist())
+            for q in qs:
+                for j in find_jumps(part.omega, part.metrics[q], d, rel_tol, ratio):
+                    steps.add(int(np.nonzero(part.omega == j.omega_from)[0][0]))
+            v = part.metrics[qs[0]]
+            for i in sorted(steps):
+                if i + 1 < part.omega.size:
+                    out.append(
+                        Jump(d, float(part.omega[i]), float(part.omega[i + 1]), float(v[i]), float(v[i + 1]))
+                    )
+        return out
+
+    def to_frame(self) -> pd.DataFrame:
+        """Tidy table, one row per point, units in the column names."""
+        data = {
+            "mesh_frequency [Hz]": self.omega / (2 * np.pi),
+            "direction": self.direction,
+            "converged": self.converged,
+            "residual [-]": self.residual,
+            "iterations": self.iterations,
+            "stable": self.stable,
+            "floquet_max [-]": self.floquet_max,
+        }
+        for name in METRIC_NAMES:
+            col, scale = _UNITS[name]
+            v = self.metrics[name]
+            data[col] = v if scale is None else v * scale
+        for k in range(self.amplitudes.shape[1]):
+            data[f"dte_amp_{k} [um]"] = self.amplitudes[:, k] * 1e6
+        return pd.DataFrame(data)
+
+    def plot(self, quantity: str = "dte_rms", ax=None):
+        """Plot ``quantity`` against mesh frequency (:func:`nlgrd.plotting.nonlinear.plot_sweep`)."""
+        from nlgrd.plotting.nonlinear import plot_sweep
+
+        return plot_sweep(self, quantity=quantity, ax=ax)
+
+
+def assemble_result(
+    omegas: Sequence[float],
+    directions: Sequence[str],
+    harmonics: Sequence[NDArray],
+    converged: Sequence[bool],
+    residual: Sequence[float],
+    iterations: Sequence[int],
+    multipliers_max: Sequence[float],
+    metrics: Sequence[MeshMetrics],
+    source: str,
+    branch_switch: Sequence[bool] | None = None,
+) -> SweepResult:
+    """Pack per-point lists into a :class:`SweepResult`."""
+    fm = np.asarray(multipliers_max, dtype=float)
+    conv = np.asarray(converged, dtype=bool)
+    with np.errstate(invalid="ignore"):
+        stable = conv & np.isfinite(fm) & (fm < 1 + 1e-6)
+    H = max((m.dte_amplitudes.size for m in metrics), default=1) - 1
+    amps = np.array([np.resize(m.dte_amplitudes, H + 1) for m in metrics]).reshape(len(metrics), H + 1)
+    mdict = {name: np.array([m.as_tuple()[i] for m in metrics]) for i, name in enumerate(METRIC_NAMES)}
+    mdict["back_contact"] = mdict["back_contact"].astype(bool)
+    return SweepResult(
+        np.asarray(omegas, dtype=float),
+        np.asarray(directions, dtype=str),
+        np.asarray(harmonics, dtype=float),
+        conv,
+        np.asarray(residual, dtype=float),
+        np.asarray(iterations, dtype=int),
+        stable,
+        fm,
+        mdict,
+        amps,
+        source,
+        None if branch_switch is None else np.asarray(branch_switch, dtype=bool),
+    )
+
+
+def _sweep_orders(omegas: NDArray, directions: str | Sequence[str]) -> list[tuple[str, NDArray]]:
+    if isinstance(directions, str):
+        directions = ("up", "down") if directions == "both" else (directions,)
+    out = []
+    for d in directions:
+        if d not in ("up", "down"):
+            raise ValueError(f"direction must be 'up', 'down' or 'both', got {d!r}")
+        out.append((d, np.sort(omegas) if d == "up" else np.sort(omegas)[::-1]))
+    return out
+
+
+def sweep(
+    model: ReducedModel,
+    omegas: ArrayLike,
+    H: int = 5,
+    directions: str | Sequence[str] = "both",
+    *,
+    method: str = "newton",
+    tol: float = 1e-10,
+    max_iter: int = 50,
+    fallback: bool = True,
+    stability: bool = True,
+    mesh: BacklashMesh | None = None,
+    n_samples: int = 2048,
+    z0: ArrayLike | None = None,
+    jump: str = "arclength",
+) -> SweepResult:
+    """Harmonic-balance sweeps up and/or down in frequency by natural continuation.
+
+    Each point starts from the last converged solution of the same sweep (the first
+    from the full-contact linear response, or ``z0``), so up and down sweeps follow
+    their branch until it folds and then jump.
+
+    Parameters
+    ----------
+    model : ReducedModel
+    omegas : array_like
+        Mesh frequencies [rad/s] (sorted internally per direction).
+    H : int
+        Number of harmonics.
+    directions : "up", "down", "both" or a sequence of them
+    method, tol, max_iter, fallback :
+        Passed to :func:`nlgrd.harmonic_balance.solve`.
+    stability : bool
+        Floquet multipliers per point (needs ``model.state_space``).
+    mesh : BacklashMesh, optional
+        The mesh for the output metrics (default: the model's first BacklashMesh).
+    n_samples : int
+        Samples per period for the force extremes.
+    jump : {"arclength", "none"}
+        When Newton fails from the previous point (its branch folded between the two
+        frequencies), "arclength" follows the curve through the fold by pseudo-arc-length
+        continuation to its first stable crossing of the new frequency
+        (:func:`nlgrd.continuation.jump_to_branch`): the branch a slow sweep jumps to on an
+        S-shaped response curve. "none" leaves the point flagged as not converged.
+
+    Returns
+    -------
+    SweepResult
+    """
+    mesh = mesh or model.mesh
+    omegas = np.asarray(omegas, dtype=float)
+    rows: dict[str, list] = {k: [] for k in ("w", "d", "z", "c", "r", "i", "f", "m", "j")}
+    for direction, order in _sweep_orders(omegas, directions):
+        z, last_w = z0, None
+        for w in order:
+            problem = model.at(float(w), H)
+            try_jump = jump == "arclength" and z is not None and last_w is not None
+            sol: HarmonicSolution = solve(
+                problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback and not try_jump
+            )
+            switched = False
+            if not sol.converged and try_jump:
+                from nlgrd.continuation import jump_to_branch
+
+                zj, steps = jump_to_branch(model, H, z, last_w, float(w), tol=tol)
+                if zj is not None:
+                    switched = True
+                    sol = solve(problem, zj, method="newton", tol=tol, max_iter=max_iter, fallback=False)
+                    sol = HarmonicSolution(
+                        sol.omega,
+                        sol.harmonics,
+                        sol.converged,
+                        sol.residual,
+                        sol.iterations + steps,
+                        "newton after arc-length jump",
+                        sol.iterate,
+                        sol.message,
+                    )
+                elif fallback:
+                    sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=True)
+            fmax = np.nan
+            if sol.converged:
+                z, last_w = sol.harmonics, float(w)
+                if stability and model.state_space is not None:
+                    mu = floquet_multipliers(model.state_space, model.nonlinearities, sol.harmonics, w)
+                    fmax = float(np.max(np.abs(mu)))
+            coord = mesh.coord if mesh is not None else 0
+            met = (
+                metrics_from_harmonics(sol.harmonics[coord], w, mesh, n_samples)
+                if mesh is not None
+                else MeshMetrics.nan(H)
+            )
+            for k, v in zip(
+                "wdzcrifm",
+                (w, direction, sol.harmonics, sol.converged, sol.residual, sol.iterations, fmax, met),
+                strict=False,
+            ):
+                rows[k].append(v)
+            rows["j"].append(switched)
+    return assemble_result(
+        rows["w"],
+        rows["d"],
+        rows["z"],
+        rows["c"],
+        rows["r"],
+        rows["i"],
+        rows["f"],
+        rows["m"],
+        f"harmonic balance (H={H}, {method})",
+        rows["j"],
+    )
