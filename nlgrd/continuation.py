@@ -258,8 +258,10 @@ def continuation(
     fm, mets = [], []
     for z, w in zip(zs, ws, strict=False):
         f = np.nan
-        if stability and model.state_space is not None:
-            f = float(np.max(np.abs(floquet_multipliers(model.state_space, model.nonlinearities, z, w))))
+        if stability and model.linear_state_space(w) is not None:
+            f = float(
+                np.max(np.abs(floquet_multipliers(model.linear_state_space(w), model.nonlinearities, z, w)))
+            )
         fm.append(f)
         mets.append(metrics_from_harmonics(z[mesh.coord], w, mesh, n_samples) if mesh else MeshMetrics.nan(H))
     curve = assemble_result(
@@ -304,7 +306,7 @@ def jump_to_branch(
     span = abs(omega_target - omega_prev)
     prev: _Point | None = None
     steps = 0
-    for p in tracer.trace(z_prev, omega_prev, direction, 0.002, 1e-8, 0.02, max_steps):
+    for p in tracer.trace(z_prev, omega_prev, direction, 0.01, 1e-8, 0.2, max_steps):
         steps += 1
         if prev is not None and (p.omega - omega_target) * (prev.omega - omega_target) <= 0:
             a = (omega_target - prev.omega) / (p.omega - prev.omega) if p.omega != prev.omega else 0.5
@@ -312,9 +314,12 @@ def jump_to_branch(
             sol = solve(model.at(omega_target, H), guess, tol=tol, fallback=False)
             if sol.converged:
                 ok = True
-                if require_stable and model.state_space is not None:
+                if require_stable and model.linear_state_space(omega_target) is not None:
                     mu = floquet_multipliers(
-                        model.state_space, model.nonlinearities, sol.harmonics, omega_target
+                        model.linear_state_space(omega_target),
+                        model.nonlinearities,
+                        sol.harmonics,
+                        omega_target,
                     )
                     ok = bool(np.max(np.abs(mu)) < 1 + 1e-6)
                 if ok:

@@ -596,6 +596,9 @@ class ReducedModel:
         B_k; identity when None.
     state_space : LinearStateSpace, optional
         Time-domain linear part, needed for Floquet stability.
+    state_space_at : callable (omega) -> LinearStateSpace, optional
+        Frequency-dependent linear part (speed-dependent gyroscopic terms and bearings of
+        an FE model); overrides ``state_space`` when given.
     kappa_derivative, force_derivative, nl_gain_derivative : callable, optional
         d/dω of the above; central finite differences when None.
     """
@@ -605,6 +608,7 @@ class ReducedModel:
     nonlinearities: tuple = ()
     nl_gain: Callable[[float, int], ArrayLike] | None = None
     state_space: LinearStateSpace | None = None
+    state_space_at: Callable[[float], LinearStateSpace] | None = None
     kappa_derivative: Callable[[float, int], ArrayLike] | None = None
     force_derivative: Callable[[float, int], ArrayLike] | None = None
     nl_gain_derivative: Callable[[float, int], ArrayLike] | None = None
@@ -616,6 +620,12 @@ class ReducedModel:
         """The reduced problem at frequency ``omega`` with ``H`` harmonics."""
         gain = None if self.nl_gain is None else self.nl_gain(omega, H)
         return ReducedProblem(omega, self.kappa(omega, H), self.force(omega, H), self.nonlinearities, gain)
+
+    def linear_state_space(self, omega: float) -> LinearStateSpace | None:
+        """The linear part for stability at mesh frequency ``omega`` (None if unknown)."""
+        if self.state_space_at is not None:
+            return self.state_space_at(float(omega))
+        return self.state_space
 
     @property
     def mesh(self) -> BacklashMesh | None:
@@ -836,10 +846,11 @@ def harmonic_solution_stability(
     model: ReducedModel, solution: HarmonicSolution, method: str = "monodromy"
 ) -> HarmonicSolution:
     """Attach Floquet multipliers (``method`` "monodromy" or "hill") to a converged solution."""
-    if model.state_space is None or not solution.converged:
+    ss = model.linear_state_space(solution.omega)
+    if ss is None or not solution.converged:
         return solution
     if method == "hill":
-        mu = hill_multipliers(model.state_space, model.nonlinearities, solution.harmonics, solution.omega)
+        mu = hill_multipliers(ss, model.nonlinearities, solution.harmonics, solution.omega)
     else:
-        mu = floquet_multipliers(model.state_space, model.nonlinearities, solution.harmonics, solution.omega)
+        mu = floquet_multipliers(ss, model.nonlinearities, solution.harmonics, solution.omega)
     return solution.with_multipliers(mu)

@@ -105,6 +105,9 @@ class MeshReceptance:
         )
         self._rigid = self._rigid_body_split()
         self._mean_cache: dict[float, MeanTerms] = {}
+        self._solve_cache: dict[tuple[float, int], tuple[NDArray, NDArray]] = {}
+        self.output_dofs = np.zeros(0, dtype=int)
+        self._stability_basis: NDArray | None = None
         if method == "modal":
             if max_frequency is None:
                 raise ModelError("max_frequency", "the modal method needs the highest excitation frequency")
@@ -154,7 +157,9 @@ class MeshReceptance:
             Z0 = self.model.dynamic_stiffness(0.0, key)
             Kr = (Z0 + self._mesh_stiffness()).tocsc()
             if np.iscomplexobj(Kr.data) and np.all(Kr.data.imag == 0):
-                Kr = Kr.real.tocsc()
+                Kr = sp.csc_matrix(
+                    (np.ascontiguousarray(Kr.data.real), Kr.indices, Kr.indptr), shape=Kr.shape
+                )
             x = self._bordered_solve(Kr, np.column_stack([self.W, self.static_force]))
             if np.iscomplexobj(x):
                 x = x.real
@@ -209,32 +214,63 @@ class MeshReceptance:
             Z = Z + Vb.T @ (b.K(ratio * speed) + 1j * w * b.C(ratio * speed)) @ Vb
         return Z
 
-    def attachment(self, omega: float, H: int, dofs: NDArray | None = None) -> NDArray:
-        """U_k = Z_k⁻¹ W for k = 1..H at mesh frequency ``omega``: shape (H, n or len(dofs), n_nl)."""
+    def set_output_dofs(self, dofs) -> None:
+        """DOFs whose responses are kept for every frequency solved (for :meth:`recover`)."""
+        self.output_dofs = np.asarray(dofs, dtype=int)
+        self._solve_cache.clear()
+
+    def _dZ(self, k: int, omega: float, speed: float, reduced: bool):
+        """dZ_k/dω along a sweep (Ω = ω / N_p): tabulated bearings and hysteresis held fixed."""
+        sp_w = self.speed_per_mesh_frequency
+        w = k * omega
+        if reduced:
+            r = self._red
+            return (
+                sp_w * r["Kc"]
+                - 2 * k * w * r["M"]
+                + 1j * k * (r["C"] + speed * r["G"])
+                + 1j * w * sp_w * r["G"]
+            )
+        m = self.model
+        return sp_w * m.Kc - 2 * k * w * m.M + 1j * k * (m.C + m.Ci + speed * m.G) + 1j * w * sp_w * m.G
+
+    def _solve(self, omega: float, H: int) -> tuple[NDArray, NDArray, NDArray]:
+        """(h_k, U_k at the output DOFs, dh_k/dω) for k = 1..H, cached per frequency."""
+        key = (float(omega), int(H))
+        hit = self._solve_cache.get(key)
+        if hit is not None:
+            return hit
         speed = self.speed(omega)
-        out = []
+        nc = self.n_coords
+        h = np.empty((H, nc, nc), dtype=complex)
+        dh = np.empty((H, nc, nc), dtype=complex)
+        U = np.empty((H, len(self.output_dofs), nc), dtype=complex)
+        Wc = self.W.astype(complex)
         for k in range(1, H + 1):
             w = k * omega
             if self.method == "direct":
-                U = spla.splu(self.model.dynamic_stiffness(w, speed)).solve(self.W.astype(complex))
+                lu = spla.splu(self.model.dynamic_stiffness(w, speed))
+                u = lu.solve(Wc)
+                v = lu.solve(Wc, trans="T")
+                h[k - 1] = self.W.T @ u
+                dh[k - 1] = -v.T @ (self._dZ(k, omega, speed, False) @ u)
+                U[k - 1] = u[self.output_dofs]
             else:
-                U = self.basis @ np.linalg.solve(self._reduced_Z(w, speed), self._W_red.astype(complex))
-            out.append(U if dofs is None else U[dofs])
-        return np.array(out)
+                Z = self._reduced_Z(w, speed)
+                Wr = self._W_red.astype(complex)
+                y = np.linalg.solve(Z, Wr)
+                x = np.linalg.solve(Z.T, Wr)
+                h[k - 1] = self._W_red.T @ y
+                dh[k - 1] = -x.T @ (self._dZ(k, omega, speed, True) @ y)
+                U[k - 1] = self.basis[self.output_dofs] @ y
+        if len(self._solve_cache) > 20000:
+            self._solve_cache.clear()
+        self._solve_cache[key] = (h, U, dh)
+        return h, U, dh
 
     def receptance(self, omega: float, H: int) -> NDArray:
         """h_k = Wᵀ Z_k⁻¹ W for k = 1..H: shape (H, n_nl, n_nl) [m/N]."""
-        speed = self.speed(omega)
-        out = np.empty((H, self.n_coords, self.n_coords), dtype=complex)
-        for k in range(1, H + 1):
-            w = k * omega
-            if self.method == "direct":
-                U = spla.splu(self.model.dynamic_stiffness(w, speed)).solve(self.W.astype(complex))
-                out[k - 1] = self.W.T @ U
-            else:
-                y = np.linalg.solve(self._reduced_Z(w, speed), self._W_red.astype(complex))
-                out[k - 1] = self._W_red.T @ y
-        return out
+        return self._solve(omega, H)[0]
 
     def kappa(self, omega: float, H: int) -> NDArray:
         """κ_k, k = 0..H, shape (H+1, n_nl, n_nl) [N/m]."""
@@ -242,6 +278,22 @@ class MeshReceptance:
         out[0] = self.mean_terms(self.speed(omega)).kappa
         if H:
             out[1:] = np.linalg.inv(self.receptance(omega, H))
+        return out
+
+    def kappa_derivative(self, omega: float, H: int) -> NDArray:
+        """dκ_k/dω = -κ_k (dh_k/dω) κ_k along a sweep (κ_0 taken speed-independent)."""
+        out = np.zeros((H + 1, self.n_coords, self.n_coords), dtype=complex)
+        if H:
+            h, _, dh = self._solve(omega, H)
+            kap = np.linalg.inv(h)
+            out[1:] = -kap @ dh @ kap
+        return out
+
+    def force_derivative(self, omega: float, H: int, lste: NDArray) -> NDArray:
+        """dF_k/dω = i k c_m E_k (k >= 1), 0 for the mean."""
+        out = np.zeros((H + 1, self.n_coords), dtype=complex)
+        k = np.arange(1, H + 1)[:, None]
+        out[1:] = 1j * k * self.c_m[None, :] * lste[1:]
         return out
 
     def force(self, omega: float, H: int, lste: NDArray) -> NDArray:
@@ -252,21 +304,54 @@ class MeshReceptance:
         F[1:] = 1j * k * omega * self.c_m[None, :] * lste[1:]
         return F
 
-    def recover(self, omega: float, Y: NDArray, G: NDArray, F: NDArray, dofs: NDArray) -> NDArray:
-        """Complex harmonics Q_k (k = 0..H) of ``dofs`` from the mesh solution.
+    def recover(
+        self, omega: float, Y: NDArray, G: NDArray, F: NDArray, dofs: NDArray | None = None
+    ) -> NDArray:
+        """Complex harmonics Q_k (k = 0..H) of ``dofs`` (default: the output DOFs) from the mesh solution.
 
         Y, G, F: (H+1, n_nl) complex harmonics of the mesh coordinates, of the nonlinear
         forces and of the reduced forcing. Q_0 = K_r⁻¹ (F_static - W (G_0 - k_h Y_0)),
         Q_k = Z_k⁻¹ W (F_k - G_k).
         """
+        if dofs is not None and not np.array_equal(np.asarray(dofs), self.output_dofs):
+            self.set_output_dofs(dofs)
+        dofs = self.output_dofs
         H = Y.shape[0] - 1
         mt = self.mean_terms(self.speed(omega))
         Q = np.empty((H + 1, len(dofs)), dtype=complex)
         Q[0] = mt.x_static[dofs] - mt.x_mesh[dofs] @ (G[0] - self.k_h * Y[0]).real
         if H:
-            U = self.attachment(omega, H, dofs)
+            U = self._solve(omega, H)[1]
             Q[1:] = np.einsum("kdj,kj->kd", U, F[1:] - G[1:])
         return Q
+
+    def state_space(self, omega: float, max_frequency: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """Dense (M, D, K, W) of the linear part projected on a modal basis, for stability.
+
+        Basis: the rigid-body and lowest modes of the linear system (meshes at k_h) up to
+        3 x ``max_frequency`` [rad/s] plus the static attachment vectors K_r⁻¹ W; D holds
+        C, internal damping, Ω G, bearing damping and c_m w wᵀ at the speed of mesh
+        frequency ``omega``; K leaves out k_h. Hysteretic damping has no time-domain form
+        and is left out.
+        """
+        if self._stability_basis is None:
+            m = self.model
+            n = m.n_dofs
+            Kr = (m.K + self._mesh_stiffness()).tocsc()
+            cutoff = 3.0 * max_frequency
+            k = min(n - 2, 30)
+            while True:
+                lam, vec = spla.eigsh(Kr, k=k, M=m.M, sigma=-1.0)
+                if np.max(lam) >= cutoff**2 or k >= n - 2 or k >= 300:
+                    break
+                k = min(n - 2, 2 * k)
+            att = spla.splu((Kr + m.M).tocsc()).solve(self.W)
+            V, _ = np.linalg.qr(np.column_stack([vec[:, lam <= cutoff**2], att]))
+            self._stability_basis = V
+        V = self._stability_basis
+        speed = self.speed(omega)
+        P = lambda A: V.T @ (A @ V)  # noqa: E731
+        return P(self.model.M), P(self.model.damping(speed)), P(self.model.stiffness(speed)), V.T @ self.W
 
 
 def dense_reference(system: RotorSystem, omega: float, H: int) -> NDArray:

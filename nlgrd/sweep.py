@@ -267,6 +267,39 @@ def _sweep_orders(omegas: NDArray, directions: str | Sequence[str]) -> list[tupl
     return out
 
 
+def _restart(model, problem, z_prev, w, H, method, tol, max_iter):
+    """Land on another branch after a fold without arc-length continuation.
+
+    Newton is started from the full-contact linear response and from the previous
+    solution with its alternating part scaled by 1/4, 1/2, 2 and 4. Of the converged
+    solutions that are stable (checked whenever the model has a linear state space),
+    the one nearest the previous solution is returned (None if there is none): after a
+    fold a slow sweep falls to the nearest coexisting stable branch, in the usual case
+    of an S-shaped curve the one the unstable branch leads to.
+    """
+    z_prev = np.asarray(z_prev, dtype=float)
+    nh = 2 * H + 1
+    guesses = [None]
+    for scale in (0.25, 0.5, 2.0, 4.0):
+        g = z_prev.reshape(-1, nh).copy()
+        g[:, 1:] *= scale
+        guesses.append(g.reshape(z_prev.shape))
+    best, best_d = None, np.inf
+    for guess in guesses:
+        cand = solve(problem, guess, method=method, tol=tol, max_iter=max_iter, fallback=False)
+        if not cand.converged:
+            continue
+        ss = model.linear_state_space(w)
+        if ss is not None:
+            mu = floquet_multipliers(ss, model.nonlinearities, cand.harmonics, w)
+            if np.max(np.abs(mu)) >= 1 + 1e-6:
+                continue
+        d = float(np.linalg.norm(cand.harmonics.reshape(-1) - z_prev.reshape(-1)))
+        if d < best_d:
+            best, best_d = cand, d
+    return best
+
+
 def sweep(
     model: ReducedModel,
     omegas: ArrayLike,
@@ -310,7 +343,12 @@ def sweep(
         frequencies), "arclength" follows the curve through the fold by pseudo-arc-length
         continuation to its first stable crossing of the new frequency
         (:func:`nlgrd.continuation.jump_to_branch`): the branch a slow sweep jumps to on an
-        S-shaped response curve. "none" leaves the point flagged as not converged.
+        S-shaped response curve. "restart" instead restarts Newton from the full-contact
+        linear response and keeps the result if it converges (and is stable, when
+        stability is computed): much cheaper, but it may pick another coexisting stable
+        branch than a slow sweep would. "auto" tries "arclength" first and "restart" when
+        that fails. "none"
+        leaves the point flagged as not converged.
 
     Returns
     -------
@@ -323,11 +361,16 @@ def sweep(
         z, last_w = z0, None
         for w in order:
             problem = model.at(float(w), H)
-            try_jump = jump == "arclength" and z is not None and last_w is not None
+            try_jump = jump in ("arclength", "auto") and z is not None and last_w is not None
             sol: HarmonicSolution = solve(
                 problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback and not try_jump
             )
             switched = False
+            if not sol.converged and jump == "restart" and z is not None:
+                cand = _restart(model, problem, z, w, H, method, tol, max_iter)
+                if cand is not None:
+                    sol, switched = cand, True
+                    try_jump = False
             if not sol.converged and try_jump:
                 from nlgrd.continuation import jump_to_branch
 
@@ -345,13 +388,17 @@ def sweep(
                         sol.iterate,
                         sol.message,
                     )
+                elif jump == "auto" and (cand := _restart(model, problem, z, w, H, method, tol, max_iter)):
+                    sol, switched = cand, True
                 elif fallback:
                     sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=True)
             fmax = np.nan
             if sol.converged:
                 z, last_w = sol.harmonics, float(w)
-                if stability and model.state_space is not None:
-                    mu = floquet_multipliers(model.state_space, model.nonlinearities, sol.harmonics, w)
+                if stability and model.linear_state_space(w) is not None:
+                    mu = floquet_multipliers(
+                        model.linear_state_space(w), model.nonlinearities, sol.harmonics, w
+                    )
                     fmax = float(np.max(np.abs(mu)))
             coord = mesh.coord if mesh is not None else 0
             met = (
