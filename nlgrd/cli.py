@@ -22,6 +22,7 @@ examples:
   nlgrd modes data/models/two_shaft.toml --rpm 3000 --n-modes 12 --out reports/two_shaft
   nlgrd campbell data/models/two_shaft.toml --rpm 0:10000:101 --orders 1,25
   nlgrd lste data/models/two_shaft.toml
+  nlgrd sweep data/case_studies/kubo.toml --rpm 4000:16000:241 --out kubo.csv
 
 Units: speeds in rpm on the command line, everything in the model file in SI
 (m, kg, N, s, rad). Shafts, nodes and DOFs are numbered from 0.
@@ -165,6 +166,95 @@ def cmd_lste(args) -> int:
     return 0
 
 
+class _Progress:
+    """A one-line progress bar on stderr (a final line only when stderr is not a terminal)."""
+
+    def __init__(self, label: str):
+        self.label = label
+
+    def __call__(self, i: int, n: int) -> None:
+        if sys.stderr.isatty():
+            bar = "#" * int(30 * i / n)
+            print(
+                f"\r{self.label} [{bar:<30}] {i}/{n}", end="" if i < n else "\n", file=sys.stderr, flush=True
+            )
+        elif i == n or i % max(1, n // 10) == 0:
+            print(f"{self.label}: {i}/{n}", file=sys.stderr, flush=True)
+
+
+def cmd_sweep(args) -> int:
+    """Nonlinear harmonic-balance sweep of the geared model: CSV, PNG, summary."""
+    from nlgrd.geared_response import build_geared_model, geared_continuation, geared_sweep
+    from nlgrd.model_file import load_model
+
+    system = load_model(args.model)
+    if (args.rpm is None) == (args.hz is None):
+        raise ModelError(
+            "--rpm", "give the range as --rpm START:STOP:COUNT (pinion speed) or --hz (mesh frequency)"
+        )
+    if args.harmonics < 1 or args.harmonics > 50:
+        raise ModelError("--harmonics", f"must be between 1 and 50, got {args.harmonics}")
+    if not system.gear_pairs:
+        raise ModelError("gear_pairs", f"{args.model} has no gear pair: nothing nonlinear to sweep")
+    probe = build_geared_model(system, 1.0, H=1) if args.rpm is not None else None
+    if args.rpm is not None:
+        omegas = probe.mesh_frequency(parse_range(args.rpm, "--rpm"))
+    else:
+        omegas = 2 * np.pi * parse_range(args.hz, "--hz")
+    if np.any(omegas <= 0):
+        raise ModelError("--rpm" if args.rpm else "--hz", "speeds and frequencies must be positive")
+    model = build_geared_model(system, float(omegas.max()), H=args.harmonics)
+    out = Path(args.out)
+    png = Path(args.plot) if args.plot else out.with_suffix(".png")
+    for p in (out, png):
+        p.parent.mkdir(parents=True, exist_ok=True)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    if args.continuation:
+        res = geared_continuation(
+            system, float(omegas.min()), float(omegas.max()), H=args.harmonics, model=model
+        )
+        frame = res.to_frame()
+        _write_csv(frame, out)
+        ax = res.plot(quantity=args.quantity)
+        n_bad = 0 if res.complete else 1
+        print(
+            f"continuation: {len(frame)} points, turning points at "
+            + ", ".join(f"{w / 2 / np.pi:.1f} Hz" for w in res.turning_omegas)
+            + ("" if res.complete else " (INCOMPLETE: the curve could not be followed to the end)")
+        )
+    else:
+        res = geared_sweep(
+            system,
+            mesh_frequencies=omegas,
+            H=args.harmonics,
+            directions=args.direction,
+            model=model,
+            stability=not args.no_stability,
+            progress=_Progress("sweep"),
+        )
+        frame = res.to_frame()
+        _write_csv(frame, out)
+        ax = res.plot(quantity=args.quantity)
+        bad = res.failures()
+        n_bad = len(bad)
+        print(f"sweep: {len(frame)} points ({args.direction}), H = {args.harmonics}, {n_bad} not converged")
+        if n_bad:
+            print(
+                "not converged (NaN in the CSV, flagged converged = False) at mesh frequency [Hz]: "
+                + ", ".join(
+                    f"{w / 2 / np.pi:.1f}" for w in np.atleast_1d(res.mesh.omega[~res.mesh.converged])
+                )
+            )
+        for j in res.jumps():
+            print(f"jump ({j.direction}): {j.omega_from / 2 / np.pi:.1f} -> {j.omega_to / 2 / np.pi:.1f} Hz")
+    ax.figure.tight_layout()
+    _save_figure(ax.figure, png)
+    print(f"wrote {out} and {png}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``nlgrd``."""
     p = argparse.ArgumentParser(
@@ -217,6 +307,26 @@ def build_parser() -> argparse.ArgumentParser:
     ls.add_argument("--pair", type=int, default=0, help="index of the gear pair (default 0)")
     ls.add_argument("--out", default=".", help="output folder (default: current directory)")
     ls.set_defaults(func=cmd_lste)
+    sw = sub.add_parser(
+        "sweep",
+        help="nonlinear response (harmonic balance) over speed or mesh frequency, up and down",
+        description="Periodic steady-state response of the geared model with backlash by "
+        "multi-harmonic balance, swept up and/or down so that jumps and double solutions "
+        "show; or the whole response curve by arc-length continuation. Writes a CSV (mesh "
+        "and bearing results per point, units in the column names) and a PNG.",
+    )
+    sw.add_argument("model", help="model file (TOML) with one [[gear_pairs]] entry")
+    rng = sw.add_mutually_exclusive_group()
+    rng.add_argument("--rpm", help="pinion speed range START:STOP:COUNT [rpm]")
+    rng.add_argument("--hz", help="mesh frequency range START:STOP:COUNT [Hz]")
+    sw.add_argument("--harmonics", type=int, default=5, help="number of harmonics H (default 5)")
+    sw.add_argument("--direction", choices=["up", "down", "both"], default="both", help="sweep direction")
+    sw.add_argument("--continuation", action="store_true", help="arc-length continuation instead of sweeps")
+    sw.add_argument("--quantity", default="dslr", help="plotted quantity: dslr, dte_rms, ... (default dslr)")
+    sw.add_argument("--no-stability", action="store_true", help="skip the Floquet stability of each point")
+    sw.add_argument("--out", default="sweep.csv", help="CSV file (default sweep.csv)")
+    sw.add_argument("--plot", default=None, help="PNG file (default: next to the CSV)")
+    sw.set_defaults(func=cmd_sweep)
     return p
 
 

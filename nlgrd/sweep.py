@@ -315,6 +315,7 @@ def sweep(
     n_samples: int = 2048,
     z0: ArrayLike | None = None,
     jump: str = "arclength",
+    chain: bool = True,
 ) -> SweepResult:
     """Harmonic-balance sweeps up and/or down in frequency by natural continuation.
 
@@ -338,6 +339,9 @@ def sweep(
         The mesh for the output metrics (default: the model's first BacklashMesh).
     n_samples : int
         Samples per period for the force extremes.
+    chain : bool
+        With several directions, start each sweep from the last solution of the one
+        before (as a rig is swept up and then back down), instead of afresh.
     jump : {"arclength", "none"}
         When Newton fails from the previous point (its branch folded between the two
         frequencies), "arclength" follows the curve through the fold by pseudo-arc-length
@@ -357,8 +361,9 @@ def sweep(
     mesh = mesh or model.mesh
     omegas = np.asarray(omegas, dtype=float)
     rows: dict[str, list] = {k: [] for k in ("w", "d", "z", "c", "r", "i", "f", "m", "j")}
+    z_end = None
     for direction, order in _sweep_orders(omegas, directions):
-        z, last_w = z0, None
+        z, last_w = (z0 if z_end is None or not chain else z_end), None
         for w in order:
             problem = model.at(float(w), H)
             try_jump = jump in ("arclength", "auto") and z is not None and last_w is not None
@@ -395,6 +400,7 @@ def sweep(
             fmax = np.nan
             if sol.converged:
                 z, last_w = sol.harmonics, float(w)
+                z_end = z
                 if stability and model.linear_state_space(w) is not None:
                     mu = floquet_multipliers(
                         model.linear_state_space(w), model.nonlinearities, sol.harmonics, w

@@ -1,0 +1,143 @@
+"""The geared FE nonlinear analysis: limits with known answers and internal consistency.
+
+- Contact never lost (large static load, small LSTE): the backlash law is linear in
+  drive-side contact, so harmonic balance must equal the linear frequency response of the
+  full model with the mesh at k_h, δ_k = wᵀ Z_lin(kω)⁻¹ w (k_h + i kω c_m) E_k
+  (1e-8 relative: both are exact; the Newton tolerance is 1e-10).
+- Bearing forces recovered from the reduced solution equal a direct full-model solve.
+- Continuation (Maliha et al. 2004 only sweep; pseudo-arc-length is our addition): the
+  unstable branch lies between the stable ones and its ends coincide with the jumps.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse.linalg as spla
+
+from nlgrd.assembly import assemble
+from nlgrd.describing_functions import real_to_complex
+from nlgrd.geared_response import build_geared_model, geared_continuation, geared_sweep, sdof_model
+from nlgrd.model_file import load_model
+
+KUBO = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
+
+
+@pytest.fixture(scope="module")
+def heavy(tmp_path_factory):
+    """Kubo's rig at 100x the torque, with the LSTE of the nominal load (2.4 µm, from a
+    file): the mesh never opens."""
+    s = load_model(KUBO)
+    lste = tmp_path_factory.mktemp("lste") / "kubo_lste.toml"
+    s.gear_pairs[0].excitation(20).save(lste)
+    g = dc.replace(s.gear_pairs[0], torque=100 * s.gear_pairs[0].torque, lste_file=str(lste))
+    return dc.replace(s, gear_pairs=(g,))
+
+
+def test_contact_never_lost_equals_linear_frequency_response(heavy):
+    H = 5
+    omegas = 2 * np.pi * np.linspace(1000, 8000, 15)
+    model = build_geared_model(heavy, omegas.max(), H=H)
+    res = geared_sweep(heavy, mesh_frequencies=omegas, H=H, model=model, directions="up", stability=False)
+    assert res.mesh.converged.all()
+    assert np.all(res.mesh.metrics["contact_loss_fraction"] == 0)
+    lin = assemble(heavy)  # mesh at k_h and c_m
+    w = model.receptance.W[:, 0]
+    E = real_to_complex(model.mesh.offset(H)[0])
+    kh, cm = model.mesh.stiffness, model.mesh.damping
+    worst = 0.0
+    for i, om in enumerate(res.mesh.omega):
+        speed = model.receptance.speed(om)
+        Y = real_to_complex(res.mesh.harmonics[i].reshape(-1))
+        for k in range(1, H + 1):
+            u = spla.splu(lin.dynamic_stiffness(k * om, speed)).solve(w.astype(complex))
+            ref = (w @ u) * (kh + 1j * k * om * cm) * E[k]
+            worst = max(worst, abs(Y[k] - ref) / abs(ref))
+    assert worst < 1e-8, worst
+
+
+def test_bearing_forces_match_full_model(heavy):
+    """Recovered bearing force amplitudes (first harmonic) equal the full linear solve, 1e-8."""
+    H = 3
+    om = 2 * np.pi * 3000.0
+    model = build_geared_model(heavy, om, H=H)
+    res = geared_sweep(heavy, mesh_frequencies=[om], H=H, model=model, directions="up", stability=False)
+    lin = assemble(heavy)
+    w = model.receptance.W[:, 0]
+    E = real_to_complex(model.mesh.offset(H)[0])
+    speed = model.receptance.speed(om)
+    q = spla.splu(lin.dynamic_stiffness(om, speed)).solve(
+        w.astype(complex) * (model.mesh.stiffness + 1j * om * model.mesh.damping) * E[1]
+    )
+    for j, b in enumerate(heavy.bearings):
+        d = heavy.dofs.node_dofs(b.shaft, b.node)[1:3]
+        f = -(b.stiffness() + 1j * om * b.damping()) @ q[d]
+        ref = np.max(np.abs(f))
+        got = res.bearings.force_amplitude[0, j]
+        assert abs(got - ref) <= 1e-8 * max(ref, 1e-9 * model.mesh.static_load), (j, got, ref)
+
+
+def test_fe_with_stiff_shafts_close_to_single_dof():
+    """Kubo's rig has stiff shafts and bearings: the paper found NLGRD and the SDOF model
+    (DYTE) alike. The main-resonance DSLR peaks of the FE and SDOF sweeps lie within 2 %."""
+    from nlgrd.sweep import sweep
+
+    s = load_model(KUBO)
+    omegas = 2 * np.pi * np.linspace(3000, 6000, 61)
+    fe = geared_sweep(s, mesh_frequencies=omegas, H=5, directions="down", stability=False)
+    sd = sweep(sdof_model(s).reduced_model(), omegas, H=5, directions="down", stability=False)
+    f_fe = omegas[np.nanargmax(fe.mesh.metrics["dslr"])]
+    f_sd = omegas[np.nanargmax(sd.metrics["dslr"])]
+    assert abs(f_fe / f_sd - 1) < 0.02, (f_fe / 2 / np.pi, f_sd / 2 / np.pi)
+
+
+@pytest.mark.slow
+def test_continuation_unstable_branch_between_jumps():
+    """Pseudo-arc-length continuation through the main resonance of Kubo's rig (FE): the
+    curve has two turning points; the part between them is unstable (Floquet), lies
+    between the stable branches, and the turning points coincide with the jumps of the
+    up and down sweeps within one sweep step."""
+    s = load_model(KUBO)
+    g = dc.replace(s.gear_pairs[0], damping_ratio=0.02)
+    s = dc.replace(s, gear_pairs=(g,))
+    H = 5
+    lo, hi = 2 * np.pi * 3000, 2 * np.pi * 5000
+    model = build_geared_model(s, hi, H=H)
+    step = 2 * np.pi * 20
+    grid = np.arange(lo, hi + step / 2, step)
+    sw = geared_sweep(s, mesh_frequencies=grid, H=H, model=model, stability=False)
+    jumps = sw.jumps()
+    up = [j for j in jumps if j.direction == "up"]
+    down = [j for j in jumps if j.direction == "down"]
+    assert up and down
+    cont = geared_continuation(s, lo, hi, H=H, model=model)
+    assert cont.complete
+    turns = sorted(cont.turning_omegas)
+    assert len(turns) >= 2
+    curve = cont.curve
+    st = curve.stable
+    unstable = np.flatnonzero(~st)
+    assert len(unstable) > 0
+    # each jump is bracketed by a turning point within one step
+    for j in up + down:
+        assert min(abs(t - j.omega_from) for t in turns) <= step * 1.01, (j, turns)
+    # the unstable points lie between the stable branches at the same frequency: split the
+    # curve into stable segments and interpolate each at the unstable point's frequency
+    om, val = curve.omega, curve.metrics["dte_rms"]
+    edges = np.flatnonzero(np.diff(st.astype(int))) + 1
+    segments = [seg for seg in np.split(np.arange(len(st)), edges) if st[seg[0]] and len(seg) > 1]
+    checked = 0
+    for i in unstable:
+        vals = []
+        for seg in segments:
+            o = om[seg]
+            if o.min() <= om[i] <= o.max():
+                order = np.argsort(o)
+                vals.append(np.interp(om[i], o[order], val[seg][order]))
+        if len(vals) >= 2:
+            assert min(vals) < val[i] < max(vals), (om[i], val[i], vals)
+            checked += 1
+    assert checked >= 1
