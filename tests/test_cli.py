@@ -103,3 +103,35 @@ def test_lste_without_gear_pair_is_one_line(capsys, tmp_path):
     single = ROOT / "data" / "models" / "single_shaft.toml"
     assert main(["lste", str(single), "--out", str(tmp_path)]) == 2
     assert "gear_pairs" in capsys.readouterr().err
+
+
+KUBO = ROOT / "data" / "case_studies" / "kubo.toml"
+
+
+def test_sweep_writes_csv_png_and_summary(tmp_path, capsys):
+    """`nlgrd sweep`: CSV with up and down points, PNG, summary with the converged count."""
+    out = tmp_path / "kubo.csv"
+    argv = ["sweep", str(KUBO), "--rpm", "9000:12000:7", "--no-stability", "--out", str(out)]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "0 not converged" in text
+    df = pd.read_csv(out)
+    assert sorted(df["direction"].unique()) == ["down", "up"] and len(df) == 14
+    assert {"pinion_speed [rpm]", "dslr [-]", "dte_rms [um]"} <= set(df.columns)
+    assert out.with_suffix(".png").exists()
+
+
+@pytest.mark.parametrize(
+    "argv, key",
+    [
+        (["--rpm", "0:1000:5"], "--rpm"),
+        (["--rpm", "1000:2000:5", "--harmonics", "0"], "--harmonics"),
+        (["--hz", "a:b:c"], "--hz"),
+        ([], "--rpm"),
+    ],
+)
+def test_sweep_bad_options_are_one_line(argv, key, tmp_path, capsys):
+    """Bad ranges and harmonics: exit 2 and one line naming the option."""
+    assert main(["sweep", str(KUBO), "--out", str(tmp_path / "x.csv"), *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and key in err, err
