@@ -95,7 +95,8 @@ def test_harmonic_balance_matches_time_integration(case):
     ok = td["converged"] & hb["stable"]
     assert ok.sum() >= 20
     print(
-        f"{case}: {int((~hb['stable']).sum())} HB points unstable, {int((~td['converged']).sum())} not periodic in time"
+        f"{case}: {int((~hb['stable']).sum())} HB points unstable, "
+        f"{int((~td['converged']).sum())} not periodic in time"
     )
     err_rms = np.abs(hb["dte_rms [um]"] / td["dte_rms [um]"] - 1)[ok]
     err_force = np.abs(hb["dslr [-]"] / td["dslr [-]"] - 1)[ok]
