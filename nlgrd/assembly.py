@@ -173,6 +173,12 @@ class LinearModel:
         (set up once), so a sweep pays microseconds per matrix, not a sparse sum.
         """
         pat = self._pattern
+        data = self.dynamic_stiffness_data(omega, speed)
+        return sp.csc_matrix((data, pat["indices"], pat["indptr"]), shape=self.M.shape)
+
+    def dynamic_stiffness_data(self, omega: float, speed: float = 0.0) -> NDArray:
+        """The non-zeros of :meth:`dynamic_stiffness` on the pattern ``_pattern`` (CSC order)."""
+        pat = self._pattern
         data = (
             pat["K"]
             + speed * pat["Kc"]
@@ -186,7 +192,7 @@ class LinearModel:
         for (bearing, ratio, _), pos in zip(self.tabulated_bearings, pat["bear"], strict=True):
             blk = bearing.K(ratio * speed) + 1j * omega * bearing.C(ratio * speed)
             np.add.at(data, pos, blk.ravel())
-        return sp.csc_matrix((data, pat["indices"], pat["indptr"]), shape=self.M.shape)
+        return data
 
     @cached_property
     def _pattern(self) -> dict:

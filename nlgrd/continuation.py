@@ -50,9 +50,9 @@ class _Tracer:
     def system(self, u: NDArray) -> tuple[NDArray, NDArray]:
         """Scaled residual and Jacobian [dR/dz̃, dR/dω̃] at u."""
         z, w = u[:-1] * self.Lz, u[-1] * self.Lw
+        Rw = self.model.omega_derivative(w, self.H, z)  # first: receptances and derivatives in one pass
         problem = self.model.at(w, self.H)
         R, J, _ = problem.residual_jacobian(z)
-        Rw = self.model.omega_derivative(w, self.H, z)
         A = np.column_stack([J * self.Lz, Rw * self.Lw]) / self.Fs
         return R / self.Fs, A
 
@@ -69,27 +69,27 @@ class _Tracer:
         return t if t @ previous >= 0 else -t
 
     def correct(self, u_pred: NDArray, t: NDArray, max_iter: int = 12) -> tuple[NDArray | None, int, float]:
-        """Newton on [R(u); tᵀ(u - u_pred)] = 0; returns (u or None, iterations, residual)."""
+        """Newton on [R(u); tᵀ(u - u_pred)] = 0; returns (u or None, Newton updates, residual).
+
+        Converged when, after at least one update, the scaled residual is below ``tol`` and
+        the arc-length constraint holds to 1e-12."""
         u = u_pred.copy()
-        for it in range(1, max_iter + 1):
+        for it in range(max_iter + 1):
             R, A = self.system(u)
-            F = np.append(R, t @ (u - u_pred))
+            res = float(np.max(np.abs(R)))
+            if it > 0 and res < self.tol and abs(t @ (u - u_pred)) < 1e-12:
+                return u, it, res
+            if it == max_iter:
+                break
             B = np.vstack([A, t])
             try:
-                du = -np.linalg.solve(B, F)
+                du = -np.linalg.solve(B, np.append(R, t @ (u - u_pred)))
             except np.linalg.LinAlgError:
-                return None, it, np.inf
+                return None, it + 1, np.inf
             if not np.all(np.isfinite(du)):
-                return None, it, np.inf
+                return None, it + 1, np.inf
             u = u + du
-            if np.max(np.abs(du)) < 1e-11:
-                R, _ = self.system(u)
-                res = float(np.max(np.abs(R)))
-                if res < self.tol:
-                    return u, it, res
-        R, _ = self.system(u)
-        res = float(np.max(np.abs(R)))
-        return (u if res < self.tol else None), max_iter, res
+        return None, max_iter, res
 
     def trace(
         self,
@@ -100,8 +100,12 @@ class _Tracer:
         ds_min: float,
         ds_max: float,
         max_steps: int,
+        grow_below: int = 3,
     ) -> Iterator[_Point]:
-        """Yield successive curve points (the start first), until the step size collapses."""
+        """Yield successive curve points (the start first), until the step size collapses.
+
+        The step grows by 1.5 after a corrector that needed at most ``grow_below``
+        iterations and halves after one that needed 8 or more."""
         u = np.append(np.asarray(z0, dtype=float).reshape(-1) / self.Lz, omega0 / self.Lw)
         prev = np.zeros(u.size)
         prev[-1] = float(np.sign(direction) or 1)
@@ -123,7 +127,7 @@ class _Tracer:
                     return
             u, t = un, tn
             yield _Point(u[:-1] * self.Lz, u[-1] * self.Lw, t, its, res)
-            if its <= 3:
+            if its <= grow_below:
                 ds = min(ds * 1.5, ds_max)
             elif its >= 8:
                 ds = max(ds / 2, ds_min)
@@ -292,26 +296,40 @@ def jump_to_branch(
     max_steps: int = 600,
     tol: float = 1e-10,
     require_stable: bool = True,
-) -> tuple[NDArray | None, int]:
+    max_excursion: float = 50.0,
+) -> tuple[NDArray | None, int, int]:
     """Find the solution at ``omega_target`` reached after the branch through ``omega_prev`` folded.
 
     Follows the curve from (z_prev, ω_prev) towards ω_target by arc-length continuation
     (through the fold and the unstable branch of an S-shaped response curve) and returns
     the first curve crossing of ω_target (solved there by Newton) that is stable
-    (``require_stable``; Floquet, when the model has a state space). Returns (harmonics
-    or None, continuation steps).
+    (``require_stable``; Floquet, when the model has a state space) or, with
+    ``require_stable=False``, the first crossing after an even number of turning points
+    (each fold flips the sign of the Jacobian's determinant, so that crossing has the
+    stability of the start: on an S-shaped curve, the far stable branch). Returns
+    (harmonics or None, continuation steps, turning points passed); no turning point
+    means Newton had failed on the same branch (e.g. at grazing), not a jump.
     """
     direction = 1 if omega_target > omega_prev else -1
     tracer = _Tracer(model, H, z_prev, omega_prev, 1e-9)
     span = abs(omega_target - omega_prev)
     prev: _Point | None = None
     steps = 0
-    for p in tracer.trace(z_prev, omega_prev, direction, 0.01, 1e-8, 0.2, max_steps):
+    folds = 0
+    for p in tracer.trace(z_prev, omega_prev, direction, 0.01, 1e-8, 0.2, max_steps, grow_below=4):
         steps += 1
-        if prev is not None and (p.omega - omega_target) * (prev.omega - omega_target) <= 0:
-            a = (omega_target - prev.omega) / (p.omega - prev.omega) if p.omega != prev.omega else 0.5
-            guess = (1 - a) * prev.z + a * p.z
-            sol = solve(model.at(omega_target, H), guess, tol=tol, fallback=False)
+        if prev is not None and np.sign(p.tangent[-1]) != np.sign(prev.tangent[-1]):
+            folds += 1
+        crossed = prev is not None and (p.omega - omega_target) * (prev.omega - omega_target) <= 0
+        # past two folds and heading for the target: try Newton there from the current point
+        shortcut = folds >= 2 and folds % 2 == 0 and (omega_target - p.omega) * p.tangent[-1] > 0
+        if crossed and (require_stable or folds % 2 == 0) or shortcut:
+            if crossed:
+                a = (omega_target - prev.omega) / (p.omega - prev.omega) if p.omega != prev.omega else 0.5
+                guess, iters = (1 - a) * prev.z + a * p.z, 50
+            else:
+                guess, iters = p.z, 12
+            sol = solve(model.at(omega_target, H), guess, tol=tol, max_iter=iters, fallback=False)
             if sol.converged:
                 ok = True
                 if require_stable and model.linear_state_space(omega_target) is not None:
@@ -323,8 +341,8 @@ def jump_to_branch(
                     )
                     ok = bool(np.max(np.abs(mu)) < 1 + 1e-6)
                 if ok:
-                    return sol.harmonics, steps
-        if abs(p.omega - omega_prev) > 50 * span + 0.5 * abs(omega_prev):
+                    return sol.harmonics, steps, folds
+        if abs(p.omega - omega_prev) > max_excursion * span + 0.5 * abs(omega_prev):
             break
         prev = p
-    return None, steps
+    return None, steps, folds

@@ -383,18 +383,36 @@ class HarmonicSolution:
         )
 
 
+#: Damped Newton gives up after this many failed line searches in a row, or when ||R||
+#: fell by less than 10 % over the last ``STALL_WINDOW`` iterations.
+STALL_LIMIT = 8
+STALL_WINDOW = 25
+
+
 def _newton(
-    problem: ReducedProblem, z: NDArray, tol: float, max_iter: int
+    problem: ReducedProblem, z: NDArray, tol: float, max_iter: int, stall: bool = False
 ) -> tuple[NDArray, float, int, str]:
-    """Damped Newton with Armijo backtracking on ||R||²; returns (z, relres, iterations, msg)."""
+    """Damped Newton with Armijo backtracking on ||R||²; returns (z, relres, iterations, msg).
+
+    With ``stall``, gives up early when the line search has failed (no sufficient
+    decrease even at the smallest step) ``STALL_LIMIT`` times in a row, or when ||R||
+    fell by less than 10 % over ``STALL_WINDOW`` iterations: Newton is then stuck near a
+    minimum of ||R|| that is not a root, as when started from a branch that has folded
+    away. Without it, slow progress at grazing points is given all ``max_iter``.
+    """
     R, J, scale = problem.residual_jacobian(z)
     rel = np.max(np.abs(R)) / scale
     nrm = np.linalg.norm(R)
     it = 0
+    stalled = 0
+    history = [nrm]
     msg = "converged"
     while rel > tol:
         if it >= max_iter:
             msg = f"no convergence in {max_iter} Newton iterations"
+            break
+        if stall and stalled >= STALL_LIMIT:
+            msg = f"Newton stalled ({STALL_LIMIT} failed line searches in a row)"
             break
         it += 1
         try:
@@ -412,7 +430,13 @@ def _newton(
             if nt <= (1 - 1e-4 * step) * nrm or step < 1 / 64:
                 break
             step /= 2
+        stalled = stalled + 1 if nt > (1 - 1e-4 * step) * nrm else 0
         z, R, J, scale, nrm = zt, Rt, Jt, st, nt
+        history.append(nrm)
+        if stall and len(history) > STALL_WINDOW and nrm > 0.9 * history[-1 - STALL_WINDOW]:
+            msg = f"Newton stalled (||R|| fell by less than 10 % in {STALL_WINDOW} iterations)"
+            rel = np.max(np.abs(R)) / scale
+            break
         rel = np.max(np.abs(R)) / scale
     return z, rel, it, msg
 
@@ -516,6 +540,7 @@ def solve(
     max_iter: int = 50,
     fallback: bool = True,
     relaxation: float = 1.0,
+    stall: bool = False,
 ) -> HarmonicSolution:
     """Solve the reduced harmonic-balance problem at one frequency.
 
@@ -537,6 +562,9 @@ def solve(
     relaxation : float
         Largest under-relaxation of the quasi-linear iteration (1 = the paper's plain
         iteration), reduced adaptively when the residual grows; negative: fixed at |value|.
+    stall : bool
+        Let Newton give up early when it stalls (see ``_newton``): for sweeps that have a
+        better move than grinding on, such as following the curve through a fold.
 
     Returns
     -------
@@ -557,7 +585,7 @@ def solve(
     if not np.all(np.isfinite(z)):
         z = problem.linear_solution()
     if method == "newton":
-        zr, rel, it, msg = _newton(problem, z, tol, max_iter)
+        zr, rel, it, msg = _newton(problem, z, tol, max_iter, stall)
     elif method == "quasi-linear":
         zr, rel, it, msg = _quasi_linear(problem, z, tol, max_iter, relaxation)
     elif method == "hybr":
@@ -762,7 +790,9 @@ def floquet_multipliers(
     constant tangent K_t (k_h in contact, 0 in separation for the backlash law), so the
     monodromy matrix is the ordered product of matrix exponentials exp(A_i Δt_i) over
     the contact intervals. The backlash force is continuous, so the saltation matrices
-    at the switching instants are the identity and this product is exact. Free
+    at the switching instants are the identity and this product is exact. With one
+    contact state over the whole period it is exp(A T), whose eigenvalues are exp(λ_i T)
+    for the eigenvalues λ_i of A (no matrix exponential needed). Free
     rigid-body modes (neutral multipliers μ = 1 in a Jordan block, which rounding splits
     into 1 ± sqrt(eps)) are removed first when ``deflate`` (:meth:`LinearStateSpace.deflated`).
     """
@@ -776,6 +806,10 @@ def floquet_multipliers(
     A = np.zeros((2 * N, 2 * N))
     A[:N, N:] = np.eye(N)
     A[N:, N:] = -MD
+    if all(np.array_equal(Kt[i], Kt[0]) for i in range(1, Kt.shape[0])):
+        # one tangent all period: the variational equation is time-invariant, μ = exp(λ T)
+        A[N:, :N] = -Minv @ (ss.K + ss.W @ Kt[0] @ ss.W.T)
+        return np.exp(np.linalg.eigvals(A) * (breaks[-1] - breaks[0]) / omega)
     cache: dict = {}
     for i in range(Kt.shape[0]):
         dt = (breaks[i + 1] - breaks[i]) / omega

@@ -118,14 +118,31 @@ class TimeHistory:
         return plot_time_history(self, quantity=quantity, ax=ax)
 
 
+_LSTE_SAMPLES: dict[tuple[bytes, int], tuple[NDArray, NDArray]] = {}
+
+
+def _lste_samples(lste: NDArray, n_samples: int) -> tuple[NDArray, NDArray]:
+    """e(θ) and de/dθ on n_samples points (the same at every point of a sweep: cached)."""
+    key = (np.asarray(lste, dtype=float).tobytes(), int(n_samples))
+    hit = _LSTE_SAMPLES.get(key)
+    if hit is None:
+        if len(_LSTE_SAMPLES) > 32:
+            _LSTE_SAMPLES.clear()
+        hit = (sample(lste, n_samples), sample(differentiate(lste), n_samples))
+        for a in hit:
+            a.setflags(write=False)
+        _LSTE_SAMPLES[key] = hit
+    return hit
+
+
 def time_history(harmonics, omega: float, mesh: BacklashMesh, n_samples: int = 1024) -> TimeHistory:
     """Reconstruct one period of δ, e and W from the harmonics of δ (1-D, real convention)."""
     z = np.asarray(harmonics, dtype=float).reshape(-1)
     theta = 2 * np.pi * np.arange(n_samples) / n_samples
     delta = sample(z, n_samples)
     ddot = omega * sample(differentiate(z), n_samples)
-    e = sample(mesh.lste, n_samples)
-    edot = omega * sample(differentiate(mesh.lste), n_samples)
+    e, de = _lste_samples(mesh.lste, n_samples)
+    edot = omega * de
     force = mesh.stiffness * deadzone(delta - e, mesh.half_backlash) + mesh.damping * (ddot - edot)
     return TimeHistory(theta / omega, delta, ddot, e, edot, force)
 

@@ -21,13 +21,24 @@ mode is an error.
 
 Two ways to get h_k = Wᵀ Z_k⁻¹ W:
 
-- ``"direct"``: a sparse LU factorisation of Z_k per harmonic and frequency (exact);
+- ``"direct"``: a sparse LU factorisation of Z_k per harmonic and frequency (exact),
+  restricted to the connected components of Z's sparsity graph that hold a mesh or an
+  output DOF (axial bars, say, never couple to a spur mesh);
 - ``"modal"``: Galerkin projection on a basis of the lowest undamped modes of the
   linear system (meshes at k_h) up to a cut-off frequency, enriched with the static
   and dynamic attachment vectors K_r⁻¹ W and Z(iω_j)⁻¹ W (modal summation with
   residual correction, in projected form so gyroscopic, non-proportional,
-  circulatory and hysteretic terms stay coupled). Per-point cost is independent of
-  the model size once the basis is built.
+  circulatory and hysteretic terms stay coupled). Rigid-body modes that move no mesh
+  are left out of the basis (they are decoupled from W exactly).
+
+Along a sweep the speed follows the mesh frequency (Ω = s ω), so without tabulated
+bearings the reduced Z_k(ω) = A_0 + ω A_1 + ω² A_2 is a quadratic matrix polynomial in ω
+(A_0 = K + hysteretic part, whose whirl signs are constant for ω > 0; A_1 = s K_c + i k
+C; A_2 = -k² M + i k s G). One eigendecomposition of its companion linearisation per
+harmonic then gives the pole-residue form h_k(ω) = Σ_j R_j / (ω - λ_j) and dh_k/dω =
+-Σ_j R_j / (ω - λ_j)² (Tisseur & Meerbergen 2001, SIAM Rev. 43:235, §3.4): per point
+a few vector products, independent of the model size. Tabulated bearings keep the
+dense per-frequency solve.
 """
 
 from __future__ import annotations
@@ -39,6 +50,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
+from scipy.sparse.csgraph import connected_components
 
 from nlgrd.assembly import LinearModel, assemble
 from nlgrd.errors import ModelError
@@ -105,8 +117,10 @@ class MeshReceptance:
         )
         self._rigid = self._rigid_body_split()
         self._mean_cache: dict[float, MeanTerms] = {}
-        self._solve_cache: dict[tuple[float, int], tuple[NDArray, NDArray]] = {}
+        self._solve_cache: dict[tuple[float, int], list] = {}
+        self._poles: dict[int, tuple[NDArray, NDArray, NDArray, NDArray]] = {}
         self.output_dofs = np.zeros(0, dtype=int)
+        self._restriction = None
         self._stability_basis: NDArray | None = None
         if method == "modal":
             if max_frequency is None:
@@ -126,7 +140,7 @@ class MeshReceptance:
     # mean problem
     def _rigid_body_split(self) -> NDArray:
         """Rigid-body modes of the linear system with the meshes in (none move a mesh)."""
-        km = LinearModel.from_matrices(self.model.M, self.model.K + sp.csc_matrix(self._mesh_stiffness()))
+        km = LinearModel.from_matrices(self.model.M, self.model.K + self._mesh_stiffness())
         R = rigid_body_modes(km)
         if R.shape[1] and np.any(
             np.abs(R.T @ self.static_force) > 1e-9 * (np.linalg.norm(self.static_force) + 1e-300)
@@ -138,7 +152,13 @@ class MeshReceptance:
         return R
 
     def _mesh_stiffness(self) -> sp.csc_matrix:
-        return sp.csc_matrix(self.W @ np.diag(self.k_h) @ self.W.T)
+        """Σ k_h w wᵀ as a sparse matrix (W has a dozen non-zeros per mesh)."""
+        idx = np.flatnonzero(np.any(self.W != 0, axis=1))
+        Wi = self.W[idx]
+        block = (Wi * self.k_h[None, :]) @ Wi.T
+        r, c = np.meshgrid(idx, idx, indexing="ij")
+        n = self.W.shape[0]
+        return sp.csc_matrix((block.ravel(), (r.ravel(), c.ravel())), shape=(n, n))
 
     def _bordered_solve(self, Kr: sp.csc_matrix, rhs: NDArray) -> NDArray:
         R = self._rigid
@@ -194,7 +214,14 @@ class MeshReceptance:
             w = frac * max_frequency
             z = spla.splu(m.dynamic_stiffness(w, self.speed(w))).solve(self.W.astype(complex))
             vectors += [z.real, z.imag]
-        V, _ = np.linalg.qr(np.column_stack(vectors))
+        B = np.column_stack(vectors)
+        R = self._rigid
+        if R.shape[1] and self._rigid_decoupled():
+            MR = m.M @ R
+            B = B - R @ np.linalg.solve(R.T @ MR, MR.T @ B)
+        B = B / np.linalg.norm(B, axis=0)
+        V, s, _ = np.linalg.svd(B, full_matrices=False)
+        V = V[:, s > 1e-10 * s[0]]
         self.basis = V
         self.n_modes = int(np.sum(keep))
         P = lambda A: V.T @ (A @ V)  # noqa: E731
@@ -202,6 +229,20 @@ class MeshReceptance:
         self._red_hyst = [(h.speed_ratio, P(h.Kb), P(h.Kx)) for h in m.hysteretic_parts]
         self._red_bear = [(b, r, V[dofs]) for b, r, dofs in m.tabulated_bearings]
         self._W_red = V.T @ self.W
+        self._poles.clear()
+
+    def _rigid_decoupled(self) -> bool:
+        """True when the rigid-body modes R (which move no mesh) are free of damping,
+        gyroscopic, circulatory and hysteretic coupling: then Z_k⁻¹ W is M-orthogonal to
+        R and R can leave the basis."""
+        m, R = self.model, self._rigid
+        if m.tabulated_bearings:
+            return False
+        mats = [m.C + m.Ci, m.G, m.Kc] + [A for h in m.hysteretic_parts for A in (h.Kb, h.Kx)]
+        for A in mats:
+            if A.nnz and np.linalg.norm(A @ R) > 1e-9 * spla.norm(A) * np.linalg.norm(R):
+                return False
+        return True
 
     def _reduced_Z(self, w: float, speed: float) -> NDArray:
         r = self._red
@@ -218,9 +259,38 @@ class MeshReceptance:
         """DOFs whose responses are kept for every frequency solved (for :meth:`recover`)."""
         self.output_dofs = np.asarray(dofs, dtype=int)
         self._solve_cache.clear()
+        self._poles.clear()
+        self._restriction = None
+
+    def _restricted(self) -> tuple:
+        """The part of Z the direct solves need: the connected components of its sparsity
+        graph that hold a mesh or an output DOF (axial DOFs, say, are decoupled from the
+        mesh; leaving them out is exact). Returns (kept DOFs, selection of the pattern's
+        non-zeros, a CSC matrix on the restricted pattern whose data each solve replaces,
+        row and column of each non-zero, W's rows, output rows)."""
+        if self._restriction is None:
+            pat = self.model._pattern
+            n = self.model.n_dofs
+            g = sp.csc_matrix((np.ones(len(pat["indices"])), pat["indices"], pat["indptr"]), shape=(n, n))
+            _, label = connected_components(g, directed=False)
+            need = np.concatenate([np.flatnonzero(np.any(self.W != 0, axis=1)), self.output_dofs])
+            keep = np.flatnonzero(np.isin(label, label[need]))
+            new = np.full(n, -1)
+            new[keep] = np.arange(len(keep))
+            col = np.repeat(np.arange(n), np.diff(pat["indptr"]))
+            sel = np.flatnonzero((new[pat["indices"]] >= 0) & (new[col] >= 0))
+            nk = len(keep)
+            indptr = np.concatenate([[0], np.cumsum(np.bincount(new[col[sel]], minlength=nk))])
+            rows, cols = new[pat["indices"][sel]], new[col[sel]]
+            Z = sp.csc_matrix((np.zeros(len(sel), dtype=complex), rows, indptr), shape=(nk, nk))
+            Wk = np.ascontiguousarray(self.W[keep], dtype=complex)
+            self._restriction = (keep, sel, Z, rows, cols, Wk, new[self.output_dofs])
+        return self._restriction
 
     def _dZ(self, k: int, omega: float, speed: float, reduced: bool):
-        """dZ_k/dω along a sweep (Ω = ω / N_p): tabulated bearings and hysteresis held fixed."""
+        """dZ_k/dω along a sweep (Ω = ω / N_p): tabulated bearings and hysteresis held fixed.
+
+        Reduced: a dense matrix; full: its non-zeros on ``LinearModel._pattern``."""
         sp_w = self.speed_per_mesh_frequency
         w = k * omega
         if reduced:
@@ -232,41 +302,98 @@ class MeshReceptance:
                 + 1j * w * sp_w * r["G"]
             )
         m = self.model
-        return sp_w * m.Kc - 2 * k * w * m.M + 1j * k * (m.C + m.Ci + speed * m.G) + 1j * w * sp_w * m.G
+        pat = m._pattern
+        data = (
+            sp_w * pat["Kc"]
+            - 2 * k * w * pat["M"]
+            + 1j * k * (pat["C"] + pat["Ci"] + speed * pat["G"])
+            + 1j * w * sp_w * pat["G"]
+        )
+        return data  # non-zeros on the model's pattern (CSC order)
 
-    def _solve(self, omega: float, H: int) -> tuple[NDArray, NDArray, NDArray]:
-        """(h_k, U_k at the output DOFs, dh_k/dω) for k = 1..H, cached per frequency."""
+    def _pole_residues(self, k: int) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """Poles λ_j and residue factors of harmonic k in the modal basis (see module docstring).
+
+        Returns (λ (2m,), Wᵀ X (n_nl, 2m), X at the output DOFs (n_out, 2m), X⁻¹ b (2m, n_nl)),
+        X the eigenvectors of the companion matrix [[0, I], [-A_2⁻¹A_0, -A_2⁻¹A_1]] and
+        b = [0; A_2⁻¹ Wᵣ], so that Z_k(ω)⁻¹ Wᵣ = X_top diag(1 / (ω - λ)) X⁻¹ b.
+        """
+        hit = self._poles.get(k)
+        if hit is not None:
+            return hit
+        r = self._red
+        s = self.speed_per_mesh_frequency
+        A0 = r["K"].astype(complex)
+        for ratio, Kb, Kx in self._red_hyst:
+            s1, s2 = np.sign(k - ratio * s), np.sign(-k - ratio * s)
+            A0 = A0 + 1j * (s1 - s2) / 2 * Kb - (s1 + s2) / 2 * Kx
+        A1 = s * r["Kc"] + 1j * k * r["C"]
+        A2 = -(k**2) * r["M"] + 1j * k * s * r["G"]
+        m = A0.shape[0]
+        lu = sla.lu_factor(A2)
+        comp = np.zeros((2 * m, 2 * m), dtype=complex)
+        comp[:m, m:] = np.eye(m)
+        comp[m:, :m] = -sla.lu_solve(lu, A0)
+        comp[m:, m:] = -sla.lu_solve(lu, A1)
+        lam, X = sla.eig(comp, overwrite_a=True, check_finite=False)
+        b = np.zeros((2 * m, self.n_coords), dtype=complex)
+        b[m:] = sla.lu_solve(lu, self._W_red.astype(complex))
+        Y = sla.solve(X, b)
+        out = (lam, self._W_red.T @ X[:m], self.basis[self.output_dofs] @ X[:m], Y)
+        self._poles[k] = out
+        return out
+
+    def _solve(self, omega: float, H: int, derivative: bool = False) -> list:
+        """[h_k, U_k at the output DOFs, dh_k/dω or None] for k = 1..H, cached per frequency.
+
+        dh_k/dω (continuation, jumps) is computed only when ``derivative`` is asked for.
+        """
         key = (float(omega), int(H))
         hit = self._solve_cache.get(key)
-        if hit is not None:
+        if hit is not None and (hit[2] is not None or not derivative):
             return hit
         speed = self.speed(omega)
         nc = self.n_coords
         h = np.empty((H, nc, nc), dtype=complex)
-        dh = np.empty((H, nc, nc), dtype=complex)
+        dh = np.empty((H, nc, nc), dtype=complex) if derivative else None
         U = np.empty((H, len(self.output_dofs), nc), dtype=complex)
-        Wc = self.W.astype(complex)
+        poles = self.method == "modal" and not self._red_bear and omega > 0
         for k in range(1, H + 1):
             w = k * omega
-            if self.method == "direct":
-                lu = spla.splu(self.model.dynamic_stiffness(w, speed))
-                u = lu.solve(Wc)
-                v = lu.solve(Wc, trans="T")
-                h[k - 1] = self.W.T @ u
-                dh[k - 1] = -v.T @ (self._dZ(k, omega, speed, False) @ u)
-                U[k - 1] = u[self.output_dofs]
+            if poles:
+                lam, cw, co, Y = self._pole_residues(k)
+                g = 1.0 / (omega - lam)
+                Yg = Y * g[:, None]
+                h[k - 1] = cw @ Yg
+                U[k - 1] = co @ Yg
+                if derivative:
+                    dh[k - 1] = -cw @ (Yg * g[:, None])
+            elif self.method == "direct":
+                keep, sel, Z, rows, cols, Wk, out = self._restricted()
+                Z.data = self.model.dynamic_stiffness_data(w, speed)[sel]
+                lu = spla.splu(Z, permc_spec="MMD_AT_PLUS_A")
+                u = lu.solve(Wk)
+                h[k - 1] = Wk.T.real @ u
+                U[k - 1] = u[out]
+                if derivative:  # dh = -vᵀ dZ u, summed over the non-zeros of dZ
+                    v = lu.solve(Wk, trans="T")
+                    d = self._dZ(k, omega, speed, False)[sel]
+                    dh[k - 1] = -np.einsum("ri,r,rj->ij", v[rows], d, u[cols])
             else:
                 Z = self._reduced_Z(w, speed)
                 Wr = self._W_red.astype(complex)
-                y = np.linalg.solve(Z, Wr)
-                x = np.linalg.solve(Z.T, Wr)
+                lu = sla.lu_factor(Z)
+                y = sla.lu_solve(lu, Wr)
                 h[k - 1] = self._W_red.T @ y
-                dh[k - 1] = -x.T @ (self._dZ(k, omega, speed, True) @ y)
                 U[k - 1] = self.basis[self.output_dofs] @ y
+                if derivative:
+                    x = sla.lu_solve(lu, Wr, trans=1)
+                    dh[k - 1] = -x.T @ (self._dZ(k, omega, speed, True) @ y)
         if len(self._solve_cache) > 20000:
             self._solve_cache.clear()
-        self._solve_cache[key] = (h, U, dh)
-        return h, U, dh
+        out = [h, U, dh]
+        self._solve_cache[key] = out
+        return out
 
     def receptance(self, omega: float, H: int) -> NDArray:
         """h_k = Wᵀ Z_k⁻¹ W for k = 1..H: shape (H, n_nl, n_nl) [m/N]."""
@@ -284,7 +411,7 @@ class MeshReceptance:
         """dκ_k/dω = -κ_k (dh_k/dω) κ_k along a sweep (κ_0 taken speed-independent)."""
         out = np.zeros((H + 1, self.n_coords, self.n_coords), dtype=complex)
         if H:
-            h, _, dh = self._solve(omega, H)
+            h, _, dh = self._solve(omega, H, derivative=True)
             kap = np.linalg.inv(h)
             out[1:] = -kap @ dh @ kap
         return out

@@ -368,7 +368,13 @@ def sweep(
             problem = model.at(float(w), H)
             try_jump = jump in ("arclength", "auto") and z is not None and last_w is not None
             sol: HarmonicSolution = solve(
-                problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback and not try_jump
+                problem,
+                z,
+                method=method,
+                tol=tol,
+                max_iter=max_iter,
+                fallback=fallback and not try_jump,
+                stall=try_jump,
             )
             switched = False
             if not sol.converged and jump == "restart" and z is not None:
@@ -379,9 +385,11 @@ def sweep(
             if not sol.converged and try_jump:
                 from nlgrd.continuation import jump_to_branch
 
-                zj, steps = jump_to_branch(model, H, z, last_w, float(w), tol=tol)
+                zj, steps, folds = jump_to_branch(
+                    model, H, z, last_w, float(w), tol=tol, require_stable=stability
+                )
                 if zj is not None:
-                    switched = True
+                    switched = folds > 0
                     sol = solve(problem, zj, method="newton", tol=tol, max_iter=max_iter, fallback=False)
                     sol = HarmonicSolution(
                         sol.omega,
@@ -395,8 +403,8 @@ def sweep(
                     )
                 elif jump == "auto" and (cand := _restart(model, problem, z, w, H, method, tol, max_iter)):
                     sol, switched = cand, True
-                elif fallback:
-                    sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=True)
+                else:  # Newton from the previous point without giving up early, then hybr
+                    sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback)
             fmax = np.nan
             if sol.converged:
                 z, last_w = sol.harmonics, float(w)

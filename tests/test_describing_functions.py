@@ -91,6 +91,31 @@ def test_crossing_methods_agree_including_near_tangency():
         np.testing.assert_allclose(np.sum(a.end - a.start), 2 * np.pi, rtol=1e-14)
 
 
+def test_single_state_shortcuts_against_dense_sampling():
+    """The one-state certificates (harmonic bound, then 64 samples with the chord bound
+    Σ k² |X_k| h² / 8) never declare one contact state where the signal crosses ±b.
+
+    Independent check: 2^18 samples of x(θ) (FFT). Signals with 30 decaying harmonics (as
+    δ - e with a tooth-profile LSTE) whose minimum sits within a few percent above or
+    below b: where dense sampling sees a crossing, the intervals must have more than one
+    piece; where they have one piece, its state must hold at every sample.
+    """
+    rng = np.random.default_rng(11)
+    b = 1.0
+    checked = 0
+    for _ in range(300):
+        x = _random_signal(rng, 30, 0.3)
+        x[0] += b - sample(x, 2**18).min() + rng.uniform(-0.03, 0.03)  # min(x) within ±0.03 of b
+        xs = sample(x, 2**18)
+        iv = contact_intervals(x, b)
+        if iv.state.size == 1:
+            checked += 1
+            assert iv.state[0] == 1 and xs.min() > b
+        else:
+            assert xs.min() < b + 1e-9
+    assert checked > 20
+
+
 def test_jacobian_matches_finite_differences():
     """Analytic dG/dx (Toeplitz of the contact indicator) equals central differences.
 

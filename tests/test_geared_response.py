@@ -141,3 +141,35 @@ def test_continuation_unstable_branch_between_jumps():
             assert min(vals) < val[i] < max(vals), (om[i], val[i], vals)
             checked += 1
     assert checked >= 1
+
+
+def test_stability_basis_gives_the_verdicts_of_the_full_basis():
+    """Floquet stability uses modes up to 3x the highest mesh frequency (plus attachment
+    vectors) instead of 3 H x. Against the large basis, at the 40 points of a sweep
+    through the main resonance with jumps (two_shaft.toml, mesh damping ratio 0.03,
+    branches followed past their loss of stability): the same stable/unstable verdict at
+    every point, and max |μ| within 1e-2 (observed 3e-3 on the 252-DOF benchmark model;
+    the modes left out lie above 3x the mesh frequency, quasi-static in the variational
+    equation)."""
+    from nlgrd.geared_response import gear_pair_mode
+    from nlgrd.harmonic_balance import LinearStateSpace, floquet_multipliers
+
+    s = load_model(Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml")
+    s = dc.replace(s, gear_pairs=(dc.replace(s.gear_pairs[0], damping_ratio=0.03),))
+    f0 = gear_pair_mode(s)[0]
+    om = 2 * np.pi * np.linspace(0.6 * f0, 1.3 * f0, 40)
+    model = build_geared_model(s, om.max(), H=5)
+    res = geared_sweep(s, mesh_frequencies=om, H=5, model=model, stability=False)
+    assert np.all(res.mesh.converged)
+    big_model = build_geared_model(s, om.max(), H=5)
+    nl = model.reduced.nonlinearities
+    small, big = [], []
+    for w, z in zip(res.mesh.omega, res.mesh.harmonics, strict=True):
+        small.append(np.max(np.abs(floquet_multipliers(model.reduced.linear_state_space(w), nl, z, w))))
+        ss = LinearStateSpace(*big_model.receptance.state_space(w, 5 * om.max()))
+        big.append(np.max(np.abs(floquet_multipliers(ss, nl, z, w))))
+    small, big = np.array(small), np.array(big)
+    assert big_model.receptance._stability_basis.shape[1] > 1.5 * model.receptance._stability_basis.shape[1]
+    assert np.sum(big >= 1 + 1e-6) >= 2  # the check has unstable points to get right
+    np.testing.assert_array_equal(small < 1 + 1e-6, big < 1 + 1e-6)
+    assert np.max(np.abs(small - big)) < 1e-2

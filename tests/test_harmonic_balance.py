@@ -213,6 +213,32 @@ def test_floquet_monodromy_matches_integrated_variational_equation():
     np.testing.assert_allclose(mu_hill, mu, rtol=1e-3)
 
 
+def test_floquet_in_full_contact_equals_matrix_exponential():
+    """With one contact state all period the monodromy is exp(A T), and the shortcut
+    μ = exp(λ(A) T) must give its eigenvalues. Independent check: scipy's expm of the
+    state matrix built here from the state space, then eigvals; 1e-10 relative (both are
+    accurate to rounding for this well-conditioned 2 x 2 case; μ ~ 0.5-0.9)."""
+    from scipy.linalg import expm
+
+    model = kubo(W0=20 * 2295.0)  # 20x the load: the mesh never opens
+    rm = model.reduced_model()
+    om = 0.6 * model.natural_frequency
+    sol = solve(rm.at(om, 5))
+    assert sol.converged and model.mesh().intervals(sol.harmonics[0]).state.size == 1
+    mu = np.sort(np.abs(floquet_multipliers(rm.state_space, rm.nonlinearities, sol.harmonics, om)))
+    ss = rm.state_space
+    Minv = np.linalg.inv(ss.M)
+    A = np.block(
+        [
+            [np.zeros_like(ss.M), np.eye(len(ss.M))],
+            [-Minv @ (ss.K + model.mesh().stiffness * ss.W @ ss.W.T), -Minv @ ss.D],
+        ]
+    )
+    ref = np.sort(np.abs(np.linalg.eigvals(expm(A * 2 * np.pi / om))))
+    np.testing.assert_allclose(mu, ref, rtol=1e-10)
+    assert mu[-1] < 1
+
+
 def test_generic_aft_nonlinearity_in_the_solver():
     """A dead zone supplied as AFTNonlinearity gives the BacklashMesh solution.
 
