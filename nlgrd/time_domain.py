@@ -81,19 +81,41 @@ def _csc(a) -> sp.csc_matrix:
     return sp.csc_matrix(a) if not sp.issparse(a) else a.tocsc()
 
 
-def static_solution(K, w: ArrayLike, mesh: BacklashMesh, static_force: ArrayLike) -> NDArray:
-    """Static deflection with the mesh at k_h in drive-side contact (least squares).
+def static_solution(
+    K, w: ArrayLike, mesh: BacklashMesh, static_force: ArrayLike, M=None, dense_limit: int = 1500
+) -> NDArray:
+    """Static deflection with the mesh at k_h in drive-side contact (minimum norm).
 
     Solves (K + k_h w wᵀ) q = F0 + k_h w (e_0 + b); raises ModelError when the residual
-    is not small (F0 not self-equilibrated against a free rigid-body mode).
+    is not small (F0 not self-equilibrated against a free rigid-body mode). Up to
+    ``dense_limit`` DOFs by dense least squares; above, by a sparse LU of the system
+    bordered with its null space R (the rigid-body modes, found with the mass matrix
+    ``M``; identity when None) and the constraint Rᵀ q = 0: the same minimum-norm
+    solution without the O(n³) dense solve.
     """
     w = np.asarray(w, dtype=float).reshape(-1)
     F0 = np.asarray(static_force, dtype=float).reshape(-1)
-    Ks = _csc(K) + mesh.stiffness * sp.csc_matrix(np.outer(w, w))
+    n = w.size
+    idx = np.flatnonzero(w)
+    r, c = np.meshgrid(idx, idx, indexing="ij")
+    ww = sp.csc_matrix((np.outer(w[idx], w[idx]).ravel(), (r.ravel(), c.ravel())), shape=(n, n))
+    Ks = (_csc(K) + mesh.stiffness * ww).tocsc()
     rhs = F0 + mesh.stiffness * w * (mesh.lste[0] + mesh.half_backlash)
-    Kd = Ks.toarray()
-    q = np.linalg.lstsq(Kd, rhs, rcond=None)[0]
-    res = np.linalg.norm(Kd @ q - rhs)
+    if n <= dense_limit:
+        Kd = Ks.toarray()
+        q = np.linalg.lstsq(Kd, rhs, rcond=None)[0]
+    else:
+        from nlgrd.assembly import LinearModel
+        from nlgrd.frequency_response import rigid_body_modes
+
+        R = rigid_body_modes(LinearModel.from_matrices(sp.identity(n) if M is None else M, Ks))
+        if R.shape[1]:
+            R = np.linalg.qr(R)[0]
+            A = sp.bmat([[Ks, sp.csc_matrix(R)], [sp.csc_matrix(R.T), None]], format="csc")
+            q = spla.splu(A).solve(np.concatenate([rhs, np.zeros(R.shape[1])]))[:n]
+        else:
+            q = spla.splu(Ks).solve(rhs)
+    res = np.linalg.norm(Ks @ q - rhs)
     if res > 1e-8 * (np.linalg.norm(rhs) + 1e-300):
         raise ModelError("static_force", f"not self-equilibrated: static residual {res:.3e} N")
     return q
@@ -180,7 +202,7 @@ def integrate_fe(
         return k_h * (x - b) if x > b else (k_h * (x + b) if x < -b else 0.0)
 
     if state0 is None:
-        u = static_solution(K, w, mesh, F0)
+        u = static_solution(K, w, mesh, F0, M=M)
         v = np.zeros(N)
     else:
         u, v = np.array(state0[0], dtype=float), np.array(state0[1], dtype=float)
