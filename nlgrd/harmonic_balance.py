@@ -32,6 +32,7 @@ for a linear part given as matrices (polynomial in the frequency).
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -777,6 +778,9 @@ def _tangent_pieces(nonlinearities: Sequence, harmonics: NDArray, n: int) -> tup
     return breaks, Kt
 
 
+_EIG_CACHE: dict[bytes, NDArray] = {}
+
+
 def floquet_multipliers(
     state_space: LinearStateSpace,
     nonlinearities: Sequence,
@@ -807,9 +811,17 @@ def floquet_multipliers(
     A[:N, N:] = np.eye(N)
     A[N:, N:] = -MD
     if all(np.array_equal(Kt[i], Kt[0]) for i in range(1, Kt.shape[0])):
-        # one tangent all period: the variational equation is time-invariant, μ = exp(λ T)
+        # one tangent all period: the variational equation is time-invariant, μ = exp(λ T);
+        # λ cached by the state matrix (an up and a down sweep meet the same ones)
         A[N:, :N] = -Minv @ (ss.K + ss.W @ Kt[0] @ ss.W.T)
-        return np.exp(np.linalg.eigvals(A) * (breaks[-1] - breaks[0]) / omega)
+        key = hashlib.blake2b(A.tobytes(), digest_size=20).digest()
+        lam = _EIG_CACHE.get(key)
+        if lam is None:
+            lam = np.linalg.eigvals(A)
+            if len(_EIG_CACHE) >= 4096:
+                _EIG_CACHE.pop(next(iter(_EIG_CACHE)))
+            _EIG_CACHE[key] = lam
+        return np.exp(lam * (breaks[-1] - breaks[0]) / omega)
     cache: dict = {}
     for i in range(Kt.shape[0]):
         dt = (breaks[i + 1] - breaks[i]) / omega
