@@ -304,9 +304,10 @@ def jump_to_branch(
     (through the fold and the unstable branch of an S-shaped response curve) and returns
     the first curve crossing of ω_target (solved there by Newton) that is stable
     (``require_stable``; Floquet, when the model has a state space) or, with
-    ``require_stable=False``, the first crossing after an even number of turning points
-    (each fold flips the sign of the Jacobian's determinant, so that crossing has the
-    stability of the start: on an S-shaped curve, the far stable branch). Returns
+    ``require_stable=False`` or without a state space, the first crossing after an even
+    number of turning points (each fold flips the sign of the Jacobian's determinant, so
+    that crossing has the stability of the start: on an S-shaped curve, the far stable
+    branch). Returns
     (harmonics or None, continuation steps, turning points passed); no turning point
     means Newton had failed on the same branch (e.g. at grazing), not a jump.
     """
@@ -321,18 +322,14 @@ def jump_to_branch(
         if prev is not None and np.sign(p.tangent[-1]) != np.sign(prev.tangent[-1]):
             folds += 1
         crossed = prev is not None and (p.omega - omega_target) * (prev.omega - omega_target) <= 0
-        # past two folds and heading for the target: try Newton there from the current point
-        shortcut = folds >= 2 and folds % 2 == 0 and (omega_target - p.omega) * p.tangent[-1] > 0
-        if crossed and (require_stable or folds % 2 == 0) or shortcut:
-            if crossed:
-                a = (omega_target - prev.omega) / (p.omega - prev.omega) if p.omega != prev.omega else 0.5
-                guess, iters = (1 - a) * prev.z + a * p.z, 50
-            else:
-                guess, iters = p.z, 12
-            sol = solve(model.at(omega_target, H), guess, tol=tol, max_iter=iters, fallback=False)
+        floquet = crossed and require_stable and model.linear_state_space(omega_target) is not None
+        if crossed and (floquet or folds % 2 == 0):
+            a = (omega_target - prev.omega) / (p.omega - prev.omega) if p.omega != prev.omega else 0.5
+            guess = (1 - a) * prev.z + a * p.z
+            sol = solve(model.at(omega_target, H), guess, tol=tol, fallback=False)
             if sol.converged:
                 ok = True
-                if require_stable and model.linear_state_space(omega_target) is not None:
+                if floquet:
                     mu = floquet_multipliers(
                         model.linear_state_space(omega_target),
                         model.nonlinearities,

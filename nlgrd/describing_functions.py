@@ -376,7 +376,12 @@ def _x_complex_full(x: NDArray) -> tuple[NDArray, int]:
 
 
 def fourier_exact(
-    x: ArrayLike, b: float, H: int, stiffness: float = 1.0, jacobian: bool = False
+    x: ArrayLike,
+    b: float,
+    H: int,
+    stiffness: float = 1.0,
+    jacobian: bool = False,
+    intervals: ContactIntervals | None = None,
 ) -> NDArray | tuple[NDArray, NDArray]:
     """Exact harmonics 0..H of stiffness · f(x(θ)) by piecewise integration.
 
@@ -393,6 +398,8 @@ def fourier_exact(
     jacobian : bool
         Also return dG/dx, the (2H+1) x (2H+1) derivative with respect to the first
         2H + 1 real harmonics of x (which equals dG/dδ since x = δ - e).
+    intervals : ContactIntervals, optional
+        ``contact_intervals(x, b)`` when the caller has it already.
 
     Notes
     -----
@@ -402,7 +409,8 @@ def fourier_exact(
     the Toeplitz matrix of the indicator, no crossing-point terms since f is continuous.
     """
     x = np.asarray(x, dtype=float)
-    intervals = contact_intervals(x, b)
+    if intervals is None:
+        intervals = contact_intervals(x, b)
     if intervals.state.size == 1:  # one contact state all period: g is linear in x
         s = float(intervals.state[0])
         G = stiffness * abs(s) * resize_harmonics(x, H)
@@ -624,8 +632,9 @@ class BacklashMesh:
         y = np.asarray(y, dtype=float).reshape(1, -1)
         H = n_harmonics(y)
         x = self.relative(y[0])
-        if self.method == "exact":
-            out = fourier_exact(x, self.half_backlash, H, self.stiffness, jacobian)
+        if self.method == "exact":  # intervals through the cache: metrics and Floquet reuse them
+            iv = self.intervals(y[0])
+            out = fourier_exact(x, self.half_backlash, H, self.stiffness, jacobian, intervals=iv)
         else:
             out = fourier_aft(x, self.half_backlash, H, self.stiffness, self.n_samples, jacobian)
         if jacobian:

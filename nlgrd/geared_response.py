@@ -206,7 +206,8 @@ def _radial_maxima(X: NDArray) -> NDArray:
 
     Columns come in (y, z) pairs. The magnitude is sampled at 64 (H+1) points per period
     and its maximum refined by a parabola through the largest sample and its two
-    neighbours (error O(h⁴), below 1e-7 of the amplitude for smooth H-harmonic signals).
+    neighbours (relative error below 1e-5 for H = 5; 2048 plain samples erred by up to
+    3e-5).
     """
     H = X.shape[1] - 1
     n = 64 * (H + 1)

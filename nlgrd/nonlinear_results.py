@@ -142,7 +142,7 @@ def time_history(harmonics, omega: float, mesh: BacklashMesh, n_samples: int = 1
     delta = sample(z, n_samples)
     ddot = omega * sample(differentiate(z), n_samples)
     e, de = _lste_samples(mesh.lste, n_samples)
-    edot = omega * de
+    e, edot = e.copy(), omega * de
     force = mesh.stiffness * deadzone(delta - e, mesh.half_backlash) + mesh.damping * (ddot - edot)
     return TimeHistory(theta / omega, delta, ddot, e, edot, force)
 

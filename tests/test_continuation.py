@@ -139,7 +139,8 @@ def test_static_solution_rejects_unbalanced_load():
 def test_sparse_static_solution_equals_dense_least_squares():
     """The sparse path (LU of K + k_h w wᵀ bordered with its rigid-body modes) gives the
     minimum-norm solution of dense least squares, to 1e-9 relative: on the two-shaft FE
-    model (132 DOFs, a free rolling mode of the drive train) and on the torsional chain."""
+    model (132 DOFs, a free rolling mode of the drive train), on the small torsional chain
+    and on a 1600-DOF chain (rigid-body modes by the sparse eigensolver)."""
     from nlgrd.assembly import assemble
     from nlgrd.model_file import load_model
 
@@ -150,8 +151,16 @@ def test_sparse_static_solution_equals_dense_least_squares():
     cases = [(lm.M, lm.K, lm.meshes[0].w, g.static_torques(s))]
     M, K, w = _torsional_chain()
     cases.append((M, K, w, 2295.0 * 0.047 * np.array([1.0, 0.0, 0.0, 1.0])))
+    # a 1600-inertia torsional chain, free at both ends, meshing at DOFs 0 and 1599: the
+    # rigid-body modes come from the sparse eigensolver path (more than 1500 DOFs)
+    n = 1600
+    kc = 1e6 * np.ones(n - 1)
+    K = np.diag(np.concatenate([kc, [0]]) + np.concatenate([[0], kc])) - np.diag(kc, 1) - np.diag(kc, -1)
+    w = np.zeros(n)
+    w[0], w[-1] = 0.047, -0.047
+    cases.append((np.diag(np.linspace(1e-3, 2e-3, n)), K, w, 1e3 * (np.eye(n)[1] - np.eye(n)[-2])))
     for M, K, w, F0 in cases:
-        dense = static_solution(K, w, mesh, F0, M=M)
+        dense = static_solution(K, w, mesh, F0, M=M, dense_limit=10**6)
         sparse = static_solution(K, w, mesh, F0, M=M, dense_limit=0)
         assert np.max(np.abs(sparse - dense)) < 1e-9 * np.max(np.abs(dense))
 
@@ -174,3 +183,25 @@ def test_plots_return_axes():
     assert th.plot(quantity="force") is not None
     assert len(ax.lines) >= 3
     plt.close("all")
+
+
+@pytest.mark.parametrize("zeta", [0.02, 0.005])
+def test_jump_landing_without_floquet_matches_floquet_checked_landing(zeta):
+    """After a fold, a sweep without stability accepts the first curve crossing past an
+    even number of turning points (the determinant's sign); with stability, the first
+    Floquet-stable crossing. On Kubo's single-DOF rig (131 frequencies 0.3-1.6 ωn, up and
+    down, several jumps at ζ = 0.005) both land on the same solutions at every point,
+    and the landing points are Floquet-stable. Independent check: Floquet multipliers of
+    the exact monodromy."""
+    m = SDOFGearPair(0.261, 0.2587e9, 50e-6, 2295.0, LSTE, damping_ratio=zeta)
+    rm = m.reduced_model()
+    om = m.natural_frequency * np.linspace(0.3, 1.6, 131)
+    with_f = sweep(rm, om, H=5, stability=True)
+    without = sweep(rm, om, H=5, stability=False)
+    assert with_f.converged.all() and without.converged.all()
+    assert np.sum(with_f.branch_switch) >= 3
+    np.testing.assert_array_equal(with_f.branch_switch, without.branch_switch)
+    np.testing.assert_allclose(
+        without.harmonics, with_f.harmonics, rtol=0, atol=1e-9 * np.max(np.abs(with_f.harmonics))
+    )
+    assert np.all(with_f.floquet_max[with_f.branch_switch] < 1 + 1e-6)

@@ -383,13 +383,11 @@ def test_flexibility_moves_the_resonance_away_from_the_sdof(outputs):
     err = s["up jump vs single-DOF [%]"]
     assert abs(err["stiff"]) < 5 and err["soft_bearings"] > 20
     # less backlash: the back flanks bound the bent resonance, so the down sweep leaves the
-    # contact-loss branch at a much higher speed (full run 9585 against 6164 rpm), and the
-    # single-DOF model has back-side impacts (DSLR ~30); the paper's backlash: none. (Which
-    # of the coexisting orbits an up sweep lands on near 10 500-11 200 rpm, with or without
-    # back-side impacts, depends on the step: the full run lands on the impacting one.)
+    # contact-loss branch at a much higher speed (full run 9585 against 6164 rpm); the
+    # paper's backlash: no back-side contact on the FE sweeps. (Whether an up sweep lands
+    # on a coexisting orbit with back-side impacts near 10 300-11 200 rpm depends on the
+    # step: the full run does, with 0.02 mm backlash, and so does the single-DOF model.)
     assert s.loc["low_backlash", "down jump [rpm]"] > 1.2 * s.loc["stiff", "down jump [rpm]"]
-    sdof_peak = s["single-DOF DSLR peak, up [-]"]
-    assert sdof_peak["low_backlash"] > 3 * sdof_peak["stiff"]
     assert s.loc["stiff", "back-side contact points"] == 0
 
 
