@@ -238,6 +238,21 @@ class LinearModel:
         return pat
 
 
+def mesh_matrix(W: NDArray, gains: NDArray) -> sp.csc_matrix:
+    """Σ_j g_j w_j w_jᵀ for the columns w_j of W (n x n_nl) as a sparse matrix [N/m].
+
+    The meshes' stiffness (or damping) along their lines of action; W has a dozen
+    non-zeros per mesh, so the n x n outer products are never formed densely.
+    """
+    W = np.asarray(W, dtype=float).reshape(W.shape[0], -1)
+    idx = np.flatnonzero(np.any(W != 0, axis=1))
+    Wi = W[idx]
+    block = (Wi * np.asarray(gains, dtype=float).reshape(1, -1)) @ Wi.T
+    r, c = np.meshgrid(idx, idx, indexing="ij")
+    n = W.shape[0]
+    return sp.csc_matrix((block.ravel(), (r.ravel(), c.ravel())), shape=(n, n))
+
+
 def assemble(system: RotorSystem, mesh_stiffness: bool = True, mesh_damping: bool = True) -> LinearModel:
     """Assemble the global sparse matrices of ``system``.
 
@@ -325,4 +340,4 @@ def assemble(system: RotorSystem, mesh_stiffness: bool = True, mesh_damping: boo
     )
 
 
-__all__ = ["assemble", "LinearModel", "MeshLink", "DOFS_PER_NODE"]
+__all__ = ["assemble", "mesh_matrix", "LinearModel", "MeshLink", "DOFS_PER_NODE"]

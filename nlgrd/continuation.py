@@ -307,9 +307,9 @@ def jump_to_branch(
     ``require_stable=False`` or without a state space, the first crossing after an even
     number of turning points (each fold flips the sign of the Jacobian's determinant, so
     that crossing has the stability of the start: on an S-shaped curve, the far stable
-    branch). Returns
-    (harmonics or None, continuation steps, turning points passed); no turning point
-    means Newton had failed on the same branch (e.g. at grazing), not a jump.
+    branch). Returns (harmonics or None, continuation steps, turning points passed); no
+    turning point means Newton had failed on the same branch (e.g. at grazing), not a
+    jump.
     """
     direction = 1 if omega_target > omega_prev else -1
     tracer = _Tracer(model, H, z_prev, omega_prev, 1e-9)

@@ -27,8 +27,6 @@ from nlgrd.receptance import MeshReceptance
 from nlgrd.sweep import SweepResult, sweep
 from nlgrd.system import RotorSystem
 
-#: Samples per period for bearing-force extremes (relative error below 1e-4 for H <= 9).
-
 
 @dataclass
 class GearedModel:

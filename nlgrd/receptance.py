@@ -52,7 +52,7 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 from scipy.sparse.csgraph import connected_components
 
-from nlgrd.assembly import LinearModel, assemble
+from nlgrd.assembly import LinearModel, assemble, mesh_matrix
 from nlgrd.errors import ModelError
 from nlgrd.frequency_response import rigid_body_modes
 from nlgrd.system import RotorSystem
@@ -152,13 +152,7 @@ class MeshReceptance:
         return R
 
     def _mesh_stiffness(self) -> sp.csc_matrix:
-        """Σ k_h w wᵀ as a sparse matrix (W has a dozen non-zeros per mesh)."""
-        idx = np.flatnonzero(np.any(self.W != 0, axis=1))
-        Wi = self.W[idx]
-        block = (Wi * self.k_h[None, :]) @ Wi.T
-        r, c = np.meshgrid(idx, idx, indexing="ij")
-        n = self.W.shape[0]
-        return sp.csc_matrix((block.ravel(), (r.ravel(), c.ravel())), shape=(n, n))
+        return mesh_matrix(self.W, self.k_h)
 
     def _bordered_solve(self, Kr: sp.csc_matrix, rhs: NDArray) -> NDArray:
         R = self._rigid

@@ -31,6 +31,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
+from nlgrd.assembly import LinearModel, mesh_matrix
 from nlgrd.describing_functions import BacklashMesh, differentiate, sample
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear_results import MeshMetrics, TimeHistory, metrics_from_history
@@ -96,16 +97,12 @@ def static_solution(
     w = np.asarray(w, dtype=float).reshape(-1)
     F0 = np.asarray(static_force, dtype=float).reshape(-1)
     n = w.size
-    idx = np.flatnonzero(w)
-    r, c = np.meshgrid(idx, idx, indexing="ij")
-    ww = sp.csc_matrix((np.outer(w[idx], w[idx]).ravel(), (r.ravel(), c.ravel())), shape=(n, n))
-    Ks = (_csc(K) + mesh.stiffness * ww).tocsc()
+    Ks = (_csc(K) + mesh_matrix(w, [mesh.stiffness])).tocsc()
     rhs = F0 + mesh.stiffness * w * (mesh.lste[0] + mesh.half_backlash)
     if n <= dense_limit or M is None:
         Kd = Ks.toarray()
         q = np.linalg.lstsq(Kd, rhs, rcond=None)[0]
     else:
-        from nlgrd.assembly import LinearModel
         from nlgrd.frequency_response import rigid_body_modes
 
         R = rigid_body_modes(LinearModel.from_matrices(M, Ks))
