@@ -633,7 +633,7 @@ class BacklashMesh:
         H = n_harmonics(y)
         x = self.relative(y[0])
         if self.method == "exact":  # intervals through the cache: metrics and Floquet reuse them
-            iv = self.intervals(y[0])
+            iv = self._intervals(x)
             out = fourier_exact(x, self.half_backlash, H, self.stiffness, jacobian, intervals=iv)
         else:
             out = fourier_aft(x, self.half_backlash, H, self.stiffness, self.n_samples, jacobian)
@@ -643,7 +643,9 @@ class BacklashMesh:
 
     def intervals(self, delta: NDArray) -> ContactIntervals:
         """Contact intervals of x = δ - e over one period (the last few are cached)."""
-        x = self.relative(delta)
+        return self._intervals(self.relative(delta))
+
+    def _intervals(self, x: NDArray) -> ContactIntervals:
         key = (x.tobytes(), float(self.half_backlash))
         hit = _INTERVAL_CACHE.get(key)
         if hit is None:

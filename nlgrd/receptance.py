@@ -214,13 +214,17 @@ class MeshReceptance:
         deflate = R.shape[1] > 0 and self._rigid_decoupled()
         if deflate:
             MR = m.M @ R
+
+            def off_rigid(X):  # the part of X M-orthogonal to R
+                return X - R @ np.linalg.solve(R.T @ MR, MR.T @ X)
+
             n0 = np.linalg.norm(B, axis=0)
-            B = B - R @ np.linalg.solve(R.T @ MR, MR.T @ B)
+            B = off_rigid(B)
             B = B[:, np.linalg.norm(B, axis=0) > 1e-8 * n0]  # drop the rigid modes themselves
         V, s, _ = np.linalg.svd(B / np.linalg.norm(B, axis=0), full_matrices=False)
         V = V[:, s > 1e-10 * s[0]]
         if deflate:  # once more, against what the SVD's rounding brought back
-            V = np.linalg.qr(V - R @ np.linalg.solve(R.T @ MR, MR.T @ V))[0]
+            V = np.linalg.qr(off_rigid(V))[0]
         self.basis = V
         self.n_modes = int(np.sum(keep))
         P = lambda A: V.T @ (A @ V)  # noqa: E731
