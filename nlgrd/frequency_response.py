@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from nlgrd.assembly import LinearModel, assemble
 from nlgrd.errors import ModelError
+from nlgrd.rigid_body import check_balanced, rigid_body_modes
 from nlgrd.system import RotorSystem
 
 DofSpec = int | tuple[int | str, int, str]
@@ -171,26 +172,6 @@ class StaticResult:
         return plot_static(self, ax=ax)
 
 
-def rigid_body_modes(model: LinearModel) -> NDArray:
-    """Mass-normalised rigid-body modes (null space of K), columns [-].
-
-    The lowest eigenpairs of K φ = λ M φ below :func:`nlgrd.modal.rigid_body_threshold`.
-    """
-    from nlgrd.modal import rigid_body_threshold
-
-    K, M = model.K, model.M
-    n = model.n_dofs
-    limit = rigid_body_threshold(model) ** 2
-    k = min(12, n - 2)
-    if n <= 1500:
-        import scipy.linalg as sla
-
-        lam, vec = sla.eigh(K.toarray(), M.toarray(), subset_by_index=[0, k - 1])
-    else:
-        lam, vec = spla.eigsh(K, k=k, M=M, sigma=-limit)
-    return vec[:, lam < limit]
-
-
 def static_deflection(
     system: RotorSystem | LinearModel,
     loads: NDArray | dict[tuple[int | str, int, str], float],
@@ -221,13 +202,9 @@ def static_deflection(
     if not np.all(np.isfinite(f)):
         raise ModelError("loads", "loads must be finite")
     K = model.stiffness(speed)
-    R = rigid_body_modes(model)
+    R = rigid_body_modes(model.K, model.M)
     if R.shape[1]:
-        net = R.T @ f
-        if np.any(np.abs(net) > 1e-9 * max(np.linalg.norm(f), 1e-300) * np.linalg.norm(R, axis=0)):
-            raise ModelError(
-                "loads", "loads have a net component on a rigid-body mode; the system would drift"
-            )
+        check_balanced(R, f, "loads")
         MR = model.M @ R
         K = (K + sp.csc_matrix(MR @ MR.T) * float(np.max(np.abs(K.diagonal())))).tocsc()
     q = spla.spsolve(K.tocsc(), f)

@@ -48,6 +48,7 @@ from nlgrd.describing_functions import (
     real_to_complex,
 )
 from nlgrd.errors import ModelError
+from nlgrd.rigid_body import complement, rigid_body_modes
 
 # --------------------------------------------------------------------------------------
 # Real block matrices
@@ -283,18 +284,16 @@ class LinearStateSpace:
         if self.D.shape != (N, N) or self.K.shape != (N, N) or self.W.shape[0] != N:
             raise ModelError("state_space", "M, D, K must be N x N and W N x n_nl")
 
-    def rigid_body_modes(self, rtol: float = 1e-10) -> NDArray:
-        """Basis (N, r) of the free modes: K φ = 0, D φ = 0 and Wᵀ φ = 0.
+    def rigid_body_modes(self) -> NDArray:
+        """M-orthonormal basis (N, r) of the free modes: K φ = 0, D φ = 0 and Wᵀ φ = 0.
 
         These move no nonlinear element and are neither restrained nor damped (the
         torsional rigid-body rotation of a whole free drive train); they give neutral
-        Floquet multipliers μ = 1 in a Jordan block.
+        Floquet multipliers μ = 1 in a Jordan block. Decided by
+        :func:`nlgrd.rigid_body.rigid_body_modes` (scaled tolerances).
         """
-        blocks = [a / (np.max(np.abs(a)) or 1.0) for a in (self.K, self.D, self.W.T)]
-        A = np.vstack(blocks)
-        _, sv, vt = np.linalg.svd(A)
-        sv = np.concatenate([sv, np.zeros(vt.shape[0] - sv.size)])
-        return vt[sv <= rtol * max(sv[0], 1e-300)].T
+        Ksym = (self.K + self.K.T) / 2
+        return rigid_body_modes(Ksym, self.M, constraints=(self.K, self.D, self.W.T))
 
     @cached_property
     def deflated(self) -> LinearStateSpace:
@@ -306,8 +305,7 @@ class LinearStateSpace:
         phi = self.rigid_body_modes()
         if phi.shape[1] == 0:
             return self
-        _, sv, vt = np.linalg.svd((self.M @ phi).T)
-        P = vt[phi.shape[1] :].T
+        P = complement(phi, self.M)
         return LinearStateSpace(P.T @ self.M @ P, P.T @ self.D @ P, P.T @ self.K @ P, P.T @ self.W)
 
 

@@ -21,12 +21,16 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from nlgrd.assembly import LinearModel, assemble
+from nlgrd.rigid_body import rigid_body_modes
 from nlgrd.system import DOFS_PER_NODE, RotorSystem
 
 #: Models with more DOFs than this use sparse shift-invert eigensolvers.
 DENSE_LIMIT = 1500
-#: Modes with a natural frequency below this are rigid-body modes [Hz].
-RIGID_BODY_HZ = 1e-2
+#: Eigenvalues with Im λ <= OVERDAMPED_RTOL |λ| are overdamped (non-oscillatory): not listed.
+#: Real eigenvalues of large modulus come out of eig with Im λ ~ 1e-9 |λ| (rounding), which
+#: would list them as "modes" of 0.002-2 Hz; a real mode this close to critical damping
+#: (ζ > 1 - 5e-13) has no resonance to show.
+OVERDAMPED_RTOL = 1e-6
 
 
 def _as_model(system_or_model: RotorSystem | LinearModel) -> LinearModel:
@@ -35,14 +39,14 @@ def _as_model(system_or_model: RotorSystem | LinearModel) -> LinearModel:
     return assemble(system_or_model)
 
 
-def rigid_body_threshold(model: LinearModel) -> float:
-    """Circular frequency [rad/s] below which a mode counts as rigid-body: 2π x 0.01 Hz.
-
-    Far below any physical mode of a machine and far above the round-off of a zero
-    eigenvalue for reasonably scaled models (supports no stiffer than ~1e9 times the
-    structure they hold).
-    """
-    return 2 * np.pi * RIGID_BODY_HZ
+def _rigid_fraction(model: LinearModel, R: NDArray, shapes: NDArray) -> NDArray:
+    """Fraction of each shape's M-norm² in span(R) (R M-orthonormal): ~1 rigid, ~0 flexible."""
+    if R.shape[1] == 0:
+        return np.zeros(shapes.shape[1])
+    Mq = model.M @ shapes
+    total = np.real(np.sum(np.conj(shapes) * Mq, axis=0))
+    total[total == 0] = 1.0
+    return np.sum(np.abs(R.T @ Mq) ** 2, axis=0) / total
 
 
 def _kind_fractions(model: LinearModel, shapes: NDArray) -> dict[str, NDArray]:
@@ -213,20 +217,20 @@ def modal_analysis(
     n = model.n_dofs
     K = model.stiffness(speed)
     M = model.M
-    scale = rigid_body_threshold(model)
-    want = min(n_modes + 12, n - 1)
+    R = rigid_body_modes(model.K, M)
+    n_rigid = R.shape[1]
+    want = min(n_modes + 12 + n_rigid, n - 1)
     if not damped:
         if n <= DENSE_LIMIT:
             w2, vec = sla.eigh(K.toarray(), M.toarray())
         else:
-            w2, vec = spla.eigsh(K, k=want, M=M, sigma=-1.0)
+            w2, vec = spla.eigsh(K, k=want, M=M, sigma=-1.0, v0=np.full(n, 1.0 / np.sqrt(n)))
         order = np.argsort(w2)
         w2, vec = w2[order], vec[:, order]
-        w = np.sqrt(np.clip(w2, 0.0, None))
-        rigid = w < scale
-        lam = 1j * w[~rigid][:n_modes]
-        shapes = vec[:, ~rigid][:, :n_modes].astype(complex)
-        n_rigid = int(np.sum(rigid))
+        flexible = _rigid_fraction(model, R, vec) < 0.5
+        w = np.sqrt(np.clip(w2[flexible], 0.0, None))
+        lam = 1j * w[:n_modes]
+        shapes = vec[:, flexible][:, :n_modes].astype(complex)
     else:
         D = model.damping(speed)
         I = sp.identity(n, format="csc")
@@ -235,15 +239,13 @@ def modal_analysis(
         if n <= DENSE_LIMIT:
             lam_all, vec_all = sla.eig(A.toarray(), B.toarray())
         else:
-            lam_all, vec_all = spla.eigs(A, k=2 * want, M=B, sigma=-1.0)
+            v0 = np.full(2 * n, 1.0 / np.sqrt(2 * n))
+            lam_all, vec_all = spla.eigs(A, k=2 * want, M=B, sigma=-1.0, v0=v0)
         finite = np.isfinite(lam_all)
-        lam_all, vec_all = lam_all[finite], vec_all[:, finite]
-        rigid = np.abs(lam_all) < scale
-        from nlgrd.frequency_response import rigid_body_modes
-
-        n_rigid = int(rigid_body_modes(model).shape[1])
-        osc = (~rigid) & (np.imag(lam_all) > 1e-9 * np.maximum(np.abs(lam_all), 1.0))
-        lam, vec = lam_all[osc], vec_all[:n, osc]
+        lam_all, vec_all = lam_all[finite], vec_all[:n, finite]
+        flexible = _rigid_fraction(model, R, vec_all) < 0.5
+        osc = flexible & (np.imag(lam_all) > OVERDAMPED_RTOL * np.abs(lam_all))
+        lam, vec = lam_all[osc], vec_all[:, osc]
         order = np.argsort(np.imag(lam))
         lam, shapes = lam[order][:n_modes], vec[:, order][:, :n_modes]
     shapes = _normalise(shapes)

@@ -54,7 +54,7 @@ from scipy.sparse.csgraph import connected_components
 
 from nlgrd.assembly import LinearModel, assemble, mesh_matrix
 from nlgrd.errors import ModelError
-from nlgrd.frequency_response import rigid_body_modes
+from nlgrd.rigid_body import check_balanced, rigid_body_modes
 from nlgrd.system import RotorSystem
 
 #: Above this many DOFs ``method="auto"`` uses the modal basis.
@@ -140,15 +140,8 @@ class MeshReceptance:
     # mean problem
     def _rigid_body_split(self) -> NDArray:
         """Rigid-body modes of the linear system with the meshes in (none move a mesh)."""
-        km = LinearModel.from_matrices(self.model.M, self.model.K + self._mesh_stiffness())
-        R = rigid_body_modes(km)
-        if R.shape[1] and np.any(
-            np.abs(R.T @ self.static_force) > 1e-9 * (np.linalg.norm(self.static_force) + 1e-300)
-        ):
-            raise ModelError(
-                "torque",
-                "the static torques have a net component on a rigid-body mode: the loads are not balanced",
-            )
+        R = rigid_body_modes(self.model.K + self._mesh_stiffness(), self.model.M)
+        check_balanced(R, self.static_force, "torque", "the static torques")
         return R
 
     def _mesh_stiffness(self) -> sp.csc_matrix:

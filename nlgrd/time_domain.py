@@ -31,10 +31,11 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
-from nlgrd.assembly import LinearModel, mesh_matrix
+from nlgrd.assembly import mesh_matrix
 from nlgrd.describing_functions import BacklashMesh, differentiate, sample
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear_results import MeshMetrics, TimeHistory, metrics_from_history
+from nlgrd.rigid_body import check_balanced, rigid_body_modes
 
 
 @dataclass(frozen=True)
@@ -82,36 +83,29 @@ def _csc(a) -> sp.csc_matrix:
     return sp.csc_matrix(a) if not sp.issparse(a) else a.tocsc()
 
 
-def static_solution(
-    K, w: ArrayLike, mesh: BacklashMesh, static_force: ArrayLike, M=None, dense_limit: int = 1500
-) -> NDArray:
+def static_solution(K, w: ArrayLike, mesh: BacklashMesh, static_force: ArrayLike, M=None) -> NDArray:
     """Static deflection with the mesh at k_h in drive-side contact (minimum norm).
 
-    Solves (K + k_h w wᵀ) q = F0 + k_h w (e_0 + b); raises ModelError when the residual
-    is not small (F0 not self-equilibrated against a free rigid-body mode). Up to
-    ``dense_limit`` DOFs, or without the mass matrix ``M``, by dense least squares;
-    above, by a sparse LU of the system bordered with its null space R (the rigid-body
-    modes of (K + k_h w wᵀ, M)) and the constraint Rᵀ q = 0: the same minimum-norm
-    solution without the O(n³) dense solve.
+    Solves (K + k_h w wᵀ) q = F0 + k_h w (e_0 + b) by a sparse LU of the system bordered
+    with its null space R (the rigid-body modes of (K + k_h w wᵀ, M) from
+    :func:`nlgrd.rigid_body.rigid_body_modes`; M = I when not given) and the constraint
+    Rᵀ q = 0: the minimum-norm solution. Raises ModelError when F0 has a net component
+    on a rigid-body mode or the residual is not small.
     """
     w = np.asarray(w, dtype=float).reshape(-1)
     F0 = np.asarray(static_force, dtype=float).reshape(-1)
     n = w.size
     Ks = (_csc(K) + mesh_matrix(w, [mesh.stiffness])).tocsc()
     rhs = F0 + mesh.stiffness * w * (mesh.lste[0] + mesh.half_backlash)
-    if n <= dense_limit or M is None:
-        Kd = Ks.toarray()
-        q = np.linalg.lstsq(Kd, rhs, rcond=None)[0]
+    Mm = sp.identity(n, format="csc") if M is None else _csc(M)
+    R = rigid_body_modes(Ks, Mm)
+    check_balanced(R, F0, "static_force", "the static forces")
+    if R.shape[1]:
+        Rq = sp.csc_matrix(np.linalg.qr(R)[0])
+        A = sp.bmat([[Ks, Rq], [Rq.T, None]], format="csc")
+        q = spla.splu(A).solve(np.concatenate([rhs, np.zeros(R.shape[1])]))[:n]
     else:
-        from nlgrd.frequency_response import rigid_body_modes
-
-        R = rigid_body_modes(LinearModel.from_matrices(M, Ks))
-        if R.shape[1]:
-            R = np.linalg.qr(R)[0]
-            A = sp.bmat([[Ks, sp.csc_matrix(R)], [sp.csc_matrix(R.T), None]], format="csc")
-            q = spla.splu(A).solve(np.concatenate([rhs, np.zeros(R.shape[1])]))[:n]
-        else:
-            q = spla.splu(Ks).solve(rhs)
+        q = spla.splu(Ks).solve(rhs)
     res = np.linalg.norm(Ks @ q - rhs)
     if res > 1e-8 * (np.linalg.norm(rhs) + 1e-300):
         raise ModelError("static_force", f"not self-equilibrated: static residual {res:.3e} N")
