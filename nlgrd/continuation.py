@@ -47,14 +47,18 @@ class _Tracer:
         self.Lw = float(abs(omega0)) or 1.0
         self.Fs = model.at(omega0, H).force_scale(z0)
 
-    def system(self, u: NDArray) -> tuple[NDArray, NDArray]:
-        """Scaled residual and Jacobian [dR/dz̃, dR/dω̃] at u."""
+    def system(self, u: NDArray) -> tuple[NDArray, NDArray, float]:
+        """Scaled residual, Jacobian [dR/dz̃, dR/dω̃] and the relative residual at u.
+
+        The relative residual max|R| / max(|L z|, |B G|, |F|) at the point itself is the
+        measure :func:`nlgrd.harmonic_balance.solve` converges on, so curve points and
+        sweep points carry residuals on one scale."""
         z, w = u[:-1] * self.Lz, u[-1] * self.Lw
         Rw = self.model.omega_derivative(w, self.H, z)  # first: receptances and derivatives in one pass
         problem = self.model.at(w, self.H)
-        R, J, _ = problem.residual_jacobian(z)
+        R, J, scale = problem.residual_jacobian(z)
         A = np.column_stack([J * self.Lz, Rw * self.Lw]) / self.Fs
-        return R / self.Fs, A
+        return R / self.Fs, A, float(np.max(np.abs(R)) / scale)
 
     def tangent(self, A: NDArray, previous: NDArray) -> NDArray:
         """Unit tangent (null vector of A) oriented along ``previous``."""
@@ -71,12 +75,12 @@ class _Tracer:
     def correct(self, u_pred: NDArray, t: NDArray, max_iter: int = 12) -> tuple[NDArray | None, int, float]:
         """Newton on [R(u); tᵀ(u - u_pred)] = 0; returns (u or None, Newton updates, residual).
 
-        Converged when, after at least one update, the scaled residual is below ``tol`` and
-        the arc-length constraint holds to 1e-12."""
+        Converged when, after at least one update, the relative residual is below ``tol``
+        and the arc-length constraint holds to 1e-12."""
         u = u_pred.copy()
+        res = np.inf
         for it in range(max_iter + 1):
-            R, A = self.system(u)
-            res = float(np.max(np.abs(R)))
+            R, A, res = self.system(u)
             if it > 0 and res < self.tol and abs(t @ (u - u_pred)) < 1e-12:
                 return u, it, res
             if it == max_iter:
@@ -109,15 +113,15 @@ class _Tracer:
         u = np.append(np.asarray(z0, dtype=float).reshape(-1) / self.Lz, omega0 / self.Lw)
         prev = np.zeros(u.size)
         prev[-1] = float(np.sign(direction) or 1)
-        R, A = self.system(u)
+        _, A, res0 = self.system(u)
         t = self.tangent(A, prev)
-        yield _Point(u[:-1] * self.Lz, u[-1] * self.Lw, t, 0, float(np.max(np.abs(R))))
+        yield _Point(u[:-1] * self.Lz, u[-1] * self.Lw, t, 0, res0)
         for _ in range(max_steps):
             while True:
                 u_pred = u + ds * t
                 un, its, res = self.correct(u_pred, t)
                 if un is not None:
-                    _, A = self.system(un)
+                    _, A, _ = self.system(un)
                     tn = self.tangent(A, t)
                     # accept only small corrections and tangent turns (< ~25 degrees)
                     if ds <= 2 * ds_min or (tn @ t > 0.9 and np.linalg.norm(un - u_pred) < 0.5 * ds):
@@ -272,7 +276,7 @@ def continuation(
         ws,
         ["curve"] * len(pts),
         zs,
-        [True] * len(pts),
+        [p.residual <= tol for p in pts],
         [p.residual for p in pts],
         [p.iterations for p in pts],
         fm,

@@ -47,6 +47,20 @@ class GearedModel:
     mesh: BacklashMesh
     reduced: ReducedModel
     bearing_dofs: NDArray = field(repr=False)
+    max_mesh_frequency: float = np.inf
+    H: int = 10**9
+
+    def check_range(self, omegas: NDArray, H: int) -> None:
+        """Raise ModelError when ``omegas`` [rad/s] or ``H`` exceed what the model was built for
+        (its modal bases and stability basis are sized by them)."""
+        top = float(np.max(omegas))
+        if top > self.max_mesh_frequency * (1 + 1e-9) or H > self.H:
+            raise ModelError(
+                "model",
+                f"built for mesh frequencies up to {self.max_mesh_frequency / (2 * np.pi):.6g} Hz and "
+                f"H <= {self.H}; asked for {top / (2 * np.pi):.6g} Hz and H = {H}: build it again "
+                "with build_geared_model(system, max_mesh_frequency, H)",
+            )
 
     def mesh_frequency(self, rpm: NDArray) -> NDArray:
         """Mesh frequency [rad/s] at pinion speeds ``rpm``."""
@@ -131,7 +145,7 @@ def build_geared_model(
         kappa_derivative=mr.kappa_derivative,
         force_derivative=force_derivative,
     )
-    return GearedModel(system, mr, mesh, reduced, bearing_dofs)
+    return GearedModel(system, mr, mesh, reduced, bearing_dofs, float(max_mesh_frequency), int(H))
 
 
 @dataclass(frozen=True)
@@ -177,13 +191,18 @@ class GearedSweepResult:
         df = self.mesh.to_frame()
         df.insert(1, "pinion_speed [rpm]", self.rpm)
         b = self.bearings
+        ok = np.asarray(self.mesh.converged, dtype=bool)
+        columns = (
+            ("displacement_max [um]", b.displacement_max, 1e6),
+            ("displacement_rms [um]", b.displacement_rms, 1e6),
+            ("force_mean [N]", b.force_mean, 1.0),
+            ("force_rms [N]", b.force_rms, 1.0),
+            ("force_max [N]", b.force_max, 1.0),
+            ("force_amplitude [N]", b.force_amplitude, 1.0),
+        )
         for j, name in enumerate(self.bearing_names):
-            df[f"{name} displacement_max [um]"] = b.displacement_max[:, j] * 1e6
-            df[f"{name} displacement_rms [um]"] = b.displacement_rms[:, j] * 1e6
-            df[f"{name} force_mean [N]"] = b.force_mean[:, j]
-            df[f"{name} force_rms [N]"] = b.force_rms[:, j]
-            df[f"{name} force_max [N]"] = b.force_max[:, j]
-            df[f"{name} force_amplitude [N]"] = b.force_amplitude[:, j]
+            for col, values, scale in columns:
+                df[f"{name} {col}"] = np.where(ok, values[:, j] * scale, np.nan)
         return df
 
     def jumps(self):
@@ -339,6 +358,7 @@ def geared_sweep(
     )
     if omegas.ndim != 1 or len(omegas) < 1 or not np.all(np.isfinite(omegas)) or np.any(omegas <= 0):
         raise ModelError("mesh_frequencies", "must be a non-empty list of positive finite frequencies")
+    model.check_range(omegas, H)
     count = {"i": 0}
     n_total = len(omegas) * (2 if directions == "both" else 1)
     base_kappa = model.reduced.kappa
@@ -392,6 +412,7 @@ def geared_continuation(
     """
     if model is None:
         model = build_geared_model(system, max(omega_start, omega_end), H=H)
+    model.check_range(np.array([omega_start, omega_end]), H)
     return continuation(model.reduced, omega_start, omega_end, H, stability=stability, **kwargs)
 
 

@@ -43,6 +43,7 @@ dense per-frequency solve.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,6 +60,40 @@ from nlgrd.system import RotorSystem
 
 #: Above this many DOFs ``method="auto"`` uses the modal basis.
 DIRECT_LIMIT = 3000
+#: Mode counts at which the bases stop doubling (the last doubling may pass them).
+MODE_CAP = 400
+STABILITY_MODE_CAP = 300
+#: Pole-residue receptances are checked against a direct solve of the reduced Z_k at one
+#: frequency per harmonic; above this relative difference the harmonic falls back to it.
+POLE_CHECK_RTOL = 1e-8
+
+
+class ModeCapWarning(UserWarning):
+    """A modal basis reached its cap before its cut-off frequency."""
+
+
+def _lowest_modes(K, M, cutoff: float, start: int, cap: int, what: str) -> tuple[NDArray, NDArray]:
+    """Lowest eigenpairs of K φ = λ M φ up to λ = cutoff² (at least), doubling the count.
+
+    Shift-invert about -1 (rigid-body modes are fine); fixed start vector (reruns are
+    byte-identical). Warns when the cap stops it short of the cut-off."""
+    n = K.shape[0]
+    v0 = np.full(n, 1.0 / np.sqrt(n))
+    k = min(n - 2, start)
+    while True:
+        lam, vec = spla.eigsh(K, k=k, M=M, sigma=-1.0, v0=v0)
+        if np.max(lam) >= cutoff**2 or k >= n - 2:
+            return lam, vec
+        if k >= cap:
+            warnings.warn(
+                f"{what}: {k} modes reach {np.sqrt(max(np.max(lam), 0)) / (2 * np.pi):.4g} Hz, short of the "
+                f"cut-off {cutoff / (2 * np.pi):.4g} Hz (cap {cap}); higher modes enter only through "
+                "the attachment vectors",
+                ModeCapWarning,
+                stacklevel=3,
+            )
+            return lam, vec
+        k = min(n - 2, 2 * k)
 
 
 @dataclass(frozen=True)
@@ -118,10 +153,13 @@ class MeshReceptance:
         self._rigid = self._rigid_body_split()
         self._mean_cache: dict[float, MeanTerms] = {}
         self._solve_cache: dict[tuple[float, int], list] = {}
-        self._poles: dict[int, tuple[NDArray, NDArray, NDArray, NDArray]] = {}
+        self._poles: dict[int, tuple[NDArray, NDArray, NDArray, NDArray] | None] = {}
+        #: relative difference of the pole-residue h_k from a direct solve, per harmonic k
+        self.pole_check: dict[int, float] = {}
+        self.max_frequency = None if max_frequency is None else float(max_frequency)
         self.output_dofs = np.zeros(0, dtype=int)
         self._restriction = None
-        self._stability_basis: NDArray | None = None
+        self._stability_basis: dict[float, NDArray] = {}
         if method == "modal":
             if max_frequency is None:
                 raise ModelError("max_frequency", "the modal method needs the highest excitation frequency")
@@ -183,16 +221,10 @@ class MeshReceptance:
     # harmonics k >= 1
     def _build_basis(self, max_frequency: float, cutoff_factor: float) -> None:
         m = self.model
-        n = m.n_dofs
         Kr = (m.K + self._mesh_stiffness()).tocsc()
         cutoff = cutoff_factor * max_frequency
         # lowest modes of the linear system with meshes, shift-invert about -1 (rigid modes ok)
-        k = min(n - 2, 40)
-        while True:
-            lam, vec = spla.eigsh(Kr, k=k, M=m.M, sigma=-1.0)
-            if np.max(lam) >= cutoff**2 or k >= n - 2 or k >= 400:
-                break
-            k = min(n - 2, 2 * k)
+        lam, vec = _lowest_modes(Kr, m.M, cutoff, start=40, cap=MODE_CAP, what="receptance basis")
         keep = lam <= cutoff**2
         vectors = [vec[:, keep]]
         lu = spla.splu((Kr + m.M).tocsc())
@@ -307,16 +339,17 @@ class MeshReceptance:
         )
         return data  # non-zeros on the model's pattern (CSC order)
 
-    def _pole_residues(self, k: int) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    def _pole_residues(self, k: int) -> tuple[NDArray, NDArray, NDArray, NDArray] | None:
         """Poles λ_j and residue factors of harmonic k in the modal basis (see module docstring).
 
         Returns (λ (2m,), Wᵀ X (n_nl, 2m), X at the output DOFs (n_out, 2m), X⁻¹ b (2m, n_nl)),
         X the eigenvectors of the companion matrix [[0, I], [-A_2⁻¹A_0, -A_2⁻¹A_1]] and
-        b = [0; A_2⁻¹ Wᵣ], so that Z_k(ω)⁻¹ Wᵣ = X_top diag(1 / (ω - λ)) X⁻¹ b.
+        b = [0; A_2⁻¹ Wᵣ], so that Z_k(ω)⁻¹ Wᵣ = X_top diag(1 / (ω - λ)) X⁻¹ b. None when
+        the a-posteriori check against a direct solve fails (relative difference in
+        :attr:`pole_check` above :data:`POLE_CHECK_RTOL`): the caller then solves directly.
         """
-        hit = self._poles.get(k)
-        if hit is not None:
-            return hit
+        if k in self._poles:
+            return self._poles[k]
         r = self._red
         s = self.speed_per_mesh_frequency
         A0 = r["K"].astype(complex)
@@ -340,6 +373,15 @@ class MeshReceptance:
         b[m:] = sla.lu_solve(lu, self._W_red.astype(complex))
         Y = g * sla.solve(X, b)  # 1 / (μ - μ_j) = γ / (ω - γ μ_j)
         out = (g * mu, self._W_red.T @ X[:m], self.basis[self.output_dofs] @ X[:m], Y)
+        # a posteriori: against a direct solve at one frequency (kω at 0.618 of the basis range)
+        wc = 0.6180339887 * self.max_frequency / k
+        h_pr = out[1] @ (out[3] / (wc - out[0])[:, None])
+        Zc = self._reduced_Z(k * wc, self.speed(wc))
+        h_d = self._W_red.T @ sla.solve(Zc, self._W_red.astype(complex))
+        err = np.linalg.norm(h_pr - h_d) / np.linalg.norm(h_d)
+        self.pole_check[k] = float(err)
+        if not err <= POLE_CHECK_RTOL:
+            out = None  # this harmonic is solved directly on the reduced basis
         self._poles[k] = out
         return out
 
@@ -360,8 +402,9 @@ class MeshReceptance:
         poles = self.method == "modal" and not self._red_bear and omega > 0
         for k in range(1, H + 1):
             w = k * omega
-            if poles:
-                lam, cw, co, Y = self._pole_residues(k)
+            pr = self._pole_residues(k) if poles else None
+            if pr is not None:
+                lam, cw, co, Y = pr
                 g = 1.0 / (omega - lam)
                 Yg = Y * g[:, None]
                 h[k - 1] = cw @ Yg
@@ -461,21 +504,20 @@ class MeshReceptance:
         frequency ``omega``; K leaves out k_h. Hysteretic damping has no time-domain form
         and is left out.
         """
-        if self._stability_basis is None:
+        key = float(max_frequency)
+        V = self._stability_basis.get(key)
+        if V is None:
             m = self.model
-            n = m.n_dofs
             Kr = (m.K + self._mesh_stiffness()).tocsc()
-            cutoff = 3.0 * max_frequency
-            k = min(n - 2, 30)
-            while True:
-                lam, vec = spla.eigsh(Kr, k=k, M=m.M, sigma=-1.0)
-                if np.max(lam) >= cutoff**2 or k >= n - 2 or k >= 300:
-                    break
-                k = min(n - 2, 2 * k)
+            cutoff = 3.0 * key
+            lam, vec = _lowest_modes(
+                Kr, m.M, cutoff, start=30, cap=STABILITY_MODE_CAP, what="stability basis"
+            )
             att = spla.splu((Kr + m.M).tocsc()).solve(self.W)
             V, _ = np.linalg.qr(np.column_stack([vec[:, lam <= cutoff**2], att]))
-            self._stability_basis = V
-        V = self._stability_basis
+            if len(self._stability_basis) >= 8:
+                self._stability_basis.pop(next(iter(self._stability_basis)))
+            self._stability_basis[key] = V
         speed = self.speed(omega)
         P = lambda A: V.T @ (A @ V)  # noqa: E731
         return P(self.model.M), P(self.model.damping(speed)), P(self.model.stiffness(speed)), V.T @ self.W

@@ -15,6 +15,7 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.describing_functions import BacklashMesh
+from nlgrd.errors import ModelError
 from nlgrd.harmonic_balance import (
     HarmonicSolution,
     ReducedModel,
@@ -33,6 +34,16 @@ _UNITS = {
     "contact_loss_fraction": ("contact_loss_fraction [-]", 1.0),
     "back_contact": ("back_contact", None),
 }
+
+
+#: How a sweep lands on the other branch after a fold (see :func:`sweep`).
+JUMP_STRATEGIES = ("arclength", "restart", "auto", "none")
+
+
+def check_quantity(quantity: str) -> None:
+    """Raise ModelError("quantity") unless ``quantity`` is one of :data:`METRIC_NAMES`."""
+    if quantity not in METRIC_NAMES:
+        raise ModelError("quantity", f"must be one of {', '.join(METRIC_NAMES)}, got {quantity!r}")
 
 
 @dataclass(frozen=True)
@@ -194,27 +205,46 @@ class SweepResult:
         return out
 
     def to_frame(self) -> pd.DataFrame:
-        """Tidy table, one row per point, units in the column names."""
+        """Tidy table, one row per point, units in the column names.
+
+        Says only what is known: a point that did not converge has NA in every numeric
+        and flag column (``stable`` and ``back_contact`` included); ``stable`` is NA where
+        stability was not computed, never False.
+        """
+        ok = np.asarray(self.converged, dtype=bool)
+
+        def num(v):
+            return np.where(ok, np.asarray(v, dtype=float), np.nan)
+
+        def flag(v, known):
+            out = pd.array(np.asarray(v, dtype=bool), dtype="boolean")
+            out[~(ok & known)] = pd.NA
+            return out
+
+        iterations = pd.array(np.asarray(self.iterations), dtype="Int64")
+        iterations[~ok] = pd.NA
         data = {
             "mesh_frequency [Hz]": self.omega / (2 * np.pi),
             "direction": self.direction,
-            "converged": self.converged,
-            "residual [-]": self.residual,
-            "iterations": self.iterations,
-            "stable": self.stable,
-            "floquet_max [-]": self.floquet_max,
+            "converged": ok,
+            "residual [-]": num(self.residual),
+            "iterations": iterations,
+            "stable": flag(self.stable, self.stability_known),
+            "floquet_max [-]": num(self.floquet_max),
         }
         for name in METRIC_NAMES:
             col, scale = _UNITS[name]
             v = self.metrics[name]
-            data[col] = v if scale is None else v * scale
+            data[col] = flag(v, ok) if scale is None else num(v) * scale
         for k in range(self.amplitudes.shape[1]):
-            data[f"dte_amp_{k} [um]"] = self.amplitudes[:, k] * 1e6
+            data[f"dte_amp_{k} [um]"] = num(self.amplitudes[:, k]) * 1e6
         return pd.DataFrame(data)
 
     def plot(self, quantity: str = "dte_rms", ax=None):
         """Plot ``quantity`` against mesh frequency (:func:`nlgrd.plotting.nonlinear.plot_sweep`)."""
         from nlgrd.plotting.nonlinear import plot_sweep
+
+        check_quantity(quantity)
 
         return plot_sweep(self, quantity=quantity, ax=ax)
 
@@ -262,7 +292,7 @@ def _sweep_orders(omegas: NDArray, directions: str | Sequence[str]) -> list[tupl
     out = []
     for d in directions:
         if d not in ("up", "down"):
-            raise ValueError(f"direction must be 'up', 'down' or 'both', got {d!r}")
+            raise ModelError("directions", f"must be 'up', 'down' or 'both', got {d!r}")
         out.append((d, np.sort(omegas) if d == "up" else np.sort(omegas)[::-1]))
     return out
 
@@ -358,6 +388,8 @@ def sweep(
     -------
     SweepResult
     """
+    if jump not in JUMP_STRATEGIES:
+        raise ModelError("jump", f"must be one of {', '.join(map(repr, JUMP_STRATEGIES))}, got {jump!r}")
     mesh = mesh or model.mesh
     omegas = np.asarray(omegas, dtype=float)
     rows: dict[str, list] = {k: [] for k in ("w", "d", "z", "c", "r", "i", "f", "m", "j")}

@@ -1,0 +1,172 @@
+"""Outputs say what is known: unconverged and unknown values are NA, residuals mean one
+thing, reruns are byte-identical, and out-of-range or misspelt requests are errors.
+
+Each test here failed on the code before issue 9 ("The same answer on every machine"):
+unconverged points wrote ``stable = False`` and ``back_contact = True`` (NaN cast to
+bool), sweeps without stability wrote ``stable = False``, continuation residuals were
+scaled by the starting point's force and ``converged`` was set to True, the iterative
+eigensolvers started from random vectors, a reused GearedModel accepted frequencies
+past the ones its bases were built for, and the stability basis kept the cut-off of
+its first call.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nlgrd.continuation import continuation
+from nlgrd.errors import ModelError
+from nlgrd.geared_response import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.model_file import load_model
+from nlgrd.receptance import MeshReceptance, ModeCapWarning, _lowest_modes
+from nlgrd.sdof import SDOFGearPair
+from nlgrd.sweep import sweep
+
+DATA = Path(__file__).resolve().parent.parent / "data"
+LSTE = np.array([0.0, 3e-6, 0.0, 1e-6, 0.0])
+KUBO_SDOF = SDOFGearPair(0.261, 0.2587e9, 50e-6, 2295.0, LSTE, damping_ratio=0.02)
+
+
+def _two_shaft(zeta=0.03):
+    s = load_model(DATA / "models" / "two_shaft.toml")
+    return dc.replace(s, gear_pairs=(dc.replace(s.gear_pairs[0], damping_ratio=zeta),))
+
+
+def test_unconverged_points_are_na_in_every_numeric_and_flag_column():
+    """With one Newton iteration and no fallback most points cannot converge; every
+    column but frequency, direction and the converged flag is NA on those rows, and
+    ``stable`` / ``back_contact`` are nullable booleans, never a False/True guess."""
+    rm = KUBO_SDOF.reduced_model()
+    om = KUBO_SDOF.natural_frequency * np.linspace(0.8, 1.2, 9)
+    res = sweep(rm, om, H=3, max_iter=1, fallback=False, jump="none", stability=True)
+    df = res.to_frame()
+    bad = ~df["converged"].to_numpy(bool)
+    assert bad.sum() >= 3 and (~bad).sum() >= 1
+    meta = {"mesh_frequency [Hz]", "direction", "converged"}
+    for col in df.columns:
+        if col not in meta:
+            assert df.loc[bad, col].isna().all(), col
+    assert str(df["stable"].dtype) == "boolean" and str(df["back_contact"].dtype) == "boolean"
+    assert df.loc[~bad, "stable"].notna().all()
+
+
+def test_sweep_without_stability_writes_stability_as_unknown():
+    """No Floquet multipliers computed: ``stable`` is NA at every point, not False."""
+    rm = KUBO_SDOF.reduced_model()
+    om = KUBO_SDOF.natural_frequency * np.linspace(0.5, 0.7, 5)
+    df = sweep(rm, om, H=3, stability=False).to_frame()
+    assert df["converged"].all()
+    assert df["stable"].isna().all() and df["floquet_max [-]"].isna().all()
+
+
+def test_continuation_residual_is_the_sweep_residual_and_converged_is_computed():
+    """Each curve point's residual equals max|R| / max(|L z|, |G|, |F|) recomputed at that
+    point (the measure sweeps converge on), to 1e-6 relative or 1e-15 absolute, and
+    ``converged`` is that residual against the tolerance."""
+    rm = KUBO_SDOF.reduced_model()
+    wn = KUBO_SDOF.natural_frequency
+    c = continuation(rm, 1.05 * wn, 0.85 * wn, 3, ds_max=0.05, tol=1e-9)
+    curve = c.curve
+    assert len(curve) >= 8
+    for w, z, r in zip(curve.omega, curve.harmonics, curve.residual, strict=True):
+        p = rm.at(float(w), 3)
+        R, _, scale = p.residual_jacobian(z.reshape(-1))
+        expect = np.max(np.abs(R)) / scale
+        assert r == pytest.approx(expect, rel=1e-6, abs=1e-15)
+    np.testing.assert_array_equal(curve.converged, curve.residual <= 1e-9)
+
+
+def test_modal_receptances_and_floquet_are_byte_identical_in_one_process():
+    """Two models built one after the other in one process (the iterative eigensolvers'
+    state differs between them) give byte-identical sweep outputs, floquet_max included."""
+    s = _two_shaft()
+    f0 = gear_pair_mode(s)[0]
+    om = 2 * np.pi * np.linspace(0.8 * f0, 1.2 * f0, 12)
+    frames = []
+    for _ in range(2):
+        m = build_geared_model(s, om.max(), H=3, receptance="modal")
+        frames.append(geared_sweep(s, mesh_frequencies=om, H=3, model=m).to_frame())
+    a, b = (f.to_csv(index=False) for f in frames)
+    assert a == b
+    ok = frames[0]["converged"].to_numpy(bool)
+    assert ok.sum() >= 10 and frames[0].loc[ok, "floquet_max [-]"].notna().all()
+
+
+def test_reused_model_refuses_frequencies_and_harmonics_it_was_not_built_for():
+    """A GearedModel built for mesh frequencies up to f and H = 3 raises ModelError('model')
+    for a sweep reaching 1.5 f or asking H = 5, instead of answering with bases that are
+    too small."""
+    s = _two_shaft()
+    f0 = 2 * np.pi * gear_pair_mode(s)[0]
+    m = build_geared_model(s, f0, H=3)
+    with pytest.raises(ModelError, match="built for mesh frequencies"):
+        geared_sweep(s, mesh_frequencies=np.array([0.9, 1.5]) * f0, H=3, model=m)
+    with pytest.raises(ModelError, match="H <= 3"):
+        geared_sweep(s, mesh_frequencies=np.array([0.9]) * f0, H=5, model=m)
+
+
+def test_stability_basis_follows_the_requested_cutoff():
+    """state_space(ω, f_max) built first for f_max, then for 5 f_max: the second basis
+    holds more modes (it was cached from the first call before)."""
+    s = _two_shaft()
+    f0 = 2 * np.pi * gear_pair_mode(s)[0]
+    mr = MeshReceptance(s, method="direct")
+    small = mr.state_space(f0, f0)[0].shape[0]
+    big = mr.state_space(f0, 5 * f0)[0].shape[0]
+    assert big > 1.5 * small
+    assert mr.state_space(f0, f0)[0].shape[0] == small
+
+
+def test_pole_residue_receptances_are_checked_and_fall_back_to_a_direct_solve(monkeypatch):
+    """The a-posteriori check of the pole-residue form passes on the two-shaft model
+    (difference < 1e-8 for every harmonic); with the check's tolerance forced to fail,
+    each harmonic falls back to the direct reduced solve and gives the same h_k to 1e-8."""
+    import nlgrd.receptance as rec
+
+    s = _two_shaft()
+    f0 = 2 * np.pi * gear_pair_mode(s)[0]
+    mr = MeshReceptance(s, method="modal", max_frequency=5 * f0)
+    h = mr.receptance(0.9 * f0, 5)
+    assert sorted(mr.pole_check) == [1, 2, 3, 4, 5]
+    assert max(mr.pole_check.values()) < 1e-8
+    monkeypatch.setattr(rec, "POLE_CHECK_RTOL", -1.0)
+    mr2 = MeshReceptance(s, method="modal", max_frequency=5 * f0)
+    h2 = mr2.receptance(0.9 * f0, 5)
+    assert all(v is None for v in mr2._poles.values()) and len(mr2._poles) == 5
+    np.testing.assert_allclose(h2, h, rtol=1e-8)
+
+
+def test_mode_basis_cap_is_reported():
+    """A basis that stops doubling at its cap short of the cut-off warns (ModeCapWarning)."""
+    n = 60
+    k = 1e6 * (2 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1))
+    import scipy.sparse as sp
+
+    K, M = sp.csc_matrix(k), sp.identity(n, format="csc")
+    with pytest.warns(ModeCapWarning, match="cap 8"):
+        lam, _ = _lowest_modes(K, M, cutoff=1e9, start=4, cap=8, what="test basis")
+    assert lam.size >= 8
+
+
+@pytest.mark.parametrize(
+    "call, key",
+    [
+        (lambda rm, om: sweep(rm, om, H=3, jump="sideways"), "jump"),
+        (lambda rm, om: sweep(rm, om, H=3, directions="sideways"), "directions"),
+        (lambda rm, om: sweep(rm, om, H=3, stability=False).plot("dslrr"), "quantity"),
+        (lambda rm, om: MeshReceptance(_two_shaft(), method="fast"), "method"),
+    ],
+    ids=["jump", "direction", "quantity", "receptance"],
+)
+def test_option_strings_are_validated_with_the_allowed_values(call, key):
+    """A misspelt option raises ModelError naming the option and listing what is allowed."""
+    rm = KUBO_SDOF.reduced_model()
+    om = KUBO_SDOF.natural_frequency * np.array([0.5, 0.6])
+    with pytest.raises(ModelError) as err:
+        call(rm, om)
+    assert err.value.key == key
+    assert "'" in str(err.value)  # the allowed values are quoted in the message
