@@ -230,3 +230,35 @@ def test_sweep_decisions_survive_permutation_perturbation_and_threads():
             m.contact_loss_fraction > 0, mref.contact_loss_fraction > 0, err_msg=label
         )
         np.testing.assert_allclose(m.dte_rms, mref.dte_rms, rtol=1e-7, err_msg=label)
+
+
+def test_campbell_lists_no_pseudo_modes_of_the_free_rotation():
+    """Kubo's rig, 0-10 000 rpm: the free rotation of the drive train is counted as a
+    rigid-body mode, never listed; overdamped real eigenvalues (Im λ ~ 1e-9 |λ| from
+    rounding) are not listed either. Reference: the lowest flexible mode is the
+    torsional coupling mode at 290 Hz (17 400 rpm), so no 1x critical speed lies below
+    10 000 rpm and no listed frequency lies below 200 Hz."""
+    from nlgrd.modal import campbell
+
+    kubo = load_model(DATA / "case_studies" / "kubo.toml")
+    res = campbell(kubo, np.linspace(0, 10000, 11) * np.pi / 30, n_modes=6)
+    assert np.nanmin(res.frequencies) > 200.0
+    assert res.critical_speeds == []
+    assert modal_analysis(kubo, speed=9000 * np.pi / 30).n_rigid_body == 1
+
+
+@pytest.mark.slow
+def test_cli_sweep_reruns_are_byte_identical(tmp_path):
+    """The same `nlgrd sweep` in two fresh processes writes byte-identical CSVs (Floquet
+    columns included): no random starts, no dependence on process state."""
+    import subprocess
+    import sys
+
+    outs = []
+    for i in range(2):
+        out = tmp_path / f"run{i}.csv"
+        cmd = [sys.executable, "-m", "nlgrd.cli", "sweep", str(DATA / "case_studies" / "kubo.toml")]
+        cmd += ["--rpm", "8000:12000:21", "--out", str(out)]
+        subprocess.run(cmd, check=True, capture_output=True, cwd=tmp_path)
+        outs.append(out.read_bytes())
+    assert outs[0] == outs[1] and len(outs[0]) > 1000
