@@ -153,8 +153,9 @@ class ContinuationResult:
     turning_omegas : ndarray
         Frequencies of the turning points [rad/s] (parabolic interpolation of ω(s)).
     complete : bool
-        The curve reached the end of the frequency range (False: step size collapsed
-        or ``max_steps`` reached).
+        The curve left the frequency range past ``omega_end`` (False: the step size
+        collapsed, ``max_steps`` was reached, or the curve turned back and left the
+        range at ``omega_start``).
     """
 
     curve: SweepResult
@@ -258,7 +259,8 @@ def continuation(
     for p in tracer.trace(first.harmonics, omega_start, direction, ds, ds_min, ds_max, max_steps):
         pts.append(p)
         if len(pts) > 1 and not (lo - 1e-9 * span <= p.omega <= hi + 1e-9 * span):
-            complete = True
+            # left the range: complete only past omega_end (not back out at the start)
+            complete = (p.omega - omega_start) * direction > 0
             break
     n = model.at(omega_start, H).n_coords
     zs = [p.z.reshape(n, -1) for p in pts]

@@ -96,6 +96,7 @@ import numpy as np
 
 from nlgrd.errors import ModelError
 from nlgrd.materials import Material
+from nlgrd.model_checks import check_lste_files, check_model
 from nlgrd.shaft import Shaft
 from nlgrd.system import RotorSystem
 
@@ -156,7 +157,9 @@ def load_model(path: str | os.PathLike) -> RotorSystem:
     ------
     ModelError
         For any bad input (unreadable file, TOML syntax, unknown or missing keys,
-        wrong types, values the model classes refuse), naming the file and the key.
+        wrong types, values the model classes refuse, a physically absurd model, an
+        unreadable or implausible ``lste_file``; see :mod:`nlgrd.model_checks`), naming
+        the file and the key.
     """
     name = os.fspath(path)
     try:
@@ -169,7 +172,12 @@ def load_model(path: str | os.PathLike) -> RotorSystem:
     except OSError as exc:
         raise ModelError("", f"cannot read the file: {exc.strerror or exc}", name) from None
     system = model_from_dict(data, file=name)
-    return _resolve_lste_files(system, os.path.dirname(os.path.abspath(name)))
+    system = _resolve_lste_files(system, os.path.dirname(os.path.abspath(name)))
+    try:
+        check_lste_files(system)
+    except ModelError as exc:
+        raise ModelError(_one_line(exc.key), _one_line(exc.message), name) from None
+    return system
 
 
 def _resolve_lste_files(system: RotorSystem, base: str) -> RotorSystem:
@@ -198,9 +206,17 @@ def model_from_dict(data: Mapping[str, Any], file: str | None = None) -> RotorSy
     Returns
     -------
     RotorSystem
+
+    Raises
+    ------
+    ModelError
+        For bad input, and for a model that :func:`nlgrd.model_checks.check_model`
+        finds absurd (an unsupported shaft, a mesh deflection beyond the tooth depth, ...).
     """
     try:
-        return _read_top(data, _Reader(file))
+        system = _read_top(data, _Reader(file))
+        check_model(system)
+        return system
     except ModelError as exc:
         raise ModelError(_one_line(exc.key), _one_line(exc.message), exc.file or file) from None
 

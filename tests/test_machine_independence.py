@@ -120,9 +120,10 @@ def test_rigid_body_modes_survive_permutation_scaling_and_perturbation(name, sys
 def test_modal_analysis_and_balance_verdict_survive_perturbation(name, system):
     """The modes listed (count of rigid-body modes, 8 lowest damped frequencies to 1e-6
     relative: (near-)double eigenvalues of the non-normal gyroscopic pencil move by
-    ~sqrt(1e-13) = 3e-7 under a 1e-13 perturbation, simple ones by ~1e-13) and the balanced-load verdict on the static torques are the same for the
-    model and for its permuted and 1e-13-perturbed copies; an imbalance of 1e-6 of the
-    torque on a free train is still rejected."""
+    ~sqrt(1e-13) = 3e-7 under a 1e-13 perturbation, simple ones by ~1e-13) and the
+    balanced-load verdict on the static torques are the same for the model and for its
+    permuted and 1e-13-perturbed copies; an imbalance of 1e-6 of the torque on a free
+    train is still rejected."""
     lm = assemble(system)
     rng = np.random.default_rng(11)
     n = lm.n_dofs

@@ -247,7 +247,7 @@ def test_floats_round_trip_exactly(tmp_path):
     rng = np.random.default_rng(1)
     values = np.sort(10.0 ** rng.uniform(-300, 300, 200) * rng.uniform(1, 10, 200))
     shaft = Shaft.uniform(1.0, 0.05, 2)
-    bearing = Bearing(0, 0, kyy=tuple(values), speeds=tuple(values))
+    bearing = Bearing(0, 0, kyy=tuple(values), kzz=1e8, speeds=tuple(values))  # kzz: held in z
     system = RotorSystem((shaft,), bearings=(bearing,))
     path = tmp_path / "floats.toml"
     save_model(system, path)

@@ -170,3 +170,17 @@ def test_option_strings_are_validated_with_the_allowed_values(call, key):
         call(rm, om)
     assert err.value.key == key
     assert "'" in str(err.value)  # the allowed values are quoted in the message
+
+
+def test_continuation_that_turns_back_is_not_complete():
+    """Kubo's rig from 3000 to 5000 Hz: the curve folds back at the main resonance's
+    turning point (near 4273 Hz) and leaves the range below 3000 Hz; that is not a
+    complete curve (it was flagged complete before). From 1000 to 1400 Hz (no fold)
+    it is."""
+    from nlgrd.geared_response import geared_continuation
+
+    kubo = load_model(DATA / "case_studies" / "kubo.toml")
+    c = geared_continuation(kubo, 2 * np.pi * 3000, 2 * np.pi * 5000, 5)
+    assert not c.complete
+    assert c.curve.omega.max() < 2 * np.pi * 4500 and c.curve.omega.min() < 2 * np.pi * 3000
+    assert geared_continuation(kubo, 2 * np.pi * 1000, 2 * np.pi * 1400, 5).complete
