@@ -24,4 +24,5 @@ test: lint
 	$(PY) -m pytest
 
 clean:
-	rm -rf $(VENV) reports/*
+	rm -rf $(VENV)
+	find reports -mindepth 1 -maxdepth 1 ! -name README.md -exec rm -rf {} +

@@ -3,5 +3,21 @@
 Each function takes ``ax=None`` (a new figure when None) and returns the axes.
 Submodules: :mod:`.rotor` (modes, Campbell, frequency response, static deflection),
 :mod:`.gear` (transmission error, mesh stiffness, load sharing),
-:mod:`.nonlinear` (sweeps, time histories).
+:mod:`.nonlinear` (sweeps, continuation curves, time histories),
+:mod:`.common` (the conventions all figures share: colours per sweep direction,
+stability, non-converged and off-scale points; saving a figure with its caption),
+:mod:`.index_page` (the report index, ``reports/index.html``).
+
+``headless``, ``record_caption`` and ``save_figure`` of :mod:`.common` are available
+here; they are imported on first use, so importing this package does not load pyplot.
 """
+
+__all__ = ["headless", "record_caption", "save_figure"]
+
+
+def __getattr__(name: str):
+    if name in __all__:
+        from nlgrd.plotting import common
+
+        return getattr(common, name)
+    raise AttributeError(f"module 'nlgrd.plotting' has no attribute {name!r}")

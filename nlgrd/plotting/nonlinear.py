@@ -1,9 +1,27 @@
-"""Plots of nonlinear mesh responses: sweeps (up/down), continuation curves, time histories."""
+"""Plots of nonlinear mesh responses: sweeps (up/down), continuation curves, time histories.
+
+Sweeps and curves follow the conventions of :mod:`nlgrd.plotting.common`: up and down in
+different colours and markers, stable filled/solid, unstable open/dashed, unknown
+stability half-filled and stated in the legend, non-converged points as crosses on the
+bottom edge counted in the legend, values beyond ``ylim`` as carets on the edge.
+"""
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
+import pandas as pd
+
+from nlgrd.plotting.common import (
+    DIRECTION_MARKERS,
+    UNKNOWN,
+    clip_to_scale,
+    direction_colours,
+    draw_points,
+    flags,
+    get_ax,
+    mark_not_converged,
+    stability_codes,
+)
 
 _LABELS = {
     "dte_rms": ("RMS of alternating DTE [µm]", 1e6),
@@ -14,67 +32,164 @@ _LABELS = {
     "dslr": ("DSLR = max W / W0 [-]", 1.0),
     "contact_loss_fraction": ("contact-loss fraction [-]", 1.0),
 }
+#: Column of the largest Floquet multiplier in sweep tables (finite where stability is known).
+FLOQUET = "floquet_max [-]"
 
 
-def _ax(ax):
-    if ax is None:
-        _, ax = plt.subplots(figsize=(7, 4))
+def _stability(frame: pd.DataFrame) -> np.ndarray:
+    """Stability codes of a sweep table: its ``stable`` column where ``floquet_max`` is finite.
+
+    Without a ``stable`` column every point is unknown; without ``floquet_max`` the
+    ``stable`` column alone decides (NaN/None: unknown).
+    """
+    if "stable" not in frame.columns:
+        return np.full(len(frame), UNKNOWN, dtype=int)
+    known = None
+    if FLOQUET in frame.columns:
+        known = np.isfinite(pd.to_numeric(frame[FLOQUET], errors="coerce").to_numpy(float))
+    return stability_codes(frame["stable"].to_numpy(object), known)
+
+
+def plot_sweep_frame(
+    frame: pd.DataFrame,
+    x: str = "mesh_frequency [Hz]",
+    y: str = "dte_rms [um]",
+    ax=None,
+    label: str | None = None,
+    series: int | tuple | dict | None = None,
+    *,
+    ylim: tuple[float | None, float | None] | None = None,
+    lines: bool = True,
+    sort: bool = True,
+    ms: float = 3.5,
+    lw: float = 1.0,
+    alpha: float = 1.0,
+    not_converged: str = "not converged",
+):
+    """Sweep table(s) with a ``direction`` column: ``y`` against ``x``, one branch per direction.
+
+    Columns used besides ``x`` and ``y``: ``direction``, ``converged`` (missing: finite
+    ``y``), ``stable`` and ``floquet_max [-]`` (missing: stability unknown). Non-converged
+    rows are never drawn as values (their numbers may be NaN or stale): they are crosses
+    on the bottom edge, labelled ``"{label} {direction}: {not_converged} (n)"``.
+
+    Parameters
+    ----------
+    label : str, optional
+        Name of the series in the legend (entries "{label} up", "{label} down", ...).
+    series : int, (up, down) colours or {direction: colour}
+        Colours (default: series 0 of :data:`~nlgrd.plotting.common.SERIES_COLOURS`).
+    ylim : (low, high), optional
+        The scale: values beyond it become carets on the edge, noted in the legend.
+    lines : bool
+        Join consecutive converged points (False: markers only).
+    sort : bool
+        Draw each direction in order of ``x`` (False: in the table's order, e.g. along
+        the arc length of a continuation curve).
+    """
+    ax = get_ax(ax)
+    colours = direction_colours(series)
+    for d in dict.fromkeys(frame["direction"].astype(str).tolist()):
+        part = frame[frame["direction"].astype(str) == d]
+        if sort:
+            part = part.sort_values(x, kind="stable")
+        xv = pd.to_numeric(part[x], errors="coerce").to_numpy(float)
+        yv = pd.to_numeric(part[y], errors="coerce").to_numpy(float)
+        conv = flags(part["converged"].to_numpy(object)) if "converged" in part else np.isfinite(yv)
+        codes = _stability(part)
+        yv = np.where(conv, yv, np.nan)
+        colour = colours.get(d, next(iter(colours.values())))
+        name = f"{label} {d}" if label else d
+        yv, _ = clip_to_scale(ax, xv, yv, ylim, colour, name, codes)
+        draw_points(
+            ax,
+            xv,
+            yv,
+            codes,
+            colour,
+            DIRECTION_MARKERS.get(d, "o"),
+            name,
+            lines=lines,
+            ms=ms,
+            lw=lw,
+            alpha=alpha,
+        )
+        mark_not_converged(ax, xv[~conv], colour, name, not_converged)
+    if ylim is not None:
+        ax.set_ylim(*[lim if lim is not None else cur for lim, cur in zip(ylim, ax.get_ylim(), strict=True)])
+    ax.set_xlabel(x)
+    ax.set_ylabel(y)
     return ax
 
 
-def _runs(mask: np.ndarray) -> list[slice]:
-    """Slices of consecutive equal values of a boolean mask."""
-    if mask.size == 0:
-        return []
-    edges = np.nonzero(mask[1:] != mask[:-1])[0] + 1
-    bounds = np.concatenate([[0], edges, [mask.size]])
-    return [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=False)]
+def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
+    """The columns :func:`plot_sweep_frame` reads, from a :class:`~nlgrd.sweep.SweepResult`.
 
-
-def plot_sweep(result, quantity: str = "dte_rms", ax=None, label: str | None = None):
-    """Sweep curve(s) against mesh frequency [Hz]: up ▲ solid, down ▼ dashed-dotted.
-
-    Points flagged unstable (Floquet) are drawn as open markers; non-converged points
-    are omitted (NaN).
+    ``quantity`` (a metric name) becomes column "value" in the units of the axis label;
+    frequencies are mesh frequencies [Hz].
     """
-    ax = _ax(ax)
-    ylabel, scale = _LABELS.get(quantity, (quantity, 1.0))
-    styles = {"up": ("C0", "^", "-"), "down": ("C3", "v", "-."), "curve": ("k", "o", "-")}
-    for d in dict.fromkeys(result.direction.tolist()):
-        part = result.select(d)
-        c, mk, ls = styles.get(d, ("C2", "o", "-"))
-        f = part.omega / (2 * np.pi)
-        y = part.metrics[quantity] * scale
-        name = f"{label + ' ' if label else ''}{d}"
-        ax.plot(f, y, ls, color=c, lw=1, marker=mk, ms=3, label=name)
-        unstable = part.stability_known & ~part.stable & part.converged
-        if np.any(unstable):
-            ax.plot(f[unstable], y[unstable], mk, mfc="none", color=c, ms=6, label=f"{name} unstable")
+    _, scale = _LABELS.get(quantity, (quantity, 1.0))
+    n = len(result.omega)
+    fm = getattr(result, "floquet_max", None)
+    return pd.DataFrame(
+        {
+            "mesh_frequency [Hz]": np.asarray(result.omega, dtype=float) / (2 * np.pi),
+            "direction": np.asarray(result.direction).astype(str),
+            "converged": np.asarray(result.converged, dtype=object),
+            "stable": np.asarray(result.stable, dtype=object),
+            FLOQUET: np.full(n, np.nan) if fm is None else np.asarray(fm, dtype=float),
+            "value": np.asarray(result.metrics[quantity], dtype=float) * scale,
+        }
+    )
+
+
+def plot_sweep(
+    result,
+    quantity: str = "dte_rms",
+    ax=None,
+    label: str | None = None,
+    series: int | tuple | dict | None = None,
+    ylim: tuple[float | None, float | None] | None = None,
+):
+    """Sweep curve(s) of a :class:`~nlgrd.sweep.SweepResult` against mesh frequency [Hz].
+
+    Up ▲ and down ▼ in different colours; stable filled/solid, unstable open/dashed,
+    unknown stability half-filled and stated in the legend; non-converged points as
+    crosses on the bottom edge, counted in the legend (see :func:`plot_sweep_frame`).
+    """
+    ax = plot_sweep_frame(
+        sweep_table(result, quantity), "mesh_frequency [Hz]", "value", ax, label, series, ylim=ylim
+    )
     ax.set_xlabel("mesh frequency [Hz]")
-    ax.set_ylabel(ylabel)
+    ax.set_ylabel(_LABELS.get(quantity, (quantity, 1.0))[0])
     ax.legend(fontsize=8)
     return ax
 
 
-def plot_continuation(result, quantity: str = "dte_rms", ax=None, color: str = "k", label: str = "HB"):
-    """Continuation curve: stable parts solid, unstable parts dashed, turning points marked."""
-    ax = _ax(ax)
-    ylabel, scale = _LABELS.get(quantity, (quantity, 1.0))
-    curve = result.curve
-    f = curve.omega / (2 * np.pi)
-    y = curve.metrics[quantity] * scale
-    stable = curve.stable
-    first = {True: True, False: True}
-    for sl in _runs(stable):
-        s = bool(stable[sl.start])
-        ext = slice(max(sl.start - 1, 0), sl.stop)  # join the pieces
-        lab = f"{label} {'stable' if s else 'unstable'}" if first[s] else None
-        first[s] = False
-        ax.plot(f[ext], y[ext], "-" if s else "--", color=color, lw=1.2, label=lab)
-    for i in result.turning_indices:
-        ax.plot(f[i], y[i], "x", color=color, ms=7)
+def plot_continuation(
+    result,
+    quantity: str = "dte_rms",
+    ax=None,
+    color: str = "k",
+    label: str = "HB",
+    ylim: tuple[float | None, float | None] | None = None,
+):
+    """Continuation curve along its arc length: stable solid/filled, unstable dashed/open.
+
+    Points of unknown stability are half-filled and stated in the legend; turning
+    points are marked with stars.
+    """
+    ax = get_ax(ax)
+    table = sweep_table(result.curve, quantity)
+    plot_sweep_frame(
+        table, "mesh_frequency [Hz]", "value", ax, label, {"curve": color}, ylim=ylim, sort=False, ms=2.5
+    )
+    f, y = table["mesh_frequency [Hz]"].to_numpy(), table["value"].to_numpy()
+    turning = np.asarray(result.turning_indices, dtype=int)
+    if turning.size:
+        ax.plot(f[turning], y[turning], "*", color=color, ms=8, ls="none", label=f"{label} turning points")
     ax.set_xlabel("mesh frequency [Hz]")
-    ax.set_ylabel(ylabel)
+    ax.set_ylabel(_LABELS.get(quantity, (quantity, 1.0))[0])
     ax.legend(fontsize=8)
     return ax
 
@@ -84,7 +199,7 @@ def plot_time_history(history, quantity: str = "delta", ax=None, label: str | No
 
     ``quantity``: "delta" (DTE δ and LSTE e, µm), "deflection" (δ - e, µm) or "force" (W, N).
     """
-    ax = _ax(ax)
+    ax = get_ax(ax)
     t = history.t * 1e3
     if quantity == "force":
         ax.plot(t, history.force, label=label or "W")

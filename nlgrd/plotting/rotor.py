@@ -2,16 +2,13 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.lines import Line2D
 
+from nlgrd.plotting.common import STABLE, UNSTABLE, get_ax
 from nlgrd.system import DOFS_PER_NODE
 
-
-def _ax(ax):
-    if ax is None:
-        _, ax = plt.subplots(figsize=(7, 4))
-    return ax
+_ax = get_ax
 
 
 def plot_mode_shape(result, mode: int = 0, ax=None):
@@ -35,7 +32,13 @@ def plot_mode_shape(result, mode: int = 0, ax=None):
                 amp = np.abs(phi[dofs[:, d]]) / peak
                 ax.plot(shaft.node_positions, amp, styles[s % 4], ms=3, label=f"shaft {s} |{name}|")
     f = result.natural_frequencies[mode]
-    ax.set_title(f"mode {mode + 1}: {f:.1f} Hz, {result.kinds[mode]}, {result.whirl[mode]}")
+    zeta = float(np.asarray(result.damping_ratios)[mode])
+    verdict = "unstable" if zeta < 0 else "stable" if getattr(result, "damped", True) else "undamped analysis"
+    ax.set_title(
+        f"mode {mode + 1}: {f:.1f} Hz, ζ = {zeta:.3g} ({verdict}), "
+        f"{result.kinds[mode]}, {result.whirl[mode]}",
+        fontsize=9,
+    )
     ax.set_xlabel("axial position [m]")
     ax.set_ylabel("amplitude / family maximum [-]")
     ax.set_ylim(0, 1.08)
@@ -43,26 +46,122 @@ def plot_mode_shape(result, mode: int = 0, ax=None):
     return ax
 
 
-def plot_campbell(result, ax=None):
-    """Damped natural frequencies against speed, order lines and critical speeds."""
-    ax = _ax(ax)
+#: Colours of the whirl directions in the Campbell diagram ("-": no lateral motion).
+WHIRL_COLOURS = {"forward": "C0", "backward": "C3", "planar": "C2", "-": "k"}
+_WHIRL_NAMES = {
+    "forward": "forward whirl",
+    "backward": "backward whirl",
+    "planar": "planar (lateral, no whirl)",
+    "-": "torsional/axial (no lateral motion)",
+}
+
+
+def campbell_breaks(result, crossing_gap: float = 0.01):
+    """Where a Campbell mode curve must not be joined: mask (n_speeds - 1, n_modes).
+
+    ``breaks[i, j]`` is True when mode slot j (the j-th lowest frequency at each speed)
+    may change identity between speeds i and i+1: its whirl or kind changes, a value is
+    missing, or a neighbouring slot comes within ``crossing_gap`` (relative) at either
+    speed, so that the frequency ordering may swap (a crossing or veering).
+    """
+    F = np.asarray(result.frequencies, dtype=float)
+    W = np.asarray(result.whirl, dtype=object)
+    K = np.asarray(result.kinds, dtype=object)
+    breaks = (W[1:] != W[:-1]) | (K[1:] != K[:-1]) | ~np.isfinite(F[1:]) | ~np.isfinite(F[:-1])
+    with np.errstate(invalid="ignore"):
+        near = np.zeros(F.shape, dtype=bool)
+        gap = np.abs(np.diff(F, axis=1)) <= crossing_gap * np.abs(F[:, 1:])
+        near[:, 1:] |= gap
+        near[:, :-1] |= gap
+    return breaks | near[1:] | near[:-1]
+
+
+def plot_campbell(result, ax=None, crossing_gap: float = 0.01):
+    """Damped natural frequencies against speed, order lines and critical speeds.
+
+    Each mode slot is drawn as points coloured by whirl (:data:`WHIRL_COLOURS`), joined
+    only where its identity is unambiguous (:func:`campbell_breaks`): never across a
+    change of whirl or kind or a near-crossing with a neighbouring slot. Stability is
+    the sign of the damping ratio: stable points filled and joined solid, unstable
+    (ζ < 0) open and joined dashed; the legend says which occur.
+    """
+    ax = get_ax(ax, figsize=(9.5, 4.5))
     rpm = result.speeds * 30 / np.pi
-    colours = {"forward": "C0", "backward": "C3", "planar": "C2", "-": "k", "": "k"}
-    for j in range(result.frequencies.shape[1]):
-        w = result.whirl[:, j]
-        for label, c in colours.items():
-            y = np.where(w == label, result.frequencies[:, j], np.nan)
-            if np.any(np.isfinite(y)):
-                ax.plot(rpm, y, ".", ms=3, color=c)
+    F = np.asarray(result.frequencies, dtype=float)
+    Z = np.asarray(result.damping_ratios, dtype=float)
+    W = np.asarray(result.whirl, dtype=object)
+    breaks = campbell_breaks(result, crossing_gap)
+    with np.errstate(invalid="ignore"):
+        unstable = Z < 0
+    for j in range(F.shape[1]):
+        for whirl, c in WHIRL_COLOURS.items():
+            on = W[:, j] == whirl
+            for code, keep in ((STABLE, on & ~unstable[:, j]), (UNSTABLE, on & unstable[:, j])):
+                if np.any(keep & np.isfinite(F[:, j])):
+                    ax.plot(
+                        rpm[keep],
+                        F[keep, j],
+                        ls="none",
+                        marker="o",
+                        ms=2.5 if code == STABLE else 4,
+                        color=c,
+                        mfc=c if code == STABLE else "none",
+                    )
+            join = ~breaks[:, j] & on[:-1] & on[1:]
+            for ls, m in (
+                ("-", join & ~unstable[:-1, j] & ~unstable[1:, j]),
+                ("--", join & (unstable[:-1, j] | unstable[1:, j])),
+            ):
+                if np.any(m):
+                    xs = np.column_stack([rpm[:-1][m], rpm[1:][m], np.full(m.sum(), np.nan)]).ravel()
+                    ys = np.column_stack([F[:-1, j][m], F[1:, j][m], np.full(m.sum(), np.nan)]).ravel()
+                    ax.plot(xs, ys, ls=ls, color=c, lw=1)
+    handles = [
+        Line2D([], [], color=c, marker="o", ms=3, lw=1, label=_WHIRL_NAMES[w])
+        for w, c in WHIRL_COLOURS.items()
+        if np.any(W == w)
+    ]
+    n_unstable = int(np.sum(unstable & np.isfinite(F)))
+    handles.append(Line2D([], [], color="0.3", marker="o", ms=3, lw=1, label="stable (ζ ≥ 0): filled, solid"))
+    if n_unstable:
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color="0.3",
+                marker="o",
+                ms=4,
+                mfc="none",
+                ls="--",
+                lw=1,
+                label=f"unstable (ζ < 0): open, dashed ({n_unstable} points)",
+            )
+        )
     for label, order in result.orders.items():
-        ax.plot(rpm, order * result.speeds / (2 * np.pi), "k--", lw=0.8)
+        ax.plot(rpm, order * result.speeds / (2 * np.pi), "k:", lw=0.8)
         ax.annotate(label, (rpm[-1], order * result.speeds[-1] / (2 * np.pi)), fontsize=7)
-    for c in result.critical_speeds:
-        ax.plot(c["speed [rpm]"], c["frequency [Hz]"], "ko", mfc="none")
-    ax.set_ylim(0, np.nanmax(result.frequencies) * 1.05)
+    if result.orders:
+        handles.append(Line2D([], [], color="k", ls=":", lw=0.8, label="excitation orders"))
+    crit = list(result.critical_speeds)
+    if crit:
+        ax.plot(
+            [c["speed [rpm]"] for c in crit],
+            [c["frequency [Hz]"] for c in crit],
+            "kD",
+            ms=4,
+            ls="none",
+        )
+        handles.append(
+            Line2D([], [], color="k", marker="D", ms=4, ls="none", label=f"critical speeds ({len(crit)})")
+        )
+    if np.any(np.isfinite(F)):
+        ax.set_ylim(0, np.nanmax(F) * 1.05)
     ax.set_xlabel("speed [rpm]")
     ax.set_ylabel("damped natural frequency [Hz]")
-    ax.set_title("Campbell diagram (blue forward, red backward, black torsional/axial)")
+    ax.set_title(
+        "Campbell diagram (curves broken where the mode's whirl or kind changes or modes cross)", fontsize=9
+    )
+    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     return ax
 
 

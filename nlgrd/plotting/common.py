@@ -1,0 +1,278 @@
+"""Conventions shared by every nlgrd figure, and saving a figure with its caption.
+
+Sweeps and curves (:mod:`.nonlinear`, and the notebooks through it):
+
+- Direction by colour *and* marker: up ▲ in the first colour of the series' pair, down ▼
+  in the second (:data:`SERIES_COLOURS`), so two directions never share a colour.
+- Stability: stable points filled, joined by solid lines; unstable points open (marker
+  face 'none'), joined by dashed lines; points whose stability was not computed
+  half-filled (``fillstyle="bottom"``), joined by solid lines, and the legend says
+  "stability not computed".
+- Points that did not converge: a cross on the bottom edge of the axes at their
+  frequency, counted in the legend ("... not converged (n)"), never a value.
+- Values beyond a given scale (``ylim``): a caret on the edge of the axes at their
+  frequency, with the count and the largest value in the legend; the line breaks there
+  instead of running off the axes.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+#: (up, down) colours of series 0, 1, ...: distinct hues within and across pairs.
+SERIES_COLOURS = (("C0", "C3"), ("C2", "C1"), ("C4", "C6"), ("C9", "C8"), ("C5", "C7"))
+#: Markers of the sweep directions.
+DIRECTION_MARKERS = {"up": "^", "down": "v", "curve": "o"}
+#: Stability codes of :func:`stability_codes`.
+STABLE, UNSTABLE, UNKNOWN = 1, 0, -1
+#: Legend wording of points whose stability was not computed.
+UNKNOWN_TEXT = "stability not computed"
+#: Height of the not-converged crosses (axes fraction).
+NC_HEIGHT = 0.015
+
+
+def get_ax(ax=None, figsize=(7, 4)):
+    """``ax``, or the axes of a new figure when None."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=figsize)
+    return ax
+
+
+def direction_colours(series: int | tuple | dict | None = None) -> dict[str, str]:
+    """{direction: colour} for a series index, an (up, down) pair or a ready mapping."""
+    if isinstance(series, dict):
+        return dict(series)
+    if series is None:
+        series = 0
+    if isinstance(series, int | np.integer):
+        up, down = SERIES_COLOURS[int(series) % len(SERIES_COLOURS)]
+    else:
+        up, down = series
+    return {"up": up, "down": down, "curve": up}
+
+
+def flags(values, size: int | None = None, default: bool = False) -> NDArray:
+    """Booleans from a flag column that may hold NaN, None or the strings 'True'/'False'.
+
+    Missing entries become ``default``; ``values=None`` gives ``size`` of them.
+    """
+    if values is None:
+        return np.full(size or 0, default, dtype=bool)
+    codes = stability_codes(values)
+    return np.where(codes == UNKNOWN, default, codes == STABLE)
+
+
+def stability_codes(stable, known=None) -> NDArray:
+    """:data:`STABLE`, :data:`UNSTABLE` or :data:`UNKNOWN` per point.
+
+    ``stable`` may hold booleans, NaN, None or ``pd.NA`` (not computed), 0/1 or the
+    strings of a CSV file; ``known`` (optional mask) marks where stability was computed, e.g. a finite
+    largest Floquet multiplier, for results that store False where it is unknown.
+    """
+    arr = np.asarray(stable, dtype=object).reshape(-1)
+    out = np.full(arr.size, UNKNOWN, dtype=int)
+    for i, v in enumerate(arr):
+        if v is None or v is pd.NA or (isinstance(v, float | np.floating) and np.isnan(v)):
+            continue
+        if isinstance(v, str):
+            s = v.strip().lower()
+            if s in ("true", "1", "1.0"):
+                out[i] = STABLE
+            elif s in ("false", "0", "0.0"):
+                out[i] = UNSTABLE
+            continue
+        out[i] = STABLE if bool(v) else UNSTABLE
+    if known is not None:
+        out[~np.asarray(known, dtype=bool).reshape(-1)] = UNKNOWN
+    return out
+
+
+def _pieces(x: NDArray, y: NDArray, keep: NDArray) -> tuple[NDArray, NDArray]:
+    """The segments i -> i+1 with ``keep[i]``, as one NaN-separated polyline."""
+    xs, ys = [], []
+    for i in np.nonzero(keep)[0]:
+        xs += [x[i], x[i + 1], np.nan]
+        ys += [y[i], y[i + 1], np.nan]
+    return np.array(xs, dtype=float), np.array(ys, dtype=float)
+
+
+def draw_points(
+    ax,
+    x,
+    y,
+    codes,
+    colour: str,
+    marker: str,
+    label: str,
+    *,
+    lines: bool = True,
+    ms: float = 3.5,
+    lw: float = 1.0,
+    alpha: float = 1.0,
+    zorder: float = 2,
+) -> list:
+    """One branch (points in drawing order; NaN y = a gap) in the stability conventions.
+
+    Segments between two finite points are solid, or dashed when either end is unstable.
+    Markers: filled (stable, labelled ``label``), open (unstable, ``label + ", unstable"``),
+    half-filled (unknown, ``label + ", stability not computed"``). Returns the artists.
+    """
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    codes = np.asarray(codes, dtype=int)
+    artists = []
+    if lines and x.size > 1:
+        ok = np.isfinite(x) & np.isfinite(y)
+        seg = ok[:-1] & ok[1:]
+        bad = (codes[:-1] == UNSTABLE) | (codes[1:] == UNSTABLE)
+        for keep, ls in ((seg & ~bad, "-"), (seg & bad, "--")):
+            if np.any(keep):
+                px, py = _pieces(x, y, keep)
+                (ln,) = ax.plot(px, py, ls=ls, color=colour, lw=lw, alpha=alpha, zorder=zorder)
+                artists.append(ln)
+    shown = np.isfinite(y)
+    styles = (
+        (STABLE, label, {"mfc": colour, "fillstyle": "full"}),
+        (UNSTABLE, f"{label}, unstable", {"mfc": "none", "fillstyle": "none", "mew": 1.0}),
+        (UNKNOWN, f"{label}, {UNKNOWN_TEXT}", {"fillstyle": "bottom", "mfc": colour, "mfcalt": "none"}),
+    )
+    for code, lab, kw in styles:
+        m = shown & (codes == code)
+        if np.any(m):
+            size = ms * 1.4 if code == UNSTABLE else ms * 1.3 if code == UNKNOWN else ms
+            (mk,) = ax.plot(
+                x[m],
+                y[m],
+                ls="none",
+                marker=marker,
+                ms=size,
+                color=colour,
+                mec=colour,
+                label=lab,
+                alpha=alpha,
+                zorder=zorder + 0.1,
+                **{("markerfacecoloralt" if k == "mfcalt" else k): v for k, v in kw.items()},
+            )
+            artists.append(mk)
+    return artists
+
+
+def mark_not_converged(ax, x, colour: str, label: str, text: str = "not converged"):
+    """Crosses on the bottom edge of the axes at ``x``, labelled ``"{label}: {text} (n)"``.
+
+    Returns the artist (None when ``x`` is empty).
+    """
+    x = np.asarray(x, dtype=float)
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        return None
+    (ln,) = ax.plot(
+        x,
+        np.full(x.size, NC_HEIGHT),
+        ls="none",
+        marker="x",
+        ms=5,
+        mew=1.2,
+        color=colour,
+        transform=ax.get_xaxis_transform(),
+        clip_on=False,
+        zorder=5,
+        label=f"{label}: {text} ({x.size})",
+    )
+    return ln
+
+
+def clip_to_scale(ax, x, y, ylim, colour: str, label: str, codes=None) -> tuple[NDArray, list]:
+    """Replace the values of ``y`` outside ``ylim = (low, high)`` by NaN; mark them.
+
+    Each side with values beyond it gets carets on that edge of the axes (at the limit
+    itself, in data coordinates) labelled with their count and extreme value; the caller
+    sets the axes limits to ``ylim``. Returns (the clipped y, the marker artists).
+    """
+    y = np.asarray(y, dtype=float).copy()
+    x = np.asarray(x, dtype=float)
+    artists = []
+    if ylim is None:
+        return y, artists
+    low, high = ylim
+    for limit, side in ((high, "above"), (low, "below")):
+        if limit is None:
+            continue
+        with np.errstate(invalid="ignore"):
+            off = (y > limit) if side == "above" else (y < limit)
+        if not np.any(off):
+            continue
+        if side == "above":
+            i, word = int(np.argmax(np.where(off, y, -np.inf))), "max"
+        else:
+            i, word = int(np.argmin(np.where(off, y, np.inf))), "min"
+        note = f"{label}: {int(off.sum())} {side} the scale ({word} {y[i]:.3g} at {x[i]:.5g})"
+        open_ = codes is not None and np.all(np.asarray(codes)[off] == UNSTABLE)
+        (mk,) = ax.plot(
+            x[off],
+            np.full(int(off.sum()), limit, dtype=float),
+            ls="none",
+            marker="^" if side == "above" else "v",
+            ms=6,
+            color=colour,
+            mfc="none" if open_ else colour,
+            clip_on=False,
+            zorder=5,
+            label=note,
+        )
+        artists.append(mk)
+        y[off] = np.nan
+    return y, artists
+
+
+def headless() -> None:
+    """Draw without a display (the Agg backend): for scripts and report builds."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+
+
+FIGURES_FILE = "figures.json"
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_bytes(data)
+    os.replace(tmp, path)
+
+
+def record_caption(path: str | os.PathLike, caption: str) -> None:
+    """Record ``caption`` for the figure file ``path`` in ``figures.json`` beside it.
+
+    The file maps figure names to one-sentence descriptions (what the figure compares);
+    the report index (:mod:`nlgrd.reports`) shows them.
+    """
+    path = Path(path)
+    index = path.parent / FIGURES_FILE
+    captions = json.loads(index.read_text(encoding="utf-8")) if index.exists() else {}
+    captions[path.name] = " ".join(caption.split())
+    text = json.dumps(dict(sorted(captions.items())), indent=1, ensure_ascii=False) + "\n"
+    _write_atomic(index, text.encode("utf-8"))
+
+
+def save_figure(fig, path: str | os.PathLike, caption: str | None = None, dpi: int = 110) -> Path:
+    """Save ``fig`` as PNG at ``path`` (tight layout, written atomically); returns the path.
+
+    With ``caption`` (one sentence: what the figure compares) it is recorded in
+    ``figures.json`` beside the figure (:func:`record_caption`).
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.tight_layout()
+    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    fig.savefig(tmp, dpi=dpi)
+    os.replace(tmp, path)
+    if caption:
+        record_caption(path, caption)
+    return path

@@ -1,0 +1,381 @@
+"""Figures a reader can trust at a glance: the artists of the sweep and Campbell plots.
+
+Small synthetic result tables (never pixels): up and down sweeps get different colours;
+unstable points open markers and dashed lines; unknown stability (NaN, None, or False
+without Floquet multipliers) half-filled markers and the words "stability not computed"
+in the legend; non-converged points (NaN values, as the sweeps write them) crosses on the
+bottom edge counted in the legend; values beyond the scale carets at the axis limit with
+a note; Campbell curves broken where the whirl or kind changes or two modes come close.
+"""
+
+from __future__ import annotations
+
+import json
+from types import SimpleNamespace
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.colors import to_rgba  # noqa: E402
+
+from nlgrd.plotting import save_figure  # noqa: E402
+from nlgrd.plotting.common import NC_HEIGHT, stability_codes  # noqa: E402
+from nlgrd.plotting.index_page import NO_CAPTION, index_html  # noqa: E402
+from nlgrd.plotting.nonlinear import plot_continuation, plot_sweep, plot_sweep_frame  # noqa: E402
+from nlgrd.plotting.rotor import campbell_breaks, plot_campbell  # noqa: E402
+
+X, Y = "mesh_frequency [Hz]", "dte_rms [um]"
+
+
+@pytest.fixture(autouse=True)
+def _close():
+    yield
+    plt.close("all")
+
+
+def sweep_frame(n=8, stable=True, floquet=1.0):
+    """Up and down sweeps over the same n frequencies, all converged."""
+    f = np.linspace(100.0, 800.0, n)
+    up = pd.DataFrame({X: f, "direction": "up", "converged": True, Y: 1 + f / 100})
+    down = pd.DataFrame({X: f[::-1], "direction": "down", "converged": True, Y: 2 + f[::-1] / 100})
+    frame = pd.concat([up, down], ignore_index=True)
+    frame["stable"] = pd.Series([stable] * len(frame), dtype=object)
+    frame["floquet_max [-]"] = floquet
+    return frame
+
+
+def data_lines(ax):
+    """Lines drawn in data coordinates with finite points (no crosses, no proxies)."""
+    return [ln for ln in ax.get_lines() if ln.get_transform() == ax.transData]
+
+
+def by_label(ax, text):
+    found = [ln for ln in ax.get_lines() if text in ln.get_label()]
+    assert found, f"no artist labelled with {text!r}: {[ln.get_label() for ln in ax.get_lines()]}"
+    return found
+
+
+def colour_of(line):
+    return to_rgba(line.get_color())
+
+
+def test_up_and_down_get_different_colours_not_only_markers():
+    ax = plot_sweep_frame(sweep_frame(), X, Y, label="FE")
+    up = {colour_of(ln) for ln in by_label(ax, "FE up")}
+    down = {colour_of(ln) for ln in by_label(ax, "FE down")}
+    assert len(up) == 1 and len(down) == 1 and up != down
+    # every drawn line (markers and segments) has one of the two colours: two colours in all
+    assert {colour_of(ln) for ln in data_lines(ax)} == up | down
+    assert by_label(ax, "FE up")[0].get_marker() != by_label(ax, "FE down")[0].get_marker()
+
+
+def test_two_series_use_four_colours():
+    ax = plot_sweep_frame(sweep_frame(), X, Y, label="FE", series=0)
+    plot_sweep_frame(sweep_frame(), X, Y, ax=ax, label="SDOF", series=1)
+    assert len({colour_of(ln) for ln in data_lines(ax)}) == 4
+
+
+def test_stable_points_are_filled_and_solid():
+    ax = plot_sweep_frame(sweep_frame(stable=True), X, Y, label="FE")
+    (mk,) = [ln for ln in by_label(ax, "FE up") if ln.get_marker() not in ("None", None, "")]
+    assert mk.get_fillstyle() == "full" and mk.get_markerfacecolor() != "none"
+    styles = {ln.get_linestyle() for ln in data_lines(ax) if ln.get_label().startswith("_")}
+    assert styles == {"-"}
+    assert not any("unstable" in ln.get_label() or "not computed" in ln.get_label() for ln in ax.get_lines())
+
+
+def test_unstable_points_are_open_and_joined_dashed():
+    frame = sweep_frame()
+    unstable = (frame["direction"] == "up") & frame[X].between(300, 600)
+    frame.loc[unstable, "stable"] = False
+    frame.loc[unstable, "floquet_max [-]"] = 1.3
+    ax = plot_sweep_frame(frame, X, Y, label="FE")
+    (open_,) = by_label(ax, "FE up, unstable")
+    assert open_.get_markerfacecolor() == "none"
+    np.testing.assert_allclose(np.sort(open_.get_xdata()), np.sort(frame.loc[unstable, X]))
+    up_colour = colour_of(open_)
+    dashed = [ln for ln in data_lines(ax) if ln.get_linestyle() == "--"]
+    assert dashed and all(colour_of(ln) == up_colour for ln in dashed)
+    # the dashed pieces join exactly the segments with an unstable end
+    xs = np.asarray(dashed[0].get_xdata(), dtype=float)
+    assert np.nanmin(xs) < 300 and np.nanmax(xs) > 600
+    filled = [ln for ln in by_label(ax, "FE up") if ln.get_label() == "FE up"]
+    assert filled[0].get_markerfacecolor() != "none"
+
+
+@pytest.mark.parametrize(
+    "stable, floquet",
+    [(np.nan, 1.0), (None, 1.0), (pd.NA, 1.0), (False, np.nan)],
+    ids=["NaN", "None", "NA", "False without Floquet"],
+)
+def test_unknown_stability_is_half_filled_and_stated(stable, floquet):
+    ax = plot_sweep_frame(sweep_frame(stable=stable, floquet=floquet), X, Y, label="FE")
+    ax.legend()
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "FE up, stability not computed" in texts and "FE down, stability not computed" in texts
+    for ln in by_label(ax, "stability not computed"):
+        assert ln.get_fillstyle() == "bottom"
+    assert not any("unstable" in t for t in texts)
+    # the lines between them are not dashed: unknown is not unstable
+    assert {ln.get_linestyle() for ln in data_lines(ax) if ln.get_label().startswith("_")} == {"-"}
+
+
+def test_nullable_boolean_column_as_the_sweep_tables_write_it():
+    """``SweepResult.to_frame`` writes ``stable`` as pandas' nullable "boolean" (NA: unknown)."""
+    frame = sweep_frame()
+    frame["stable"] = pd.array([True, False, None, True] * (len(frame) // 4), dtype="boolean")
+    ax = plot_sweep_frame(frame, X, Y, label="FE")
+    labels = {ln.get_label() for ln in ax.get_lines()}
+    assert {"FE up", "FE up, unstable", "FE up, stability not computed"} <= labels
+
+
+def test_stable_column_missing_means_unknown():
+    frame = sweep_frame().drop(columns=["stable", "floquet_max [-]"])
+    ax = plot_sweep_frame(frame, X, Y, label="FE")
+    assert by_label(ax, "FE up, stability not computed")
+
+
+def test_non_converged_points_are_crosses_at_the_bottom_counted_in_the_legend():
+    frame = sweep_frame()
+    bad = (frame["direction"] == "down") & frame[X].isin(frame[X].unique()[[1, 4, 5]])
+    # as the sweeps will write them: NaN in every numeric and flag column
+    frame.loc[bad, [Y, "floquet_max [-]"]] = np.nan
+    frame["stable"] = frame["stable"].astype(object)
+    frame.loc[bad, "stable"] = None
+    frame["converged"] = frame["converged"].astype(object)
+    frame.loc[bad, "converged"] = False
+    ax = plot_sweep_frame(frame, X, Y, label="FE")
+    ax.legend()
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "FE down: not converged (3)" in texts
+    assert not any("FE up: not converged" in t for t in texts)
+    (cross,) = by_label(ax, "not converged")
+    assert cross.get_marker() == "x"
+    assert cross.get_transform() != ax.transData  # y in axes coordinates: the bottom edge
+    np.testing.assert_allclose(cross.get_ydata(), NC_HEIGHT)
+    np.testing.assert_allclose(np.sort(cross.get_xdata()), np.sort(frame.loc[bad, X]))
+    down = colour_of(by_label(ax, "FE down")[0])
+    assert colour_of(cross) == down
+    # no down-sweep value is drawn at those frequencies
+    for ln in data_lines(ax):
+        if colour_of(ln) == down:
+            x, y = np.asarray(ln.get_xdata(), float), np.asarray(ln.get_ydata(), float)
+            assert not np.isin(x[np.isfinite(y)], frame.loc[bad, X].to_numpy()).any()
+
+
+def test_stale_values_of_non_converged_points_are_not_drawn():
+    """A table that keeps the last iterate's value of a failed point still shows only a cross."""
+    frame = sweep_frame()
+    frame.loc[3, "converged"] = False
+    frame.loc[3, Y] = 99.0
+    ax = plot_sweep_frame(frame, X, Y, label="FE")
+    for ln in data_lines(ax):
+        assert 99.0 not in np.asarray(ln.get_ydata(), float)
+    assert by_label(ax, "FE up: not converged (1)")
+
+
+def test_values_off_the_scale_are_clipped_to_the_axis_limit_with_a_note():
+    frame = sweep_frame()
+    up = frame.index[frame["direction"] == "up"]
+    frame.loc[up[4], Y] = 30.0
+    frame.loc[up[5], Y] = 12.0
+    ax = plot_sweep_frame(frame, X, Y, label="SDOF", ylim=(0, 10))
+    assert ax.get_ylim() == (0, 10)
+    (caret,) = by_label(ax, "above the scale")
+    np.testing.assert_allclose(caret.get_ydata(), 10.0)  # at the axis limit
+    np.testing.assert_allclose(np.sort(caret.get_xdata()), np.sort(frame.loc[up[4:6], X]))
+    assert caret.get_label().startswith("SDOF up: 2 above the scale (max 30")
+    assert not caret.get_clip_on()
+    # no line runs off the top: every other vertex lies within the scale
+    for ln in data_lines(ax):
+        if ln is not caret:
+            y = np.asarray(ln.get_ydata(), float)
+            assert np.all(y[np.isfinite(y)] <= 10.0)
+
+
+def sweep_result(n=6):
+    """A SweepResult-like object (the attributes plot_sweep reads), stability partly unknown."""
+    omega = 2 * np.pi * np.concatenate([np.linspace(100, 600, n), np.linspace(600, 100, n)])
+    direction = np.array(["up"] * n + ["down"] * n)
+    converged = np.ones(2 * n, dtype=bool)
+    converged[2] = False
+    stable = np.array([True, False, None, True, True, True] + [None] * n, dtype=object)
+    floquet = np.array([0.9, 1.2, np.nan, 0.9, 0.9, 0.9] + [np.nan] * n)
+    rms = np.linspace(1e-6, 3e-6, 2 * n)
+    rms[2] = np.nan
+    return SimpleNamespace(
+        omega=omega,
+        direction=direction,
+        converged=converged,
+        stable=stable,
+        floquet_max=floquet,
+        metrics={"dte_rms": rms},
+    )
+
+
+def test_plot_sweep_of_a_result_states_everything_in_its_legend():
+    ax = plot_sweep(sweep_result(), "dte_rms")
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert {"up", "up, unstable", "up: not converged (1)", "down, stability not computed"} <= set(texts)
+    assert ax.get_xlabel() == "mesh frequency [Hz]"
+    res = sweep_result()
+    (up,) = [ln for ln in ax.get_lines() if ln.get_label() == "up"]
+    np.testing.assert_allclose(up.get_ydata(), res.metrics["dte_rms"][[0, 3, 4, 5]] * 1e6)  # in µm
+
+
+def test_every_plot_function_takes_and_returns_the_axes():
+    _, ax = plt.subplots()
+    assert plot_sweep_frame(sweep_frame(), X, Y, ax=ax) is ax
+    assert plot_sweep(sweep_result(), ax=ax) is ax
+    assert plot_campbell(campbell_result(), ax=ax) is ax
+    assert plot_continuation(continuation_result(), ax=ax) is ax
+    assert plot_sweep(sweep_result()) is not ax  # ax=None: a new figure
+
+
+def continuation_result():
+    """An S-shaped curve in arc-length order: stable, unstable middle branch, stable."""
+    s = np.linspace(-1.2, 1.2, 25)
+    f = 500 + 100 * (s**3 - s)  # folds back between the turning points
+    y = 1e-6 * (3 + s)
+    stable = np.abs(s) > 0.577
+    curve = SimpleNamespace(
+        omega=2 * np.pi * f,
+        direction=np.array(["curve"] * s.size),
+        converged=np.ones(s.size, dtype=bool),
+        stable=stable,
+        floquet_max=np.where(stable, 0.9, 1.5),
+        metrics={"dte_rms": y},
+    )
+    return SimpleNamespace(curve=curve, turning_indices=np.array([7, 17]))
+
+
+def test_continuation_keeps_the_arc_order_and_dashes_the_unstable_branch():
+    ax = plot_continuation(continuation_result(), color="k", label="HB")
+    dashed = [ln for ln in data_lines(ax) if ln.get_linestyle() == "--"]
+    assert len(dashed) == 1
+    xs = np.asarray(dashed[0].get_xdata(), float)
+    xs = xs[np.isfinite(xs)]
+    assert np.any(np.diff(xs) < 0)  # not re-sorted by frequency: it runs back along the fold
+    assert by_label(ax, "HB curve, unstable")[0].get_markerfacecolor() == "none"
+    assert by_label(ax, "HB turning points")
+
+
+def campbell_result(ns=11):
+    """Three mode slots over speed: slot 0 changes whirl at index 5, slots 1 and 2 touch at
+    index 8 (ordering may swap), slot 2 turns unstable (negative damping) from index 9."""
+    speeds = np.linspace(0, 1000, ns)
+    F = np.column_stack([100 + 0.01 * speeds, 200 + 0.05 * speeds, 300 - 0.01 * speeds])
+    F[8, 2] = F[8, 1] * 1.005
+    Z = np.full(F.shape, 0.02)
+    Z[9:, 2] = -0.01
+    whirl = np.array([["forward", "-", "backward"]] * ns, dtype=object)
+    whirl[5:, 0] = "backward"
+    kinds = np.array([["lateral", "torsional", "lateral"]] * ns, dtype=object)
+    crit = [{"order": "1x", "mode": 1, "speed [rpm]": 6000.0, "frequency [Hz]": 100.0}]
+    return SimpleNamespace(
+        speeds=speeds,
+        frequencies=F,
+        damping_ratios=Z,
+        whirl=whirl,
+        kinds=kinds,
+        orders={"1x": 1.0},
+        critical_speeds=crit,
+    )
+
+
+def joined(ax, x0, x1, y0, y1):
+    """Whether any line of ``ax`` has a segment from (x0, y0) to (x1, y1)."""
+    for ln in ax.get_lines():
+        x, y = np.asarray(ln.get_xdata(), float), np.asarray(ln.get_ydata(), float)
+        if x.size < 2 or ln.get_linestyle() in ("None", "none", ""):
+            continue
+        hit = np.isclose(x[:-1], x0) & np.isclose(x[1:], x1) & np.isclose(y[:-1], y0) & np.isclose(y[1:], y1)
+        if np.any(hit):
+            return True
+    return False
+
+
+def marker_colour(ax, x, y):
+    """Colour of the marker drawn at (x, y)."""
+    for ln in ax.get_lines():
+        if ln.get_linestyle() in ("None", "none", ""):
+            xs, ys = np.asarray(ln.get_xdata(), float), np.asarray(ln.get_ydata(), float)
+            if np.any(np.isclose(xs, x) & np.isclose(ys, y)):
+                return colour_of(ln)
+    raise AssertionError(f"no marker at {(x, y)}")
+
+
+def test_campbell_curves_break_at_whirl_changes_and_near_crossings():
+    res = campbell_result()
+    br = campbell_breaks(res)
+    assert br[4, 0] and not br[3, 0] and not br[5, 0]  # slot 0: forward up to speed 4, backward from 5
+    assert br[7, 1] and br[8, 1] and br[7, 2] and br[8, 2]  # slots 1, 2 touch at speed 8
+    ax = plot_campbell(res)
+    rpm = res.speeds * 30 / np.pi
+    F = res.frequencies
+    assert joined(ax, rpm[3], rpm[4], F[3, 0], F[4, 0])
+    assert not joined(ax, rpm[4], rpm[5], F[4, 0], F[5, 0])
+    assert not joined(ax, rpm[7], rpm[8], F[7, 1], F[8, 1])
+    assert not joined(ax, rpm[8], rpm[9], F[8, 2], F[9, 2])
+    # the points on either side of the change carry their whirl's colour
+    assert marker_colour(ax, rpm[4], F[4, 0]) == to_rgba("C0")  # forward
+    assert marker_colour(ax, rpm[5], F[5, 0]) == to_rgba("C3")  # backward
+
+
+def test_campbell_draws_stability_and_counts_critical_speeds():
+    ax = plot_campbell(campbell_result())
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(t.startswith("unstable (ζ < 0)") and "(2 points)" in t for t in texts)
+    assert any(t.startswith("stable (ζ ≥ 0)") for t in texts)
+    assert "critical speeds (1)" in texts
+    rpm = campbell_result().speeds * 30 / np.pi
+    F = campbell_result().frequencies
+    open_ = [ln for ln in ax.get_lines() if ln.get_markerfacecolor() == "none" and ln.get_marker() == "o"]
+    assert open_ and np.allclose(np.sort(open_[0].get_xdata()), rpm[9:])
+    assert joined(ax, rpm[9], rpm[10], F[9, 2], F[10, 2])
+    dashed = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"]
+    assert dashed
+
+
+def test_stability_codes_read_csv_strings_and_missing_values():
+    codes = stability_codes(np.array(["True", "False", "", None, np.nan, True, 0], dtype=object))
+    assert codes.tolist() == [1, 0, -1, -1, -1, 1, 0]
+    assert stability_codes([True, True], known=[True, False]).tolist() == [1, -1]
+
+
+def test_save_figure_records_its_caption(tmp_path):
+    _, ax = plt.subplots()
+    ax.plot([0, 1], [0, 1])
+    save_figure(ax.figure, tmp_path / "b.png", "Second   figure,\n one line.")
+    save_figure(ax.figure, tmp_path / "a.png", "First figure.")
+    assert (tmp_path / "a.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    captions = json.loads((tmp_path / "figures.json").read_text())
+    assert list(captions) == ["a.png", "b.png"]
+    assert captions["b.png"] == "Second figure, one line."
+    assert not list(tmp_path.glob(".*"))  # no temporary files left
+
+
+def test_index_page_lists_every_figure_with_its_caption_and_settings(tmp_path):
+    from nlgrd.reports import ROOT, record_settings
+
+    part = tmp_path / "models"
+    part.mkdir()
+    for name in ("x_campbell.png", "x_modes.png"):
+        (part / name).write_bytes(b"\x89PNG")
+    (part / "x_campbell.csv").write_text("a\n1\n")
+    (part / "figures.json").write_text(json.dumps({"x_campbell.png": "Frequencies against speed."}))
+    record_settings(part, {"mode": "fast"}, key="run")
+    record_settings(part, {"harmonics H": 5, "mesh damping ratio": 0.005})
+    page = index_html(tmp_path, fast=True, parts=("models",), root=ROOT)
+    assert '<img src="models/x_campbell.png"' in page and '<img src="models/x_modes.png"' in page
+    assert "Frequencies against speed." in page and NO_CAPTION in page
+    assert '<a href="models/x_campbell.csv">' in page
+    assert "<td>harmonics H</td><td>5</td>" in page and "<td>mesh damping ratio</td><td>0.005</td>" in page
+    assert "built in fast mode" in page and "<td>nlgrd</td>" in page
+    assert str(tmp_path) not in page
+    assert page == index_html(tmp_path, fast=True, parts=("models",), root=ROOT)
