@@ -36,6 +36,29 @@ _UNITS = {
 }
 
 
+#: Significant digits of the written Floquet multiplier modulus, and the band around 1
+#: written as exactly 1 (a neutral mode: an undamped mode or the drift of a free one).
+FLOQUET_DIGITS = 10
+NEUTRAL_BAND = 1e-9
+
+
+def floquet_output(values: NDArray) -> NDArray:
+    """max |μ| as written: 10 significant digits, neutral multipliers as exactly 1.
+
+    The monodromy's eigenvalues carry rounding noise of ~1e-13 that also depends on the
+    alignment of the arrays in memory (it changes between runs of the same command); a
+    neutral multiplier would otherwise be written as 1 ± noise. Rounded to 10 digits
+    (quantum 1e-9, far above the noise, far below the stability margin 1e-6) the column
+    is the same from run to run and machine to machine.
+    """
+    v = np.asarray(values, dtype=float).copy()
+    ok = np.isfinite(v) & (v > 0)
+    v[ok & (np.abs(v - 1.0) <= NEUTRAL_BAND)] = 1.0
+    e = np.floor(np.log10(v[ok]))
+    v[ok] = np.round(v[ok] / 10**e, FLOQUET_DIGITS - 1) * 10**e
+    return v
+
+
 #: How a sweep lands on the other branch after a fold (see :func:`sweep`).
 JUMP_STRATEGIES = ("arclength", "restart", "auto", "none")
 
@@ -230,7 +253,7 @@ class SweepResult:
             "residual [-]": num(self.residual),
             "iterations": iterations,
             "stable": flag(self.stable, self.stability_known),
-            "floquet_max [-]": num(self.floquet_max),
+            "floquet_max [-]": floquet_output(num(self.floquet_max)),
         }
         for name in METRIC_NAMES:
             col, scale = _UNITS[name]
