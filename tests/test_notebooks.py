@@ -204,7 +204,18 @@ def test_golden_curves(outputs, name):
     written = sorted(p.name for p in out.glob("*.csv"))
     assert written == [p.name for p in goldens]
     for g in goldens:
-        assert_same_table(read(out, g.name), pd.read_csv(g), f"{name}/{g.name}")
+        actual, golden = read(out, g.name), pd.read_csv(g)
+        if g.name == "landmarks.csv":
+            # TD vs HB differences [%] measure the time integration's own error: it stops at a
+            # steady state within 1e-4 of the DTE range (TD_OPTIONS in notebook 01), so they
+            # are known to ±0.01 percentage points, not to rtol 1e-4 (Haswell vs SkylakeX
+            # kernels: 0.0760 vs 0.0767 %)
+            td = golden["landmark"].str.startswith("TD vs HB").to_numpy()
+            np.testing.assert_allclose(
+                actual.loc[td, "value"].to_numpy(float), golden.loc[td, "value"].to_numpy(float), atol=0.01
+            )
+            actual, golden = actual[~td].reset_index(drop=True), golden[~td].reset_index(drop=True)
+        assert_same_table(actual, golden, f"{name}/{g.name}")
 
 
 @pytest.mark.notebook
