@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from nlgrd.continuation import ContinuationResult, continuation
 from nlgrd.describing_functions import BacklashMesh, real_to_complex
 from nlgrd.errors import ModelError
+from nlgrd.floquet import FloquetCache
 from nlgrd.harmonic_balance import LinearStateSpace, ReducedModel
 from nlgrd.receptance import MeshReceptance
 from nlgrd.sweep import SweepResult, sweep
@@ -131,11 +132,14 @@ def build_geared_model(
         E = real_to_complex(mesh.offset(H_)[0])
         return mr.force_derivative(omega, H_, E[:, None])
 
+    # one store for the model's state spaces: a down sweep finds the up sweep's Floquet work
+    floquet_cache = FloquetCache(maxsize=4096)
+
     @lru_cache(maxsize=4)
     def state_space_at(omega: float) -> LinearStateSpace:
         # modes to 3x the highest mesh frequency: Floquet verdicts as with modes to 3H x
         # (tests/test_geared_response.py), at a tenth of the size
-        return LinearStateSpace(*mr.state_space(omega, max_mesh_frequency))
+        return LinearStateSpace(*mr.state_space(omega, max_mesh_frequency), cache=floquet_cache)
 
     reduced = ReducedModel(
         kappa=mr.kappa,

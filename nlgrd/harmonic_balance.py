@@ -27,7 +27,8 @@ or the paper's quasi-linear receptance iteration (``method="quasi-linear"``).
 Stability: Floquet multipliers of the exact monodromy matrix of the piecewise-linear
 variational equation (:func:`floquet_multipliers`; exact for the backlash law since f
 is continuous, so no saltation terms), or Hill's method (:func:`hill_multipliers`)
-for a linear part given as matrices (polynomial in the frequency).
+for a linear part given as matrices (polynomial in the frequency). Both live in
+:mod:`nlgrd.floquet` and are re-exported here.
 """
 
 from __future__ import annotations
@@ -38,7 +39,6 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.optimize as so
 from numpy.typing import ArrayLike, NDArray
 
@@ -48,6 +48,15 @@ from nlgrd.describing_functions import (
     real_to_complex,
 )
 from nlgrd.errors import ModelError
+from nlgrd.floquet import (  # noqa: F401  (re-exported: the stability code lives in nlgrd.floquet)
+    FloquetCache,
+    _tangent_pieces,
+    floquet_multipliers,
+    harmonic_solution_stability,
+    hill_multipliers,
+    tangent_spectrum,
+)
+from nlgrd.floquet import free_modes as _free_modes
 from nlgrd.rigid_body import complement, rigid_body_modes
 
 # --------------------------------------------------------------------------------------
@@ -268,12 +277,19 @@ class LinearStateSpace:
     coordinates y = Wᵀ q. K excludes the nonlinear elements' stiffness (the mesh k_h);
     D includes the mesh damping. For the single-DOF gear pair M = [[m_eq]], D = [[c_m]],
     K = [[0]], W = [[1]].
+
+    ``cache``: an optional :class:`nlgrd.floquet.FloquetCache` shared by the state
+    spaces of one model (one per mesh frequency): Floquet work is then found again when
+    a sweep comes back to a frequency (the down sweep after the up sweep), keyed by the
+    matrices' :attr:`digest`. Without it each state space keeps its own
+    (:attr:`floquet_cache`).
     """
 
     M: NDArray
     D: NDArray
     K: NDArray
     W: NDArray
+    cache: FloquetCache | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         for name in ("M", "D", "K", "W"):
@@ -289,11 +305,20 @@ class LinearStateSpace:
 
         These move no nonlinear element and are neither restrained nor damped (the
         torsional rigid-body rotation of a whole free drive train); they give neutral
-        Floquet multipliers μ = 1 in a Jordan block. Decided by
-        :func:`nlgrd.rigid_body.rigid_body_modes` (scaled tolerances).
+        Floquet multipliers μ = 1 in a Jordan block. Decided by the fast
+        :func:`nlgrd.floquet.free_modes` when it can (the tolerances of
+        :func:`nlgrd.rigid_body.rigid_body_modes`), else by ``rigid_body_modes``. Both
+        see a free mode that a projected basis holds as one of its vectors (the stability
+        basis of a free drive train, Kubo's rig), whose stiffness diagonal is rounding.
         """
-        Ksym = (self.K + self.K.T) / 2
-        return rigid_body_modes(Ksym, self.M, constraints=(self.K, self.D, self.W.T))
+        F = _free_modes(self.K, self.D, self.W)
+        if F is None:
+            Ksym = (self.K + self.K.T) / 2
+            return rigid_body_modes(Ksym, self.M, constraints=(self.K, self.D, self.W.T))
+        if F.shape[1] == 0:
+            return F
+        L = np.linalg.cholesky(F.T @ self.M @ F)
+        return np.linalg.solve(L, F.T).T  # M-orthonormal: Rᵀ M R = I
 
     @cached_property
     def deflated(self) -> LinearStateSpace:
@@ -302,11 +327,31 @@ class LinearStateSpace:
         With q = Φ η + P r, Pᵀ M Φ = 0, the rigid-body coordinates η decouple exactly
         (KΦ = DΦ = 0, WᵀΦ = 0), so the stability of the periodic solution is that of r.
         """
-        phi = self.rigid_body_modes()
+        if self.cache is None:
+            phi = self.rigid_body_modes()
+        else:
+            phi = self.cache.get(("rigid", self.digest), self.rigid_body_modes)
         if phi.shape[1] == 0:
             return self
         P = complement(phi, self.M)
-        return LinearStateSpace(P.T @ self.M @ P, P.T @ self.D @ P, P.T @ self.K @ P, P.T @ self.W)
+        return LinearStateSpace(
+            P.T @ self.M @ P, P.T @ self.D @ P, P.T @ self.K @ P, P.T @ self.W, cache=self.cache
+        )
+
+    @cached_property
+    def digest(self) -> bytes:
+        """Hash of M, D, K, W (the key of this state space's entries in a shared cache)."""
+        h = hashlib.blake2b(digest_size=20)
+        for a in (self.M, self.D, self.K, self.W):
+            a = np.ascontiguousarray(a)
+            h.update(str(a.shape).encode())
+            h.update(a.tobytes())
+        return h.digest()
+
+    @cached_property
+    def floquet_cache(self) -> FloquetCache:
+        """This state space's own bounded store of Floquet work (factorisations, certificates)."""
+        return FloquetCache()
 
 
 # --------------------------------------------------------------------------------------
@@ -750,151 +795,3 @@ class ReducedModel:
             nonlinearities=nls,
             state_space=LinearStateSpace(M, D, K, W),
         )
-
-
-# --------------------------------------------------------------------------------------
-# Stability
-# --------------------------------------------------------------------------------------
-
-
-def _tangent_pieces(nonlinearities: Sequence, harmonics: NDArray, n: int) -> tuple[NDArray, NDArray]:
-    """Common breaks over [0, 2π] and the n x n tangent stiffness on each piece."""
-    segs = []
-    for nl in nonlinearities:
-        idx = list(nl.coords)
-        br, kt = nl.tangent_segments(harmonics[idx])
-        segs.append((idx, br, kt))
-    allb = [np.mod(br[:-1], 2 * np.pi) for _, br, _ in segs]
-    breaks = np.unique(np.concatenate([[0.0, 2 * np.pi], *allb])) if allb else np.array([0.0, 2 * np.pi])
-    breaks = breaks[np.append(True, np.diff(breaks) > 1e-14)]
-    mids = 0.5 * (breaks[:-1] + breaks[1:])
-    Kt = np.zeros((mids.size, n, n))
-    for idx, br, kt in segs:
-        rel = np.mod(mids - br[0], 2 * np.pi) + br[0]
-        seg = np.clip(np.searchsorted(br, rel, side="right") - 1, 0, kt.shape[0] - 1)
-        Kt[np.ix_(np.arange(mids.size), idx, idx)] += kt[seg]
-    return breaks, Kt
-
-
-_EIG_CACHE: dict[bytes, NDArray] = {}
-
-
-def floquet_multipliers(
-    state_space: LinearStateSpace,
-    nonlinearities: Sequence,
-    harmonics: ArrayLike,
-    omega: float,
-    deflate: bool = True,
-) -> NDArray[np.complex128]:
-    """Floquet multipliers of a periodic solution from the exact monodromy matrix.
-
-    The variational equation M η'' + D η' + (K + W K_t(θ) Wᵀ) η = 0 has a piecewise
-    constant tangent K_t (k_h in contact, 0 in separation for the backlash law), so the
-    monodromy matrix is the ordered product of matrix exponentials exp(A_i Δt_i) over
-    the contact intervals. The backlash force is continuous, so the saltation matrices
-    at the switching instants are the identity and this product is exact. With one
-    contact state over the whole period it is exp(A T), whose eigenvalues are exp(λ_i T)
-    for the eigenvalues λ_i of A (no matrix exponential needed). Free
-    rigid-body modes (neutral multipliers μ = 1 in a Jordan block, which rounding splits
-    into 1 ± sqrt(eps)) are removed first when ``deflate`` (:meth:`LinearStateSpace.deflated`).
-    """
-    ss = state_space.deflated if deflate else state_space
-    Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
-    N = ss.M.shape[0]
-    breaks, Kt = _tangent_pieces(nonlinearities, Y, ss.W.shape[1])
-    Minv = np.linalg.inv(ss.M)
-    MD = Minv @ ss.D
-    Phi = np.eye(2 * N)
-    A = np.zeros((2 * N, 2 * N))
-    A[:N, N:] = np.eye(N)
-    A[N:, N:] = -MD
-    if all(np.array_equal(Kt[i], Kt[0]) for i in range(1, Kt.shape[0])):
-        # one tangent all period: the variational equation is time-invariant, μ = exp(λ T);
-        # λ cached by the state matrix (an up and a down sweep meet the same ones)
-        A[N:, :N] = -Minv @ (ss.K + ss.W @ Kt[0] @ ss.W.T)
-        key = hashlib.blake2b(A.tobytes(), digest_size=20).digest()
-        lam = _EIG_CACHE.get(key)
-        if lam is None:
-            lam = np.linalg.eigvals(A)
-            if len(_EIG_CACHE) >= 4096:
-                _EIG_CACHE.pop(next(iter(_EIG_CACHE)))
-            _EIG_CACHE[key] = lam
-        return np.exp(lam * (breaks[-1] - breaks[0]) / omega)
-    cache: dict = {}
-    for i in range(Kt.shape[0]):
-        dt = (breaks[i + 1] - breaks[i]) / omega
-        key = Kt[i].tobytes()
-        if key not in cache:
-            Ai = A.copy()
-            Ai[N:, :N] = -Minv @ (ss.K + ss.W @ Kt[i] @ ss.W.T)
-            cache[key] = Ai
-        Phi = sla.expm(cache[key] * dt) @ Phi
-    return np.linalg.eigvals(Phi)
-
-
-def tangent_spectrum(nonlinearities: Sequence, harmonics: ArrayLike, n: int, n_max: int) -> NDArray:
-    """Fourier coefficients T_m = (1/2π) ∫ K_t(θ) e^{-imθ} dθ, m = -n_max..n_max, shape (2n_max+1, n, n)."""
-    Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
-    breaks, Kt = _tangent_pieces(nonlinearities, Y, n)
-    m = np.arange(-n_max, n_max + 1)
-    t1, t2 = breaks[:-1], breaks[1:]
-    w = np.empty((m.size, t1.size), dtype=complex)
-    nz = m != 0
-    w[nz] = (np.exp(-1j * np.outer(m[nz], t2)) - np.exp(-1j * np.outer(m[nz], t1))) * 1j / (2 * np.pi)
-    w[nz] /= m[nz][:, None]
-    w[~nz] = (t2 - t1) / (2 * np.pi)
-    return np.einsum("ms,sij->mij", w, Kt)
-
-
-def hill_multipliers(
-    state_space: LinearStateSpace,
-    nonlinearities: Sequence,
-    harmonics: ArrayLike,
-    omega: float,
-    n_hill: int = 30,
-) -> NDArray[np.complex128]:
-    """Floquet multipliers by Hill's method (quadratic eigenproblem in the Floquet exponent).
-
-    With η = e^{λt} Σ_k p_k e^{ikωt}, k = -n_hill..n_hill, the variational equation gives
-    [(λ + ikω)² M + (λ + ikω) D + K] p_k + Σ_m W T_{k-m} Wᵀ p_m = 0 (T: tangent Fourier
-    coefficients; at λ = 0 this is the harmonic-balance Jacobian in complex form),
-    linearised to a 2N(2n_hill+1) eigenproblem. The 2N exponents with the smallest
-    |Im λ| are kept (fundamental strip) and μ = exp(λ 2π/ω) returned. Truncation error
-    decays slowly for the discontinuous tangent of the backlash law; prefer
-    :func:`floquet_multipliers`. This is the route when the linear part is polynomial.
-    """
-    ss = state_space.deflated
-    N = ss.M.shape[0]
-    nk = 2 * n_hill + 1
-    T = tangent_spectrum(nonlinearities, harmonics, ss.W.shape[1], 2 * n_hill)
-    k = np.arange(-n_hill, n_hill + 1)
-    size = N * nk
-    M2 = np.kron(np.eye(nk), ss.M).astype(complex)
-    D1 = np.zeros((size, size), dtype=complex)
-    K0 = np.zeros((size, size), dtype=complex)
-    for a, ka in enumerate(k):
-        sl = slice(a * N, (a + 1) * N)
-        iw = 1j * ka * omega
-        D1[sl, sl] = 2 * iw * ss.M + ss.D
-        K0[sl, sl] = iw * iw * ss.M + iw * ss.D + ss.K
-        for b, kb in enumerate(k):
-            K0[sl, b * N : (b + 1) * N] += ss.W @ T[2 * n_hill + ka - kb] @ ss.W.T
-    M2inv = np.linalg.inv(M2)
-    A = np.block([[np.zeros((size, size)), np.eye(size)], [-M2inv @ K0, -M2inv @ D1]])
-    lam = np.linalg.eigvals(A)
-    lam = lam[np.argsort(np.abs(lam.imag))][: 2 * N]
-    return np.exp(lam * 2 * np.pi / omega)
-
-
-def harmonic_solution_stability(
-    model: ReducedModel, solution: HarmonicSolution, method: str = "monodromy"
-) -> HarmonicSolution:
-    """Attach Floquet multipliers (``method`` "monodromy" or "hill") to a converged solution."""
-    ss = model.linear_state_space(solution.omega)
-    if ss is None or not solution.converged:
-        return solution
-    if method == "hill":
-        mu = hill_multipliers(ss, model.nonlinearities, solution.harmonics, solution.omega)
-    else:
-        mu = floquet_multipliers(ss, model.nonlinearities, solution.harmonics, solution.omega)
-    return solution.with_multipliers(mu)

@@ -48,7 +48,11 @@ def _scaled_null_space(K, rtol: float) -> NDArray:
     n = K.shape[0]
     diag = np.abs(np.asarray(K.diagonal(), dtype=float))
     d = np.sqrt(diag)
-    d[diag <= 1e-300] = 1.0  # a DOF with no stiffness at all: its row is zero
+    # Diagonals at rounding level (a free rotation projected onto a basis, ~1e-20 of the
+    # largest) are zeros: scaling them up to 1 would make noise look like stiffness.
+    # With d = sqrt(max) their scaled rows stay <= sqrt(n eps), far inside rtol's reach.
+    dmax = float(diag.max()) if n else 0.0
+    d[diag <= n * np.finfo(float).eps * dmax] = np.sqrt(dmax) if dmax > 0 else 1.0
     Dinv = sp.diags(1.0 / d)
     if n <= DENSE_LIMIT:
         Ks = _dense(Dinv @ (sp.csr_matrix(K) if not sp.issparse(K) else K) @ Dinv)
