@@ -579,7 +579,7 @@ def _revisit(entry, times: NDArray) -> NDArray | None:
     if t0.shape != times.shape:
         return None
     x = float(np.sum(g * np.abs(times - t0)))
-    return mu if x * np.exp(x) <= REVISIT_RTOL else None
+    return mu if x <= REVISIT_RTOL and x * np.exp(x) <= REVISIT_RTOL else None
 
 
 def _product(Es: list[NDArray]) -> NDArray:

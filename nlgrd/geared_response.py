@@ -24,6 +24,7 @@ from nlgrd.describing_functions import BacklashMesh, real_to_complex
 from nlgrd.errors import ModelError
 from nlgrd.floquet import FloquetCache
 from nlgrd.harmonic_balance import LinearStateSpace, ReducedModel
+from nlgrd.harmonic_convergence import LADDER, OUTPUT_RTOL, converged_continuation, converged_sweep
 from nlgrd.receptance import MeshReceptance
 from nlgrd.sweep import SweepResult, sweep
 from nlgrd.system import RotorSystem
@@ -150,6 +151,11 @@ def build_geared_model(
         force_derivative=force_derivative,
     )
     return GearedModel(system, mr, mesh, reduced, bearing_dofs, float(max_mesh_frequency), int(H))
+
+
+#: Bearing outputs below this fraction of the largest of their kind (over bearings and
+#: points) are rounding of the recovery, not response.
+RECOVERY_RTOL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -293,6 +299,10 @@ def bearing_response(model: GearedModel, result: SweepResult) -> BearingResponse
         sl = slice(a, a + 200)
         out["displacement_max"][rows[sl]] = _radial_maxima(Qs[sl])
         out["force_max"][rows[sl]] = _radial_maxima(Fs[sl])
+    # A bearing the mesh does not load (a stub shaft coupled in torsion only) gets
+    # rounding, 1e-60 and below, which differs from machine to machine: written as 0.
+    for v in out.values():
+        v[np.abs(v) <= RECOVERY_RTOL * np.nanmax(np.abs(v))] = 0.0
     return BearingResponse(**out)
 
 
@@ -300,7 +310,7 @@ def geared_sweep(
     system: RotorSystem,
     mesh_frequencies: NDArray | None = None,
     rpm: NDArray | None = None,
-    H: int = 5,
+    H: int | None = None,
     directions: str = "both",
     *,
     method: str = "newton",
@@ -311,6 +321,7 @@ def geared_sweep(
     jump: str = "auto",
     model: GearedModel | None = None,
     progress: Callable[[int, int], None] | None = None,
+    harmonic_rtol: float = OUTPUT_RTOL,
 ) -> GearedSweepResult:
     """Up and/or down harmonic-balance sweep of a geared FE model.
 
@@ -322,8 +333,11 @@ def geared_sweep(
         Mesh frequencies [rad/s]; or
     rpm : array_like, optional
         pinion speeds [rpm].
-    H : int
-        Number of harmonics (default 5, as in the paper).
+    H : int, optional
+        Number of harmonics. Default: chosen so that RMS DTE and maximum mesh force are
+        within ``harmonic_rtol`` (0.5 %) of the H -> infinity answer and every jump stays
+        put (:func:`nlgrd.harmonic_convergence.converged_sweep`; the estimate is stored
+        per point). Give 5 for the paper's choice.
     directions : {"up", "down", "both"}
     method : {"newton", "quasi-linear", "hybr"}
         Solver (see :func:`nlgrd.harmonic_balance.solve`).
@@ -356,13 +370,14 @@ def geared_sweep(
             gp = system.gear_pairs[0]
             s_p = abs(system.shafts[gp.pinion_shaft].speed_ratio)
             top = np.max(rpm) * np.pi / 30 * gp.geometry.teeth_pinion * s_p
-        model = build_geared_model(system, float(top), H=H, receptance=receptance)
+        model = build_geared_model(system, float(top), H=H or LADDER[-1], receptance=receptance)
     omegas = np.asarray(
         mesh_frequencies if mesh_frequencies is not None else model.mesh_frequency(rpm), float
     )
     if omegas.ndim != 1 or len(omegas) < 1 or not np.all(np.isfinite(omegas)) or np.any(omegas <= 0):
         raise ModelError("mesh_frequencies", "must be a non-empty list of positive finite frequencies")
-    model.check_range(omegas, H)
+    ladder = _ladder(model) if H is None else ()
+    model.check_range(omegas, H if H is not None else ladder[-1])
     count = {"i": 0}
     n_total = len(omegas) * (2 if directions == "both" else 1)
     base_kappa = model.reduced.kappa
@@ -381,43 +396,72 @@ def geared_sweep(
         kappa_derivative=model.reduced.kappa_derivative,
         force_derivative=model.reduced.force_derivative,
     )
-    res = sweep(
-        reduced,
-        omegas,
-        H=H,
-        directions=directions,
-        method=method,
-        stability=stability,
-        tol=tol,
-        max_iter=max_iter,
-        jump=jump,
+    options = dict(
+        directions=directions, method=method, stability=stability, tol=tol, max_iter=max_iter, jump=jump
     )
+    if H is None:
+        label = getattr(progress, "label", None)
+
+        def on_rung(H_: int) -> None:
+            count["i"] = 0
+            if label is not None:
+                progress.label = f"{label} (H = {H_})"
+
+        res = converged_sweep(reduced, omegas, ladder=ladder, rtol=harmonic_rtol, on_rung=on_rung, **options)
+    else:
+        res = sweep(reduced, omegas, H=H, **options)
     bearings = bearing_response(model, res)
     names = [
         b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(model.system.bearings)
     ]
-    return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), names, H)
+    return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), names, res.H)
 
 
 def geared_continuation(
     system: RotorSystem,
     omega_start: float,
     omega_end: float,
-    H: int = 5,
+    H: int | None = None,
     *,
     model: GearedModel | None = None,
     stability: bool = True,
+    harmonic_rtol: float = OUTPUT_RTOL,
     **kwargs,
 ) -> ContinuationResult:
     """Pseudo-arc-length continuation of a geared FE model's response in mesh frequency.
 
     Returns the whole response curve, unstable branch included
-    (:func:`nlgrd.continuation.continuation`; ``kwargs`` are passed on).
+    (:func:`nlgrd.continuation.continuation`; ``kwargs`` are passed on). ``H`` default:
+    chosen by the error estimate (:func:`nlgrd.harmonic_convergence.converged_continuation`).
     """
     if model is None:
-        model = build_geared_model(system, max(omega_start, omega_end), H=H)
-    model.check_range(np.array([omega_start, omega_end]), H)
-    return continuation(model.reduced, omega_start, omega_end, H, stability=stability, **kwargs)
+        model = build_geared_model(system, max(omega_start, omega_end), H=H or LADDER[-1])
+    span = np.array([omega_start, omega_end])
+    if H is not None:
+        model.check_range(span, H)
+        return continuation(model.reduced, omega_start, omega_end, H, stability=stability, **kwargs)
+    ladder = _ladder(model)
+    model.check_range(span, ladder[-1])
+    return converged_continuation(
+        model.reduced,
+        omega_start,
+        omega_end,
+        ladder=ladder,
+        rtol=harmonic_rtol,
+        stability=stability,
+        **kwargs,
+    )
+
+
+def _ladder(model: GearedModel) -> tuple[int, ...]:
+    """The rungs of :data:`LADDER` the model was built for (at least two)."""
+    ladder = tuple(h for h in LADDER if h <= model.H)
+    if len(ladder) < 2:
+        raise ModelError(
+            "model",
+            f"choosing H needs a model built for H >= {LADDER[1]} (ladder {LADDER}); it has H = {model.H}",
+        )
+    return ladder
 
 
 def time_response(

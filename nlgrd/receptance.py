@@ -152,7 +152,7 @@ class MeshReceptance:
         )
         self._rigid = self._rigid_body_split()
         self._mean_cache: dict[float, MeanTerms] = {}
-        self._solve_cache: dict[tuple[float, int], list] = {}
+        self._solve_cache: dict[float, list] = {}
         self._poles: dict[int, tuple[NDArray, NDArray, NDArray, NDArray] | None] = {}
         #: relative difference of the pole-residue h_k from a direct solve, per harmonic k
         self.pole_check: dict[int, float] = {}
@@ -388,19 +388,30 @@ class MeshReceptance:
     def _solve(self, omega: float, H: int, derivative: bool = False) -> list:
         """[h_k, U_k at the output DOFs, dh_k/dω or None] for k = 1..H, cached per frequency.
 
+        One entry per frequency serves every H (harmonic k's solve does not depend on H):
+        a request for more harmonics than stored computes only the missing ones.
         dh_k/dω (continuation, jumps) is computed only when ``derivative`` is asked for.
         """
-        key = (float(omega), int(H))
+        key = float(omega)
         hit = self._solve_cache.get(key)
         if hit is not None and (hit[2] is not None or not derivative):
-            return hit
+            if hit[0].shape[0] >= H:
+                return [hit[0][:H], hit[1][:H], None if hit[2] is None else hit[2][:H]]
+            start, (h0, U0, dh0) = hit[0].shape[0] + 1, hit
+        else:
+            start, h0, U0, dh0 = 1, None, None, None
         speed = self.speed(omega)
         nc = self.n_coords
         h = np.empty((H, nc, nc), dtype=complex)
-        dh = np.empty((H, nc, nc), dtype=complex) if derivative else None
+        dh = np.empty((H, nc, nc), dtype=complex) if derivative or dh0 is not None else None
         U = np.empty((H, len(self.output_dofs), nc), dtype=complex)
+        if start > 1:
+            h[: start - 1], U[: start - 1] = h0, U0
+            if dh is not None:
+                dh[: start - 1] = dh0
+        derivative = dh is not None
         poles = self.method == "modal" and not self._red_bear and omega > 0
-        for k in range(1, H + 1):
+        for k in range(start, H + 1):
             w = k * omega
             pr = self._pole_residues(k) if poles else None
             if pr is not None:

@@ -63,6 +63,15 @@ def floquet_output(values: NDArray) -> NDArray:
 JUMP_STRATEGIES = ("arclength", "restart", "auto", "none")
 
 
+def _significant(values: NDArray, digits: int) -> NDArray:
+    """``values`` rounded to ``digits`` significant digits (an estimate's noise not written)."""
+    v = np.asarray(values, dtype=float).copy()
+    ok = np.isfinite(v) & (v != 0)
+    e = np.floor(np.log10(np.abs(v[ok])))
+    v[ok] = np.round(v[ok] / 10**e, digits - 1) * 10**e
+    return v
+
+
 def check_quantity(quantity: str) -> None:
     """Raise ModelError("quantity") unless ``quantity`` is one of :data:`METRIC_NAMES`."""
     if quantity not in METRIC_NAMES:
@@ -143,6 +152,11 @@ class SweepResult:
     branch_switch : ndarray of bool
         The point was reached only after the previous branch folded (Newton failed
         from the previous solution and the arc-length jump found the new branch).
+    harmonic_error : ndarray, optional
+        Estimated relative error of the outputs from the truncation to H harmonics
+        (:func:`nlgrd.harmonic_convergence.check_harmonics`); NaN where not estimated.
+    H_check : int, optional
+        The H the estimate was made against.
     """
 
     omega: NDArray
@@ -157,10 +171,19 @@ class SweepResult:
     amplitudes: NDArray
     source: str = ""
     branch_switch: NDArray | None = None
+    harmonic_error: NDArray | None = None
+    H_check: int | None = None
 
     def __post_init__(self):
         if self.branch_switch is None:
             object.__setattr__(self, "branch_switch", np.zeros(self.omega.size, dtype=bool))
+        if self.harmonic_error is None:
+            object.__setattr__(self, "harmonic_error", np.full(self.omega.size, np.nan))
+
+    @property
+    def H(self) -> int:
+        """Number of harmonics of the solutions."""
+        return (self.harmonics.shape[-1] - 1) // 2
 
     def __len__(self) -> int:
         return self.omega.size
@@ -192,6 +215,8 @@ class SweepResult:
             self.amplitudes[keep],
             self.source,
             self.branch_switch[keep],
+            self.harmonic_error[keep],
+            self.H_check,
         )
 
     def failures(self) -> NDArray:
@@ -254,7 +279,10 @@ class SweepResult:
             "iterations": iterations,
             "stable": flag(self.stable, self.stability_known),
             "floquet_max [-]": floquet_output(num(self.floquet_max)),
+            "H": pd.array(np.where(ok, self.H, 0), dtype="Int64"),
+            "harmonic_error [-]": _significant(num(self.harmonic_error), 3),
         }
+        data["H"][~ok] = pd.NA
         for name in METRIC_NAMES:
             col, scale = _UNITS[name]
             v = self.metrics[name]

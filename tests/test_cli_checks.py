@@ -101,7 +101,7 @@ def test_real_ctrl_c_in_a_running_sweep(tmp_path):
     )
     try:
         first = proc.stderr.readline()  # the first progress line: the sweep is running
-        assert first.startswith("sweep:"), first + proc.stderr.read()
+        assert first.startswith("sweep"), first + proc.stderr.read()
         proc.send_signal(signal.SIGINT)
         err = proc.stderr.read()
         assert proc.wait(timeout=120) == 130
@@ -229,9 +229,13 @@ def test_model_errors_are_checked_before_output_folders_are_made(tmp_path, capsy
 
 def test_continuation_that_turns_back_reports_its_span_and_fails(tmp_path, capsys):
     """Kubo upward from 3000 Hz: the curve folds back at about 4273 Hz and leaves the range
-    at the low end; the CLI says it covered 3000-4273 Hz of 3000-5000 Hz and exits 1."""
+    at the low end; the CLI says it covered 3000-4273 Hz of 3000-5000 Hz and exits 1.
+
+    The continuation tests fix H = 5 (--harmonics 5): they check how the command reports
+    coverage, with figures of that H; the H chosen by default is tested in
+    tests/test_harmonic_convergence.py."""
     out = tmp_path / "curve.csv"
-    argv = ["sweep", KUBO, "--hz", "3000:5000:101", "--continuation", "--direction", "up"]
+    argv = ["sweep", KUBO, "--hz", "3000:5000:101", "--continuation", "--harmonics", "5", "--direction", "up"]
     rc, text, err = run(capsys, *argv, "--no-stability", "--out", out)
     assert rc == 1
     line = one_line(err)
@@ -244,7 +248,17 @@ def test_continuation_that_turns_back_reports_its_span_and_fails(tmp_path, capsy
 def test_continuation_both_ways_covers_the_range(tmp_path, capsys):
     """--direction both traces from each end: together they cover 3000-5000 Hz (exit 0)."""
     out = tmp_path / "curve.csv"
-    argv = ["sweep", KUBO, "--hz", "3000:5000:101", "--continuation", "--direction", "both"]
+    argv = [
+        "sweep",
+        KUBO,
+        "--hz",
+        "3000:5000:101",
+        "--continuation",
+        "--harmonics",
+        "5",
+        "--direction",
+        "both",
+    ]
     rc, text, err = run(capsys, *argv, "--no-stability", "--out", out)
     assert rc == 0, err
     assert "covered the requested 3000-5000 Hz" in text
@@ -257,7 +271,17 @@ def test_continuation_both_ways_covers_the_range(tmp_path, capsys):
 def test_continuation_count_sets_the_frequency_resolution(tmp_path, capsys):
     """COUNT = 101 over 3000-5000 Hz: successive curve points about 20 Hz apart at most."""
     out = tmp_path / "curve.csv"
-    argv = ["sweep", KUBO, "--hz", "3000:5000:101", "--continuation", "--direction", "down"]
+    argv = [
+        "sweep",
+        KUBO,
+        "--hz",
+        "3000:5000:101",
+        "--continuation",
+        "--harmonics",
+        "5",
+        "--direction",
+        "down",
+    ]
     rc, _, err = run(capsys, *argv, "--no-stability", "--out", out)
     assert rc == 0, err
     f = pd.read_csv(out)["mesh_frequency [Hz]"].to_numpy()
@@ -269,7 +293,7 @@ def test_continuation_count_sets_the_frequency_resolution(tmp_path, capsys):
 
 def test_continuation_turning_points_in_rpm(tmp_path, capsys):
     out = tmp_path / "curve.csv"
-    argv = ["sweep", KUBO, "--rpm", "7200:12000", "--continuation", "--direction", "up"]
+    argv = ["sweep", KUBO, "--rpm", "7200:12000", "--continuation", "--harmonics", "5", "--direction", "up"]
     rc, text, err = run(capsys, *argv, "--no-stability", "--out", out)
     assert rc == 1
     assert re.search(r"turning points at [\d., ]+ rpm", text), text
