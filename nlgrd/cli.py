@@ -346,6 +346,12 @@ def cmd_sweep(args) -> int:
             f"not converged (NaN in the CSV, flagged converged = False) at {unit.name}: "
             + ", ".join(unit(w) for w in bad)
         )
+    lost = np.atleast_1d(res.mesh.omega[res.mesh.no_stable])
+    if len(lost):
+        print(
+            f"no stable mesh-periodic response (response column; NaN outputs) at {unit.name}: "
+            + ", ".join(unit(w) for w in lost)
+        )
     for j in res.jumps():
         print(f"jump ({j.direction}): {unit(j.omega_from)} -> {unit(j.omega_to)} {unit.name}")
     print(f"wrote {out} and {png}")

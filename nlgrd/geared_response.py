@@ -201,7 +201,7 @@ class GearedSweepResult:
         df = self.mesh.to_frame()
         df.insert(1, "pinion_speed [rpm]", self.rpm)
         b = self.bearings
-        ok = np.asarray(self.mesh.converged, dtype=bool)
+        ok = np.asarray(self.mesh.converged, dtype=bool) & ~self.mesh.no_stable
         columns = (
             ("displacement_max [um]", b.displacement_max, 1e6),
             ("displacement_rms [um]", b.displacement_rms, 1e6),
@@ -263,7 +263,7 @@ def bearing_response(model: GearedModel, result: SweepResult) -> BearingResponse
     nb = len(system.bearings)
     n = len(result.omega)
     out = {k: np.full((n, nb), np.nan) for k in BearingResponse.__dataclass_fields__}
-    pts = [i for i in range(n) if result.converged[i]]
+    pts = [i for i in range(n) if result.converged[i] and not result.no_stable[i]]
     if not pts:
         return BearingResponse(**out)
     H = (result.harmonics[pts[0]].size - 1) // 2

@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from nlgrd.errors import ModelError
 from nlgrd.harmonic_balance import ReducedModel, floquet_multipliers, solve
 from nlgrd.nonlinear_results import MeshMetrics, metrics_from_harmonics
-from nlgrd.sweep import SweepResult, assemble_result, sweep
+from nlgrd.sweep import STABLE_RTOL, SweepResult, assemble_result, dominant_multiplier, sweep
 
 #: The harmonic counts tried, in order (each checked against the next).
 LADDER = (5, 7, 9, 13, 17, 25)
@@ -211,6 +211,7 @@ def lift(
     n = len(result)
     z = np.full((n, *pad_harmonics(result.harmonics[0], H2).shape), np.nan)
     residual, iterations, fmax = np.full(n, np.nan), np.zeros(n, dtype=int), np.full(n, np.nan)
+    dominant = np.full(n, np.nan + 0j)
     metrics = []
     for i in range(n):
         w = float(result.omega[i])
@@ -225,11 +226,13 @@ def lift(
             return None
         ss = model.linear_state_space(w) if stability else None
         if ss is not None:
-            fmax[i] = float(np.max(np.abs(floquet_multipliers(ss, model.nonlinearities, sol.harmonics, w))))
-            if result.stability_known[i] and (fmax[i] < 1 + 1e-6) != bool(result.stable[i]):
+            fmax[i], dominant[i] = dominant_multiplier(
+                floquet_multipliers(ss, model.nonlinearities, sol.harmonics, w)
+            )
+            if result.stability_known[i] and (fmax[i] < 1 + STABLE_RTOL) != bool(result.stable[i]):
                 return None
         z[i], residual[i], iterations[i] = sol.harmonics, sol.residual, sol.iterations
-        metrics.append(m)
+        metrics.append(MeshMetrics.nan(H2) if result.no_stable[i] else m)
     source = result.source.replace(f"H={result.H},", f"H={H2},", 1)
     return assemble_result(
         result.omega,
@@ -242,6 +245,8 @@ def lift(
         metrics,
         source,
         result.branch_switch,
+        result.no_stable,
+        dominant,
     )
 
 

@@ -30,6 +30,9 @@ from nlgrd.describing_functions import (
 )
 
 #: Names of the scalar metrics, in the order of :meth:`MeshMetrics.as_tuple`.
+#: What the CSV's ``response`` column says where a sweep found no stable periodic orbit.
+NO_STABLE = "no stable mesh-periodic response"
+
 METRIC_NAMES = (
     "dte_mean",
     "dte_rms",

@@ -22,7 +22,7 @@ from nlgrd.harmonic_balance import (
     floquet_multipliers,
     solve,
 )
-from nlgrd.nonlinear_results import METRIC_NAMES, MeshMetrics, metrics_from_harmonics
+from nlgrd.nonlinear_results import METRIC_NAMES, NO_STABLE, MeshMetrics, metrics_from_harmonics
 
 _UNITS = {
     "dte_mean": ("dte_mean [um]", 1e6),
@@ -36,14 +36,19 @@ _UNITS = {
 }
 
 
+#: A point is stable when max |μ| < 1 + STABLE_RTOL.
+STABLE_RTOL = 1e-6
 #: Significant digits of the written Floquet multiplier modulus, and the band around 1
 #: written as exactly 1 (a neutral mode: an undamped mode or the drift of a free one).
 FLOQUET_DIGITS = 10
 NEUTRAL_BAND = 1e-9
 
 
-def floquet_output(values: NDArray) -> NDArray:
+def floquet_output(values: NDArray, signed: bool = False) -> NDArray:
     """max |μ| as written: 10 significant digits, neutral multipliers as exactly 1.
+
+    ``signed``: a multiplier's real or imaginary part, written to the same quantum 1e-9
+    absolute (a part much smaller than |μ| carries |μ|'s rounding, not its own).
 
     The monodromy's eigenvalues carry rounding noise of ~1e-13 that also depends on the
     alignment of the arrays in memory (it changes between runs of the same command); a
@@ -52,11 +57,28 @@ def floquet_output(values: NDArray) -> NDArray:
     is the same from run to run and machine to machine.
     """
     v = np.asarray(values, dtype=float).copy()
+    if signed:
+        return np.round(v, FLOQUET_DIGITS - 1) + 0.0  # + 0.0: no "-0.0"
     ok = np.isfinite(v) & (v > 0)
     v[ok & (np.abs(v - 1.0) <= NEUTRAL_BAND)] = 1.0
     e = np.floor(np.log10(v[ok]))
     v[ok] = np.round(v[ok] / 10**e, FLOQUET_DIGITS - 1) * 10**e
     return v
+
+
+def instability_kind(mu: NDArray, stable: NDArray) -> NDArray:
+    """Per point: "" (stable), or the dominant multiplier's kind where unstable: "real > 1"
+    (a fold: saddle-node), "real < -1" (period doubling), "complex" (a torus, Neimark-
+    Sacker); a pair counts as complex when |Im μ| > 1e-6 |μ| (rounding leaves ~1e-15)."""
+    mu = np.asarray(mu, dtype=complex)
+    out = np.full(mu.shape, "", dtype=object)
+    with np.errstate(invalid="ignore"):
+        cplx = np.abs(mu.imag) > 1e-6 * np.abs(mu)
+        unstable = ~np.asarray(stable, dtype=bool) & np.isfinite(mu.real)
+        out[unstable & cplx] = "complex"
+        out[unstable & ~cplx & (mu.real > 0)] = "real > 1"
+        out[unstable & ~cplx & (mu.real < 0)] = "real < -1"
+    return out
 
 
 #: How a sweep lands on the other branch after a fold (see :func:`sweep`).
@@ -157,6 +179,13 @@ class SweepResult:
         (:func:`nlgrd.harmonic_convergence.check_harmonics`); NaN where not estimated.
     H_check : int, optional
         The H the estimate was made against.
+    no_stable : ndarray of bool
+        No stable mesh-periodic response was found at the point: the harmonics are those of
+        the unstable orbit the sweep reached (kept for the analysis of what grows from
+        it), the metrics are NaN, never drawn as the response.
+    dominant_multiplier : ndarray of complex
+        The Floquet multiplier of largest modulus (NaN where not computed): real > 1 (a
+        fold), real < -1 (period doubling) or a complex pair (a torus) at an instability.
     """
 
     omega: NDArray
@@ -173,10 +202,16 @@ class SweepResult:
     branch_switch: NDArray | None = None
     harmonic_error: NDArray | None = None
     H_check: int | None = None
+    no_stable: NDArray | None = None
+    dominant_multiplier: NDArray | None = None
 
     def __post_init__(self):
         if self.branch_switch is None:
             object.__setattr__(self, "branch_switch", np.zeros(self.omega.size, dtype=bool))
+        if self.no_stable is None:
+            object.__setattr__(self, "no_stable", np.zeros(self.omega.size, dtype=bool))
+        if self.dominant_multiplier is None:
+            object.__setattr__(self, "dominant_multiplier", np.full(self.omega.size, np.nan + 0j))
         if self.harmonic_error is None:
             object.__setattr__(self, "harmonic_error", np.full(self.omega.size, np.nan))
 
@@ -217,6 +252,8 @@ class SweepResult:
             self.branch_switch[keep],
             self.harmonic_error[keep],
             self.H_check,
+            self.no_stable[keep],
+            self.dominant_multiplier[keep],
         )
 
     def failures(self) -> NDArray:
@@ -233,14 +270,17 @@ class SweepResult:
 
         A step is a jump when any of ``quantities`` jumps by the test of
         :func:`find_jumps` (a jump onto or off a contact-loss branch shows most clearly in
-        the contact-loss fraction), or when the solver had to leave the folded branch
-        (``branch_switch``). The reported values are those of the first quantity.
+        the contact-loss fraction), when the solver had to leave the folded branch
+        (``branch_switch``), or where the sweep enters or leaves a range with no stable
+        mesh-periodic response (``no_stable``; its values are NaN). The reported values
+        are those of the first quantity.
         """
         qs = (quantities,) if isinstance(quantities, str) else tuple(quantities)
         out = []
         for d in dict.fromkeys(self.direction.tolist()):
             part = self.select(d)
             steps: set[int] = set(np.nonzero(part.branch_switch[1:])[0].tolist())
+            steps |= set(np.nonzero(np.diff(part.no_stable.astype(int)) != 0)[0].tolist())
             for q in qs:
                 for j in find_jumps(part.omega, part.metrics[q], d, rel_tol, ratio):
                     steps.add(int(np.nonzero(part.omega == j.omega_from)[0][0]))
@@ -281,8 +321,17 @@ class SweepResult:
             "floquet_max [-]": floquet_output(num(self.floquet_max)),
             "H": pd.array(np.where(ok, self.H, 0), dtype="Int64"),
             "harmonic_error [-]": _significant(num(self.harmonic_error), 3),
+            "response": pd.array(
+                np.where(self.no_stable, NO_STABLE, "periodic").astype(object), dtype="string"
+            ),
+            "instability": pd.array(instability_kind(self.dominant_multiplier, self.stable), dtype="string"),
+            "dominant_multiplier_re [-]": floquet_output(num(self.dominant_multiplier.real), signed=True),
+            "dominant_multiplier_im [-]": floquet_output(num(self.dominant_multiplier.imag), signed=True),
         }
         data["H"][~ok] = pd.NA
+        data["response"][~ok] = pd.NA
+        data["instability"][~ok | ~self.stability_known] = pd.NA
+        ok = ok & ~self.no_stable  # the metrics: of the response only
         for name in METRIC_NAMES:
             col, scale = _UNITS[name]
             v = self.metrics[name]
@@ -311,6 +360,8 @@ def assemble_result(
     metrics: Sequence[MeshMetrics],
     source: str,
     branch_switch: Sequence[bool] | None = None,
+    no_stable: Sequence[bool] | None = None,
+    dominant: Sequence[complex] | None = None,
 ) -> SweepResult:
     """Pack per-point lists into a :class:`SweepResult`."""
     fm = np.asarray(multipliers_max, dtype=float)
@@ -334,6 +385,10 @@ def assemble_result(
         amps,
         source,
         None if branch_switch is None else np.asarray(branch_switch, dtype=bool),
+        None,
+        None,
+        None if no_stable is None else np.asarray(no_stable, dtype=bool),
+        None if dominant is None else np.asarray(dominant, dtype=complex),
     )
 
 
@@ -397,6 +452,7 @@ def sweep(
     z0: ArrayLike | None = None,
     jump: str = "arclength",
     chain: bool = True,
+    leave_unstable: bool = True,
 ) -> SweepResult:
     """Harmonic-balance sweeps up and/or down in frequency by natural continuation.
 
@@ -434,6 +490,17 @@ def sweep(
         branch than a slow sweep would. "auto" tries "arclength" first and "restart" when
         that fails. "none"
         leaves the point flagged as not converged.
+    leave_unstable : bool
+        With stability: at a point where the branch followed is unstable (by a fold or
+        not), do what a slow physical sweep does. A real multiplier > 1 (the orbit
+        departs along one direction, as past a fold): leave for a stable mesh-periodic
+        solution at that frequency (Newton from the full-contact response and from the
+        unstable orbit with its alternating part scaled by 1/4 .. 4; the nearest stable
+        one, :func:`_restart`), listed as a jump. A complex pair or a real multiplier
+        < -1 (a torus or a period-2 orbit grows around the orbit; time integration stays
+        near it, tests/test_geared_time_domain.py), or no stable solution found: flag the
+        point ``no_stable`` with NaN metrics and its dominant multiplier, and go on from
+        the unstable orbit. False: stay on the branch and flag its points unstable.
 
     Returns
     -------
@@ -443,7 +510,7 @@ def sweep(
         raise ModelError("jump", f"must be one of {', '.join(map(repr, JUMP_STRATEGIES))}, got {jump!r}")
     mesh = mesh or model.mesh
     omegas = np.asarray(omegas, dtype=float)
-    rows: dict[str, list] = {k: [] for k in ("w", "d", "z", "c", "r", "i", "f", "m", "j")}
+    rows: dict[str, list] = {k: [] for k in ("w", "d", "z", "c", "r", "i", "f", "m", "j", "n", "u")}
     z_end = None
     for direction, order in _sweep_orders(omegas, directions):
         z, last_w = (z0 if z_end is None or not chain else z_end), None
@@ -488,19 +555,30 @@ def sweep(
                     sol, switched = cand, True
                 else:  # Newton from the previous point without giving up early, then hybr
                     sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback)
-            fmax = np.nan
+            fmax, dom, lost = np.nan, complex(np.nan, np.nan), False
             if sol.converged:
                 z, last_w = sol.harmonics, float(w)
                 z_end = z
-                if stability and model.linear_state_space(w) is not None:
-                    mu = floquet_multipliers(
-                        model.linear_state_space(w), model.nonlinearities, sol.harmonics, w
+                ss = model.linear_state_space(w) if stability else None
+                if ss is not None:
+                    fmax, dom = dominant_multiplier(
+                        floquet_multipliers(ss, model.nonlinearities, sol.harmonics, w)
                     )
-                    fmax = float(np.max(np.abs(mu)))
+                    if leave_unstable and fmax >= 1 + STABLE_RTOL:
+                        fold = abs(dom.imag) <= 1e-6 * abs(dom) and dom.real > 0
+                        cand = _restart(model, problem, z, w, H, method, tol, max_iter) if fold else None
+                        if cand is None:
+                            lost = True
+                        else:
+                            sol, switched = cand, True
+                            z = z_end = sol.harmonics
+                            fmax, dom = dominant_multiplier(
+                                floquet_multipliers(ss, model.nonlinearities, z, w)
+                            )
             coord = mesh.coord if mesh is not None else 0
             met = (
                 metrics_from_harmonics(sol.harmonics[coord], w, mesh, n_samples)
-                if mesh is not None
+                if mesh is not None and not lost
                 else MeshMetrics.nan(H)
             )
             for k, v in zip(
@@ -510,6 +588,8 @@ def sweep(
             ):
                 rows[k].append(v)
             rows["j"].append(switched)
+            rows["n"].append(lost)
+            rows["u"].append(dom)
     return assemble_result(
         rows["w"],
         rows["d"],
@@ -521,4 +601,14 @@ def sweep(
         rows["m"],
         f"harmonic balance (H={H}, {method})",
         rows["j"],
+        rows["n"],
+        rows["u"],
     )
+
+
+def dominant_multiplier(mu: NDArray) -> tuple[float, complex]:
+    """max |μ| and the multiplier that has it (the one with Im >= 0 of a pair)."""
+    mu = np.asarray(mu, dtype=complex)
+    top = float(np.max(np.abs(mu)))
+    cand = mu[np.abs(mu) >= top * (1 - 1e-12)]
+    return top, complex(cand[np.argmax(cand.imag)])

@@ -191,3 +191,59 @@ def test_bearings_the_mesh_does_not_load_are_written_as_zero():
         v = getattr(b, name)
         assert np.all(v[:, stub] == 0.0), name
         assert np.all(v[:, ~stub] > 0.0), name
+
+
+def test_sweep_leaves_unstable_branches():
+    """Kubo's rig, H = 5, 4000-16000 rpm in 100 rpm steps, stability on (the default).
+    With ``leave_unstable=False`` the sweep stays on branches that lose stability
+    without a fold (the issue's finding); by default no converged point is drawn
+    unstable: each is stable, or flagged "no stable mesh-periodic response" with NaN
+    outputs and its dominant multiplier (here complex pairs, a torus, and one real < -1,
+    period doubling), listed among the jumps where the sweep enters such a range."""
+    kubo = load_model(KUBO)
+    rpm = np.linspace(4000, 16000, 121)
+    model = build_geared_model(kubo, 2 * np.pi * 16000 / 60 * 25 * 1.01, H=5)
+    om = model.mesh_frequency(rpm)
+    stay = geared_sweep(kubo, mesh_frequencies=om, H=5, model=model)
+    from nlgrd.sweep import sweep
+
+    kept = sweep(model.reduced, om, 5, leave_unstable=False, jump="auto")
+    assert np.sum(kept.converged & ~kept.stable) >= 4
+    m = stay.mesh
+    assert not np.any(m.converged & ~m.stable & ~m.no_stable)
+    assert m.no_stable.sum() >= 4
+    df = stay.to_frame()
+    lost = df[df["response"] == "no stable mesh-periodic response"]
+    assert len(lost) == m.no_stable.sum()
+    assert lost["dte_rms [um]"].isna().all() and lost["force_max [N]"].isna().all()
+    assert (
+        lost["instability"].isin(["complex", "real < -1"]).all() and (lost["instability"] == "complex").any()
+    )
+    assert (np.hypot(lost["dominant_multiplier_re [-]"], lost["dominant_multiplier_im [-]"]) > 1 + 1e-6).all()
+    ok = df[df["response"] == "periodic"]
+    assert ok["stable"].all() and ok["dte_rms [um]"].notna().all()
+    entries = {(j.direction, j.omega_to) for j in m.jumps()}
+    for d in ("up", "down"):
+        part = m.select(d)
+        starts = np.nonzero(~part.no_stable[:-1] & part.no_stable[1:])[0]
+        assert starts.size and all((d, part.omega[i + 1]) in entries for i in starts)
+
+
+@pytest.mark.slow
+def test_no_stable_response_confirmed_by_time_integration():
+    """Independent check of a "no stable mesh-periodic response" point: HHT-α integration
+    of the full FE model (time_sweep, from the converged periodic state at 13 600 rpm)
+    reaches a periodic steady state at 13 600 rpm (as the sweep's stable point, DTE RMS
+    within 0.1 %: H = 5 truncation 3e-4 here, the integration's steady-state test 1e-4)
+    but none at 13 900 rpm in 3000 mesh periods, where the sweep found
+    only an orbit with a complex multiplier pair outside the unit circle."""
+    from nlgrd.geared_response import time_sweep
+
+    kubo = load_model(KUBO)
+    model = build_geared_model(kubo, 2 * np.pi * 16000 / 60 * 25 * 1.01, H=5)
+    om = model.mesh_frequency(np.array([13600.0, 13900.0]))
+    hb = geared_sweep(kubo, mesh_frequencies=om, H=5, model=model, directions="up").mesh
+    assert hb.stable[0] and hb.no_stable[1]
+    td = time_sweep(model, om, "up")
+    assert bool(td["converged"].iloc[0]) and not bool(td["converged"].iloc[1])
+    assert td["dte_rms [um]"].iloc[0] == pytest.approx(hb.dte_rms[0] * 1e6, rel=1e-3)

@@ -163,8 +163,8 @@ def draw_points(
     return artists
 
 
-def mark_not_converged(ax, x, colour: str, label: str, text: str = "not converged"):
-    """Crosses on the bottom edge of the axes at ``x``, labelled ``"{label}: {text} (n)"``.
+def mark_not_converged(ax, x, colour: str, label: str, text: str = "not converged", marker: str = "x"):
+    """Crosses (``marker``) on the bottom edge of the axes at ``x``, labelled ``"{label}: {text} (n)"``.
 
     Returns the artist (None when ``x`` is empty).
     """
@@ -176,7 +176,7 @@ def mark_not_converged(ax, x, colour: str, label: str, text: str = "not converge
         x,
         np.full(x.size, NC_HEIGHT),
         ls="none",
-        marker="x",
+        marker=marker,
         ms=5,
         mew=1.2,
         color=colour,

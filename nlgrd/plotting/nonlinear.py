@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from nlgrd.nonlinear_results import NO_STABLE
 from nlgrd.plotting.common import (
     DIRECTION_MARKERS,
     UNKNOWN,
@@ -115,6 +116,9 @@ def plot_sweep_frame(
             alpha=alpha,
         )
         mark_not_converged(ax, xv[~conv], colour, name, not_converged)
+        if "response" in part:  # converged, but the orbit is unstable and no stable one was found
+            lost = conv & (part["response"].astype(str).to_numpy() == NO_STABLE)
+            mark_not_converged(ax, xv[lost], colour, name, "no stable periodic response", marker="1")
     if ylim is not None:
         ax.set_ylim(*[lim if lim is not None else cur for lim, cur in zip(ylim, ax.get_ylim(), strict=True)])
     ax.set_xlabel(x)
@@ -139,6 +143,9 @@ def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
             "stable": np.asarray(result.stable, dtype=object),
             FLOQUET: np.full(n, np.nan) if fm is None else np.asarray(fm, dtype=float),
             "value": np.asarray(result.metrics[quantity], dtype=float) * scale,
+            "response": np.where(
+                getattr(result, "no_stable", np.zeros(n, dtype=bool)), NO_STABLE, "periodic"
+            ),
         }
     )
 
