@@ -187,7 +187,10 @@ def _jump_holds(model, result, i, fine, H2, tol, rtol) -> bool:
         return True  # the branch folds at H2 too
     z = sol.harmonics
     ss = model.linear_state_space(w)
-    if ss is not None and np.max(np.abs(floquet_multipliers(ss, model.nonlinearities, z, w))) >= 1 + 1e-6:
+    if (
+        ss is not None
+        and np.max(np.abs(floquet_multipliers(ss, model.nonlinearities, z, w))) >= 1 + STABLE_RTOL
+    ):
         return True  # it exists but is unstable: a slow sweep leaves it at H2 as well
     after = fine.get(i + 1)
     if after is None:
@@ -304,13 +307,22 @@ def converged_sweep(
         if H_check != ladder[-1]:  # the next rung: lifted from the check, else swept afresh
             res = lift(model, res, check, stability)
     else:
-        warnings.warn(
-            f"harmonics: at H = {H} the estimated relative error is {check.max_error:.3g} "
-            f"(tolerance {rtol:g}){'' if check.jumps_held else ', and a jump moves at higher H'}; "
-            "points above the tolerance are marked not converged",
-            HarmonicsWarning,
-            stacklevel=2,
-        )
+        _warn_exhausted(check, rtol)
+    return _finish(res, check, history, rtol)
+
+
+def _warn_exhausted(check: HarmonicCheck, rtol: float) -> None:
+    warnings.warn(
+        f"harmonics: at H = {check.H} the estimated relative error is {check.max_error:.3g} "
+        f"(tolerance {rtol:g}){'' if check.jumps_held else ', and a jump moves at higher H'}; "
+        "points above the tolerance are marked not converged",
+        HarmonicsWarning,
+        stacklevel=3,
+    )
+
+
+def _finish(res: SweepResult, check: HarmonicCheck, history: list, rtol: float) -> SweepResult:
+    """``res`` with the ladder's steps in its source and the estimate per point."""
     steps = ", ".join(f"H = {h}: {e:.2g}" + ("" if ok else " (a jump moves)") for h, e, ok in history)
     res = replace(res, source=f"{res.source}; H chosen by error estimate, tolerance {rtol:g} ({steps})")
     return with_harmonic_error(res, replace(check, history=tuple(history)), rtol)
@@ -360,14 +372,5 @@ def converged_continuation(
         if check.passed(rtol):
             break
     else:
-        warnings.warn(
-            f"harmonics: at H = {H} the estimated relative error is {check.max_error:.3g} "
-            f"(tolerance {rtol:g}); points above the tolerance are marked not converged",
-            HarmonicsWarning,
-            stacklevel=2,
-        )
-    steps = ", ".join(f"H = {h}: {e:.2g}" for h, e, _ in history)
-    curve = replace(
-        res.curve, source=f"{res.curve.source}; H chosen by error estimate, tolerance {rtol:g} ({steps})"
-    )
-    return replace(res, curve=with_harmonic_error(curve, replace(check, history=tuple(history)), rtol))
+        _warn_exhausted(check, rtol)
+    return replace(res, curve=_finish(res.curve, check, history, rtol))

@@ -367,7 +367,7 @@ def assemble_result(
     fm = np.asarray(multipliers_max, dtype=float)
     conv = np.asarray(converged, dtype=bool)
     with np.errstate(invalid="ignore"):
-        stable = conv & np.isfinite(fm) & (fm < 1 + 1e-6)
+        stable = conv & np.isfinite(fm) & (fm < 1 + STABLE_RTOL)
     H = max((m.dte_amplitudes.size for m in metrics), default=1) - 1
     amps = np.array([np.resize(m.dte_amplitudes, H + 1) for m in metrics]).reshape(len(metrics), H + 1)
     mdict = {name: np.array([m.as_tuple()[i] for m in metrics]) for i, name in enumerate(METRIC_NAMES)}
@@ -428,7 +428,7 @@ def _restart(model, problem, z_prev, w, H, method, tol, max_iter):
         ss = model.linear_state_space(w)
         if ss is not None:
             mu = floquet_multipliers(ss, model.nonlinearities, cand.harmonics, w)
-            if np.max(np.abs(mu)) >= 1 + 1e-6:
+            if np.max(np.abs(mu)) >= 1 + STABLE_RTOL:
                 continue
         d = float(np.linalg.norm(cand.harmonics.reshape(-1) - z_prev.reshape(-1)))
         if d < best_d:
