@@ -241,6 +241,7 @@ class Probe:
 
     def wrap(self, owner, name: str, phase: str, sticky: bool = False, boundary: bool = False) -> None:
         orig = getattr(owner, name)
+        raw = vars(owner).get(name, orig)  # a classmethod is restored as itself
         probe = self
 
         def wrapper(*args, **kwargs):
@@ -259,7 +260,7 @@ class Probe:
                     probe._snap = cur
 
         setattr(owner, name, wrapper)
-        self._patched.append((owner, name, orig))
+        self._patched.append((owner, name, raw))
 
     def __enter__(self):
         w = self.wrap
@@ -270,6 +271,7 @@ class Probe:
         w(nl_sweep, "solve", "Newton")
         w(nl_sweep, "floquet_multipliers", "stability")
         w(nl_sweep, "metrics_from_harmonics", "output metrics", boundary=True)
+        w(nl_sweep.MeshMetrics, "nan", "output metrics", boundary=True)  # a point without a stable response
         w(nl_continuation, "jump_to_branch", "jump", sticky=True)
         w(nl_sweep, "_restart", "jump", sticky=True)
         w(nl_geared, "bearing_response", "bearing recovery", sticky=True)
@@ -298,6 +300,7 @@ class SweepTiming:
     n_regular: int
     n_switch: int
     n_failed: int
+    n_no_stable: int
     newton_iterations: int
     point_times: np.ndarray  # per point [s], in sweep order
     point_phases: list  # per point: {phase: s}
@@ -322,11 +325,13 @@ def timed_sweep(system, model, omegas, H, directions="both", stability=False) ->
         raise RuntimeError(f"probe saw {len(probe.points)} points, the sweep has {n}")
     switch = np.asarray(m.branch_switch, bool)
     failed = ~np.asarray(m.converged, bool) & ~switch
-    regular = ~switch & ~failed
+    lost = np.asarray(m.no_stable, bool) & ~switch & ~failed  # unstable, no stable response found
+    regular = ~switch & ~failed & ~lost
     per_point = np.array([sum(p.values()) for p in probe.points])
     phases = {p: sum(probe.points[i].get(p, 0.0) for i in np.nonzero(regular)[0]) for p in POINT_PHASES}
     phases["jumps"] = float(per_point[switch].sum())
     phases["failed points"] = float(per_point[failed].sum())
+    phases["no stable response"] = float(per_point[lost].sum())
     phases["bearing recovery"] = probe.acc.get("bearing recovery", 0.0)
     phases["other"] += total - sum(probe.acc.values())  # geared_sweep outside any wrapped call
     return SweepTiming(
@@ -336,6 +341,7 @@ def timed_sweep(system, model, omegas, H, directions="both", stability=False) ->
         int(regular.sum()),
         int(switch.sum()),
         int(failed.sum()),
+        int(lost.sum()),
         int(np.sum(m.iterations[regular])),
         per_point,
         probe.points,
@@ -438,8 +444,8 @@ def case_sweep(cfg) -> dict:
 
     spec = [
         (
-            "points: regular / branch switch / failed",
-            lambda s, b, t: f"{s.n_regular}/{s.n_switch}/{s.n_failed}",
+            "points: regular / branch switch / failed / no stable",
+            lambda s, b, t: f"{s.n_regular}/{s.n_switch}/{s.n_failed}/{s.n_no_stable}",
         ),
         ("model build, one-off [s]", lambda s, b, t: f"{b:.3f}"),
         ("stability basis, one-off [s]", lambda s, b, t: "-" if t is None else f"{t:.3f}"),
@@ -451,6 +457,7 @@ def case_sweep(cfg) -> dict:
         ("output metrics [s]", lambda s, b, t: f"{s.phases['output metrics']:.3f}"),
         ("jumps: points with branch_switch [s]", lambda s, b, t: f"{s.phases['jumps']:.3f}"),
         ("failed points [s]", lambda s, b, t: f"{s.phases['failed points']:.3f}"),
+        ("no stable response: restarts [s]", lambda s, b, t: f"{s.phases['no stable response']:.3f}"),
         ("bearing recovery [s]", lambda s, b, t: f"{s.phases['bearing recovery']:.3f}"),
         ("other [s]", lambda s, b, t: f"{s.phases['other']:.3f}"),
         ("sweep total [s]", lambda s, b, t: f"{s.total:.3f}"),

@@ -80,27 +80,23 @@ class ShaftElement:
         Include shear deformation (Timoshenko); False gives Rayleigh beam.
     rotary_inertia : bool
         Include rotary inertia and gyroscopic terms of the shaft itself.
-    mass_matrix : {"blended", "consistent"}
-        "consistent": Nelson's (1980) consistent matrices, from the shape functions of
-        the stiffness (without axial force a Rayleigh-Ritz discretisation: natural
-        frequencies converge from above). "blended" (default): the consistent matrices
-        blended with the lumped ones by beta = Phi / (2 (1 + Phi)); for slender
-        elements (Phi << 1) beta -> 0 and the two coincide.
+    mass_matrix : {"consistent", "blended"}
+        "consistent" (default): Nelson's (1980) consistent matrices, from the shape
+        functions of the stiffness (without axial force a Rayleigh-Ritz
+        discretisation: natural frequencies converge from above). "blended": the
+        consistent matrices blended with the lumped ones by beta = Phi / (2 (1 + Phi));
+        for slender elements (Phi << 1) beta -> 0 and the two coincide. A model file
+        sets it per element (``mass_matrix = "blended"``).
 
-        Convergence in the element length h (measured in tests/element_study.py and
-        tests/test_element_convergence.py; table in docs/verification.md): slender
-        elements converge as h^4, as cubic beam elements do. As Phi grows (elements
-        about as short as the shaft is thick: the shipped models have Phi = 0.2-13,
-        L/D = 0.4-3.3) the interdependent shape functions tend to linear ones and the
-        consistent mass converges as h^2. Averaging lumped and consistent mass cancels
-        their opposite h^2 errors (Krieg & Key 1973; Goudreau & Taylor 1973), but only
-        on a uniform shaft pinned at both ends, where the blend converges as h^4. With
-        disks, elastic bearings or overhangs the blend converges as h^2 too, with the
-        larger error constant on the shipped models (kubo.toml, whose shafts carry
-        almost no mass, aside): at their own element counts (and twice them) its
-        largest error per group of modes is 1.6-22 x the consistent one, and its errors
-        take either sign. On shafts held by pins only, with or without disks, the
-        blend is the more accurate one.
+        Convergence in the element length h (tests/element_study.py, table in
+        docs/verification.md): slender elements converge as h^4 with either mass.
+        Elements about as short as the shaft is thick (the shipped models: Phi =
+        0.2-13) converge as h^2 with the consistent mass. The blend cancels the
+        opposite h^2 errors of lumped and consistent mass (Krieg & Key 1973) only on a
+        uniform shaft pinned at both ends; with disks, elastic bearings or overhangs it
+        converges as h^2 too, with errors of either sign and, on every shipped model
+        at its own element count and twice it, a largest error per group of modes
+        1.6-22 x the consistent one. Hence the default.
     """
 
     length: float
@@ -110,14 +106,14 @@ class ShaftElement:
     axial_force: float = 0.0
     shear: bool = True
     rotary_inertia: bool = True
-    mass_matrix: str = "blended"
+    mass_matrix: str = "consistent"
 
     def __post_init__(self):
         for key in ("shear", "rotary_inertia"):
             if not isinstance(getattr(self, key), bool):
                 raise ModelError(key, f"must be true or false, got {getattr(self, key)!r}")
         if self.mass_matrix not in ("blended", "consistent"):
-            raise ModelError("mass_matrix", f"must be 'blended' or 'consistent', got {self.mass_matrix!r}")
+            raise ModelError("mass_matrix", f"must be 'consistent' or 'blended', got {self.mass_matrix!r}")
         check_positive("length", self.length)
         check_positive("outer_diameter", self.outer_diameter)
         check_positive("inner_diameter", self.inner_diameter, allow_zero=True)

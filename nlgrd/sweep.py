@@ -9,11 +9,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
+from nlgrd import sweep_landing as landing
 from nlgrd.describing_functions import BacklashMesh
 from nlgrd.errors import ModelError
 from nlgrd.harmonic_balance import (
@@ -23,6 +25,7 @@ from nlgrd.harmonic_balance import (
     solve,
 )
 from nlgrd.nonlinear_results import METRIC_NAMES, NO_STABLE, MeshMetrics, metrics_from_harmonics
+from nlgrd.sweep_landing import STABLE_RTOL, WANDER_ITER
 
 _UNITS = {
     "dte_mean": ("dte_mean [um]", 1e6),
@@ -36,8 +39,6 @@ _UNITS = {
 }
 
 
-#: A point is stable when max |μ| < 1 + STABLE_RTOL.
-STABLE_RTOL = 1e-6
 #: Significant digits of the written Floquet multiplier modulus, and the band around 1
 #: written as exactly 1 (a neutral mode: an undamped mode or the drift of a free one).
 FLOQUET_DIGITS = 10
@@ -403,39 +404,6 @@ def _sweep_orders(omegas: NDArray, directions: str | Sequence[str]) -> list[tupl
     return out
 
 
-def _restart(model, problem, z_prev, w, H, method, tol, max_iter):
-    """Land on another branch after a fold without arc-length continuation.
-
-    Newton is started from the full-contact linear response and from the previous
-    solution with its alternating part scaled by 1/4, 1/2, 2 and 4. Of the converged
-    solutions that are stable (checked whenever the model has a linear state space),
-    the one nearest the previous solution is returned (None if there is none): after a
-    fold a slow sweep falls to the nearest coexisting stable branch, in the usual case
-    of an S-shaped curve the one the unstable branch leads to.
-    """
-    z_prev = np.asarray(z_prev, dtype=float)
-    nh = 2 * H + 1
-    guesses = [None]
-    for scale in (0.25, 0.5, 2.0, 4.0):
-        g = z_prev.reshape(-1, nh).copy()
-        g[:, 1:] *= scale
-        guesses.append(g.reshape(z_prev.shape))
-    best, best_d = None, np.inf
-    for guess in guesses:
-        cand = solve(problem, guess, method=method, tol=tol, max_iter=max_iter, fallback=False)
-        if not cand.converged:
-            continue
-        ss = model.linear_state_space(w)
-        if ss is not None:
-            mu = floquet_multipliers(ss, model.nonlinearities, cand.harmonics, w)
-            if np.max(np.abs(mu)) >= 1 + STABLE_RTOL:
-                continue
-        d = float(np.linalg.norm(cand.harmonics.reshape(-1) - z_prev.reshape(-1)))
-        if d < best_d:
-            best, best_d = cand, d
-    return best
-
-
 def sweep(
     model: ReducedModel,
     omegas: ArrayLike,
@@ -487,8 +455,10 @@ def sweep(
         S-shaped response curve. "restart" instead restarts Newton from the full-contact
         linear response and keeps the result if it converges (and is stable, when
         stability is computed): much cheaper, but it may pick another coexisting stable
-        branch than a slow sweep would. "auto" tries "arclength" first and "restart" when
-        that fails. "none"
+        branch than a slow sweep would. "auto" tries both and lands on the stable solution
+        nearest the orbit that folded (the arc-length landing, or "restart"'s when that is
+        nearer or arc length fails): where the curve folds more than once, the far branch
+        of arc length can be an orbit a slow sweep does not reach. "none"
         leaves the point flagged as not converged.
     leave_unstable : bool
         With stability: at a point where the branch followed is unstable (by a fold or
@@ -496,7 +466,7 @@ def sweep(
         departs along one direction, as past a fold): leave for a stable mesh-periodic
         solution at that frequency (Newton from the full-contact response and from the
         unstable orbit with its alternating part scaled by 1/4 .. 4; the nearest stable
-        one, :func:`_restart`), listed as a jump. A complex pair or a real multiplier
+        one, :func:`nlgrd.sweep_landing.restart`), listed as a jump. A complex pair or a real multiplier
         < -1 (a torus or a period-2 orbit grows around the orbit; time integration stays
         near it, tests/test_geared_time_domain.py), or no stable solution found: flag the
         point ``no_stable`` with NaN metrics and its dominant multiplier, and go on from
@@ -510,11 +480,74 @@ def sweep(
         raise ModelError("jump", f"must be one of {', '.join(map(repr, JUMP_STRATEGIES))}, got {jump!r}")
     mesh = mesh or model.mesh
     omegas = np.asarray(omegas, dtype=float)
+    kw = dict(
+        method=method,
+        tol=tol,
+        max_iter=max_iter,
+        fallback=fallback,
+        stability=stability,
+        mesh=mesh,
+        n_samples=n_samples,
+        z0=z0,
+        jump=jump,
+        chain=chain,
+        leave_unstable=leave_unstable,
+    )
+    result, landings = _sweep_pass(model, omegas, H, directions, **kw)
+    if jump != "auto" or len({d for d, _ in _sweep_orders(omegas, directions)}) < 2:
+        return result
+    # a second pass where another direction's stable solution is a nearer landing
+    pool = _pool(result, stability)
+    for direction, w, z_prev, z_land in landings:
+        dist = np.linalg.norm(np.ravel(z_land) - np.ravel(z_prev))
+        if any(
+            np.linalg.norm(np.ravel(z) - np.ravel(z_prev)) < dist
+            for d, z in pool.get(w, ())
+            if d != direction
+        ):
+            return _sweep_pass(model, omegas, H, directions, pool=pool, **kw)[0]
+    return result
+
+
+def _pool(result: SweepResult, stability: bool) -> dict[float, list]:
+    """{frequency: [(direction, harmonics)]} of a sweep's stable response points."""
+    ok = result.converged & ~result.no_stable
+    if stability:
+        ok &= result.stable.astype(bool)
+    pool: dict[float, list] = {}
+    for i in np.nonzero(ok)[0]:
+        pool.setdefault(float(result.omega[i]), []).append((str(result.direction[i]), result.harmonics[i]))
+    return pool
+
+
+def _sweep_pass(
+    model,
+    omegas,
+    H,
+    directions,
+    *,
+    method,
+    tol,
+    max_iter,
+    fallback,
+    stability,
+    mesh,
+    n_samples,
+    z0,
+    jump,
+    chain,
+    leave_unstable,
+    pool=None,
+):
+    """One pass of :func:`sweep`; returns (result, landings after folds: (direction, w,
+    previous harmonics, landing harmonics)). ``pool``: other directions' solutions, also
+    candidates for a landing."""
+    landings = []
     rows: dict[str, list] = {k: [] for k in ("w", "d", "z", "c", "r", "i", "f", "m", "j", "n", "u")}
     z_end = None
     for direction, order in _sweep_orders(omegas, directions):
         z, last_w = (z0 if z_end is None or not chain else z_end), None
-        for w in order:
+        for k, w in enumerate(order):
             problem = model.at(float(w), H)
             try_jump = jump in ("arclength", "auto") and z is not None and last_w is not None
             sol: HarmonicSolution = solve(
@@ -526,9 +559,18 @@ def sweep(
                 fallback=fallback and not try_jump,
                 stall=try_jump,
             )
-            switched = False
+            switched, z_prev = False, z
+            auto = jump == "auto"
+
+            others = partial(landing.pool_candidates, model, problem, pool, w, direction, tol, max_iter)
+            if auto and sol.converged and try_jump and sol.iterations > WANDER_ITER:
+                sol, switched = landing.follow_branch(
+                    model, problem, sol, z, last_w, float(w), H, method, tol, max_iter, stability, others()
+                )
+            if not sol.converged and z is None and jump != "none":
+                sol = landing.approach(model, problem, order, k, H, method, tol, max_iter, stability) or sol
             if not sol.converged and jump == "restart" and z is not None:
-                cand = _restart(model, problem, z, w, H, method, tol, max_iter)
+                cand = landing.restart(model, problem, z, w, H, method, tol, max_iter)
                 if cand is not None:
                     sol, switched = cand, True
                     try_jump = False
@@ -551,8 +593,15 @@ def sweep(
                         sol.iterate,
                         sol.message,
                     )
-                elif jump == "auto" and (cand := _restart(model, problem, z, w, H, method, tol, max_iter)):
+                    if switched and auto:
+                        sol = landing.nearest_landing(
+                            model, problem, sol, z, float(w), H, method, tol, max_iter, others()
+                        )
+                elif auto and (cand := landing.restart(model, problem, z, w, H, method, tol, max_iter)):
                     sol, switched = cand, True
+                    sol = landing.nearest_landing(
+                        model, problem, sol, z, float(w), H, method, tol, max_iter, others()
+                    )
                 else:  # Newton from the previous point without giving up early, then hybr
                     sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback)
             fmax, dom, lost = np.nan, complex(np.nan, np.nan), False
@@ -566,7 +615,13 @@ def sweep(
                     )
                     if leave_unstable and fmax >= 1 + STABLE_RTOL:
                         fold = abs(dom.imag) <= 1e-6 * abs(dom) and dom.real > 0
-                        cand = _restart(model, problem, z, w, H, method, tol, max_iter) if fold else None
+                        cand = (
+                            landing.restart(model, problem, z, w, H, method, tol, max_iter) if fold else None
+                        )
+                        if fold and auto:
+                            for c in others():
+                                if cand is None or landing.distance(c, z) < landing.distance(cand, z):
+                                    cand = c
                         if cand is None:
                             lost = True
                         else:
@@ -588,9 +643,11 @@ def sweep(
             ):
                 rows[k].append(v)
             rows["j"].append(switched)
+            if switched and sol.converged and z_prev is not None:
+                landings.append((direction, float(w), z_prev, sol.harmonics))
             rows["n"].append(lost)
             rows["u"].append(dom)
-    return assemble_result(
+    result = assemble_result(
         rows["w"],
         rows["d"],
         rows["z"],
@@ -604,6 +661,7 @@ def sweep(
         rows["n"],
         rows["u"],
     )
+    return result, landings
 
 
 def dominant_multiplier(mu: NDArray) -> tuple[float, complex]:

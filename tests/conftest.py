@@ -7,3 +7,12 @@ import signal
 # inherit the ignored disposition). The Ctrl-C tests need the interactive behaviour, so
 # the session restores it; children exec'd from here start with SIGINT at its default.
 signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def pytest_collection_modifyitems(config, items):
+    """Notebook runs (papermill, minutes) count as slow: ``-m "not slow"`` is the inner loop."""
+    import pytest
+
+    for item in items:
+        if item.get_closest_marker("notebook") is not None:
+            item.add_marker(pytest.mark.slow)

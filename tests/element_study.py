@@ -8,8 +8,8 @@ prints the table of docs/verification.md ("Shaft element: mesh convergence of th
 matrix"); ``tests/test_element_convergence.py`` imports these functions and asserts the
 orders and the comparison.
 
-Method. :class:`nlgrd.shaft.ShaftElement` accepts two mass matrices, ``"blended"`` (the
-default) and ``"consistent"``; no other formulation exists (``shear`` and
+Method. :class:`nlgrd.shaft.ShaftElement` accepts two mass matrices, ``"consistent"`` (the
+default, chosen by this study) and ``"blended"``; no other formulation exists (``shear`` and
 ``rotary_inertia`` change the beam theory, not its discretisation). For each case every
 original shaft element is split into f = 1, 2, 4, 8, 16 equal elements, the nodes of
 disks, bearings, couplings and gear pairs mapped n -> f n as

@@ -3,9 +3,10 @@
     .venv/bin/python tests/regenerate_golden.py [NAME ...]
 
 Runs each case-study notebook (all, or those named) exactly as the test does (fast mode,
-the same SYNTHETIC measured data sets) and replaces ``tests/golden/<notebook>/`` with the
-CSV files it wrote. Review the diff before committing: a golden should change only when
-the library or the notebook changed on purpose.
+the same SYNTHETIC measured data sets) and replaces ``tests/golden/<notebook>/`` with its
+golden files (``GOLDEN_FILES``: linear, branch-robust results). Review the diff before
+committing: a golden should change only when the library or the notebook changed on
+purpose, and ``test_linear_goldens_match_a_refined_mesh`` must confirm the new numbers.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from test_notebooks import GOLDEN, NAMES, run_fast  # noqa: E402
+from test_notebooks import GOLDEN, GOLDEN_FILES, NAMES, run_fast  # noqa: E402
 
 
 def main(names: list[str]) -> int:
@@ -33,8 +34,8 @@ def main(names: list[str]) -> int:
             if staged.exists():
                 shutil.rmtree(staged)
             staged.mkdir(parents=True)
-            for csv in sorted(out.glob("*.csv")):
-                shutil.copy2(csv, staged / csv.name)
+            for file in GOLDEN_FILES[name]:
+                shutil.copy2(out / file, staged / file)
             if target.exists():
                 shutil.rmtree(target)
             staged.rename(target)

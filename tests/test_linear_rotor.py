@@ -80,32 +80,46 @@ def test_slender_shaft_matches_euler_bernoulli():
 
 
 def test_stocky_shaft_matches_timoshenko():
-    """L/D = 5: shear lowers mode 4 by ~30 % from Euler-Bernoulli; the FE Timoshenko
-    element (20 elements) must be within 0.1 % of the analytic Timoshenko values."""
+    """L/D = 5: shear lowers mode 4 by ~30 % from Euler-Bernoulli. On this bare shaft
+    pinned at both ends the blended mass is fourth order (docs/verification.md, case (a)):
+    20 elements within 0.1 % of the analytic Timoshenko values. The default consistent
+    mass is second order here (elements of L/D = 0.25): within 1 % (measured 0.76 % on
+    mode 4, 20 elements), an upper bound on every mode (Rayleigh-Ritz)."""
     L, D = 0.5, 0.1
-    f = bending_frequencies(pinned_shaft(L, D, 20), 4)
     ref = timoshenko_ss(L, D, 4)
-    eb = euler_bernoulli_ss(L, D, 4)
+    f = bending_frequencies(pinned_shaft(L, D, 20, mass_matrix="blended"), 4)
     assert np.all(np.abs(f / ref - 1) < 1e-3), f / ref - 1
+    fc = bending_frequencies(pinned_shaft(L, D, 20), 4)
+    assert np.all((fc / ref - 1 > 0) & (fc / ref - 1 < 1e-2)), fc / ref - 1
+    eb = euler_bernoulli_ss(L, D, 4)
     assert eb[3] / ref[3] > 1.2  # the case really tests shear and rotary inertia
 
 
+@pytest.mark.parametrize("mass", ["blended", "consistent"])
 @pytest.mark.parametrize("geometry", [(3.0, 0.01), (0.5, 0.1)])
-def test_bending_convergence_table(geometry):
-    """Refining the mesh gives monotonically shrinking errors (no jumps), each within a
-    factor 2 of the h^4 rate of cubic elements at the finest levels."""
+def test_bending_convergence_table(geometry, mass):
+    """Refining the mesh gives monotonically shrinking errors (no jumps). At the finest
+    levels mode 4 (>= 2 elements per half wave from 8 elements on) converges at the
+    rate of cubic elements, h^4, for slender elements (L/D = 300, Phi << 1: the two
+    masses coincide) and for the blended mass on the stocky shaft; the consistent mass
+    on the stocky shaft (Phi = 9-35 at 8-16 elements) at h^2 (docs/verification.md,
+    case (a): 2.00-2.03). Each within a factor 2 of its rate."""
     L, D = geometry
     ref = timoshenko_ss(L, D, 4)
     counts = [4, 8, 16, 20]
-    errs = np.array([np.abs(bending_frequencies(pinned_shaft(L, D, n), 4) / ref - 1) for n in counts])
+    errs = np.array(
+        [np.abs(bending_frequencies(pinned_shaft(L, D, n, mass_matrix=mass), 4) / ref - 1) for n in counts]
+    )
     print("elements  " + "  ".join(f"mode {m + 1} error" for m in range(4)))
     for n, e in zip(counts, errs, strict=True):
         print(f"{n:8d}  " + "  ".join(f"{x:12.2e}" for x in e))
     for m in range(4):
         assert np.all(np.diff(errs[:, m]) < 0), (m, errs[:, m])
-    # mode 4 has >= 2 elements per half wave from 8 elements on: rate of cubic elements ~ h^4
     rate = np.log(errs[2, 3] / errs[1, 3]) / np.log(2.0)
-    assert -5.0 < rate < -3.0, rate
+    if mass == "consistent" and L / D < 10:
+        assert -3.0 < rate < -1.5, rate
+    else:
+        assert -5.0 < rate < -3.0, rate
 
 
 def test_torsion_free_free_and_fixed_free():
