@@ -499,12 +499,7 @@ def sweep(
     # a second pass where another direction's stable solution is a nearer landing
     pool = _pool(result, stability)
     for direction, w, z_prev, z_land in landings:
-        dist = np.linalg.norm(np.ravel(z_land) - np.ravel(z_prev))
-        if any(
-            np.linalg.norm(np.ravel(z) - np.ravel(z_prev)) < dist
-            for d, z in pool.get(w, ())
-            if d != direction
-        ):
+        if any(landing.nearer(z, z_land, z_prev) for d, z in pool.get(w, ()) if d != direction):
             return _sweep_pass(model, omegas, H, directions, pool=pool, **kw)[0]
     return result
 
@@ -594,14 +589,10 @@ def _sweep_pass(
                         sol.message,
                     )
                     if switched and auto:
-                        sol = landing.nearest_landing(
-                            model, problem, sol, z, float(w), H, method, tol, max_iter, others()
-                        )
+                        sol = landing.nearest_landing(sol, z, others())
                 elif auto and (cand := landing.restart(model, problem, z, w, H, method, tol, max_iter)):
                     sol, switched = cand, True
-                    sol = landing.nearest_landing(
-                        model, problem, sol, z, float(w), H, method, tol, max_iter, others()
-                    )
+                    sol = landing.nearest_landing(sol, z, others())
                 else:  # Newton from the previous point without giving up early, then hybr
                     sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback)
             fmax, dom, lost = np.nan, complex(np.nan, np.nan), False

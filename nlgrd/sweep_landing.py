@@ -79,17 +79,31 @@ def pool_candidates(model, problem, pool, w, direction, tol, max_iter) -> list[H
     return out
 
 
-def nearest_landing(model, problem, landing, z_prev, w, H, method, tol, max_iter, others=()):
-    """After a fold: of the arc-length ``landing``, ``others`` and :func:`restart`'s
-    candidate, the stable solution nearest the departed orbit ``z_prev``.
+#: Two solutions closer than this (relative to the larger norm) are the same orbit.
+SAME_ORBIT_RTOL = 1e-6
+
+
+def nearer(cand, best, z_prev) -> bool:
+    """``cand`` is another orbit than ``best`` and nearer ``z_prev`` (arrays of harmonics)."""
+    c, b, p = (np.ravel(x) for x in (cand, best, z_prev))
+    scale = max(float(np.linalg.norm(c)), float(np.linalg.norm(b)))
+    if np.linalg.norm(c - b) <= SAME_ORBIT_RTOL * scale:
+        return False
+    return float(np.linalg.norm(c - p)) < float(np.linalg.norm(b - p))
+
+
+def nearest_landing(landing, z_prev, others=()):
+    """After a fold: of the arc-length ``landing`` and the stable candidates ``others``
+    (the other sweep directions' solutions at this frequency, Newton's own), the one
+    nearest the departed orbit ``z_prev``.
 
     Arc length alone takes the far stable branch of an S. Where the curve folds twice
     more, as onto the back-side impact orbit of Kubo's single-DOF model near 10 500 rpm,
     a slow sweep falls to a nearer attractor (time integration:
     tests/test_sweep_landing.py)."""
     best = landing
-    for cand in (*others, restart(model, problem, z_prev, w, H, method, tol, max_iter)):
-        if cand is not None and distance(cand, z_prev) < distance(best, z_prev):
+    for cand in others:
+        if cand is not None and nearer(cand.harmonics, best.harmonics, z_prev):
             best = cand
     return best
 
@@ -124,7 +138,7 @@ def follow_branch(model, problem, sol, z_prev, w_prev, w, H, method, tol, max_it
         fol.message,
     )
     if folds:
-        fol = nearest_landing(model, problem, fol, z_prev, w, H, method, tol, max_iter, others=(sol, *others))
+        fol = nearest_landing(fol, z_prev, others=(sol, *others))
     scale = max(float(np.linalg.norm(fol.harmonics)), float(np.linalg.norm(sol.harmonics)))
     if distance(fol, sol.harmonics) <= 1e-6 * scale:
         return sol, folds > 0

@@ -344,8 +344,9 @@ def test_kubo_main_resonance_jumps(outputs, kubo):
     assert sd_down.omega < sd_up.omega - 0.2 * res
     # between the jumps the sweeps differ almost everywhere; above the resonance they agree
     x, yu, yd = fe["up"][0], fe["up"][1], fe["down"][1]
-    differ = np.abs(yu - yd) > 0.02 * np.maximum(yu, yd)
-    inside = (x > down.omega) & (x < up.omega)
+    ok = np.isfinite(yu) & np.isfinite(yd)  # both a stable response (not 'no stable')
+    differ = ok & (np.abs(yu - yd) > 0.02 * np.maximum(yu, yd))
+    inside = ok & (x > down.omega) & (x < up.omega)
     assert differ[inside].mean() > 0.9
     above = x > 1.02 * res
     assert differ[above].sum() <= 2  # isolated points at narrow resonances of a higher FE mode
@@ -365,9 +366,14 @@ def test_kubo_dslr_peak_is_bent_below_the_resonance(outputs, kubo):
     x_pk, y_pk = local_peak(*dslr["up"], 0.7 * res, 1.3 * res)
     assert up_jump.omega <= x_pk <= res
     assert y_pk > 2.0
-    # the down sweep's largest DSLR lies at its fold, far below the resonance
+    # the down sweep's largest DSLR lies at the end of its stable contact-loss branch, far
+    # below the resonance: within one grid step of its main down jump (with Floquet on
+    # the branch ends near 0.63 x the resonance; followed unstable at H = 5 it reached 0.52)
+    _, down_jump = resonance_jumps(dte["up"], dte["down"], res)
     x_dn = dslr["down"][0][np.nanargmax(dslr["down"][1])]
-    assert x_dn < 0.6 * res
+    step = np.diff(dslr["down"][0]).max()
+    assert abs(x_dn - down_jump.omega) <= step * (1 + 1e-9)
+    assert x_dn < 0.7 * res
 
 
 @pytest.mark.notebook
@@ -446,26 +452,26 @@ def test_kb_contact_ratio_against_the_iso_formula(outputs, kb_mode):
 
 @pytest.mark.notebook
 def test_kb_dte_main_resonance_and_superharmonics(outputs, kb_mode):
+    """With Floquet stability the FE model of this rig (mesh and bearings damped, shafts
+    not) has no stable mesh-periodic response over wide bands (max |mu| 1.00001-1.33:
+    weakly damped modes excited parametrically by the mesh), so the paper's jump picture
+    cannot be read off its curves. What holds: every point is a stable response or is
+    flagged with its multiplier above 1; the largest stable DTE within 0.7-1.1 x the
+    gear-pair mode, the main resonance, is bent 3-15 % below it; where up and down sweeps both have a stable
+    response above the resonance they agree."""
     _, f_gp = kb_mode
     out = outputs(NAMES[1])
-    c = directions_of(read(out, "dte_fe.csv"), HZ, "dte_rms [um]")
-    up, down = resonance_jumps(c["up"], c["down"], f_gp)
-    assert 0.85 * f_gp < up.omega < 0.97 * f_gp
-    assert 0.7 * f_gp < down.omega < up.omega - 0.05 * f_gp
+    fe = read(out, "dte_fe.csv")
+    flagged = fe["response"] != "periodic"
+    assert (fe.loc[flagged & fe["converged"], "floquet_max [-]"] > 1).all()
+    assert fe.loc[~flagged, "dte_rms [um]"].notna().all() and fe.loc[flagged, "dte_rms [um]"].isna().all()
+    c = directions_of(fe, HZ, "dte_rms [um]")
+    for d in ("up", "down"):
+        x_pk, _ = local_peak(*c[d], 0.7 * f_gp, 1.1 * f_gp)
+        assert 0.85 * f_gp < x_pk < 0.97 * f_gp, (d, x_pk)
     x, yu, yd = c["up"][0], c["up"][1], c["down"][1]
-    ok = np.isfinite(yu) & np.isfinite(yd)
-    differ = ok & (np.abs(yu - yd) > 0.02 * np.maximum(yu, yd))
-    assert differ[ok & (x > down.omega) & (x < up.omega)].mean() > 0.9
-    assert not differ[x > 1.02 * f_gp].any()
-    # (no claim on where the down sweep's DTE peaks: this H = 5 sweep without stability
-    # follows orbits there that are unstable, Floquet max |mu| 1.015-1.055 at 4061-4149 Hz)
-    # jumps (two solutions) near 1/2 and 1/3 of the bent main resonance
-    bands = hysteresis_bands(x, yu, yd)
-    for k in (2, 3):
-        lo, hi = 0.9 * down.omega / k, 1.1 * up.omega / k
-        assert any(b0 <= hi and b1 >= lo for b0, b1 in bands), (k, bands)
-        _, y_sup = local_peak(*c["down"], lo, hi)
-        assert y_sup > 2 * np.nanmin(yu[(x >= lo) & (x <= hi)])
+    ok = np.isfinite(yu) & np.isfinite(yd) & (x > 1.02 * f_gp)
+    np.testing.assert_allclose(yu[ok], yd[ok], rtol=1e-6)
 
 
 @pytest.mark.notebook
@@ -514,6 +520,94 @@ def test_flexibility_linear_study_and_bearing_forces(outputs, kubo):
     w0 = s.gear_pairs[0].static_load
     for key in ("stiff", "soft_bearings", "soft_slender", "low_backlash"):
         f = read(out, f"sweep_{key}.csv")
-        conv = f["converged"]
+        conv = f["converged"] & (f["response"] == "periodic")  # a stable response
         force = f.loc[conv, "gear-shaft bearings force_max [N]"]
+        assert force.notna().all(), key
         assert (force >= 0.5 * w0 * (1 - 1e-6)).all(), key  # never below the static share
+
+
+# --------------------------------------------------------------------------------------
+# Every written response is converged, Floquet-stable and within the harmonic tolerance
+# --------------------------------------------------------------------------------------
+
+#: Columns that carry a response value in a sweep table.
+RESPONSE_COLUMNS = ("dslr [-]", "dte_rms [um]", "force_max [N]")
+#: The default output tolerance of the harmonic estimate (nlgrd.harmonic_convergence).
+HARMONIC_RTOL = 5e-3
+
+
+def unphysical_rows(frame: pd.DataFrame, time_integration: bool = False) -> list[str]:
+    """Why rows of a sweep table that carry a response value are not a physical response:
+    not converged, not Floquet-stable, flagged 'no stable mesh-periodic response', or
+    with a harmonic error above the tolerance. A time-integration table
+    (``time_integration``: the ``*_td.csv`` files) needs ``converged`` (periodic) only: a
+    periodic steady state reached by integration is attracting, and it keeps every
+    harmonic."""
+    if "direction" not in frame or "converged" not in frame:
+        return []
+    cols = [c for c in RESPONSE_COLUMNS if c in frame]
+    has = frame[cols].notna().any(axis=1) if cols else pd.Series(False, index=frame.index)
+    rows = frame[has]
+    bad = []
+    if not rows["converged"].astype(bool).all():
+        bad.append("not converged")
+    if time_integration:
+        return bad
+    if "stable" not in frame:
+        return [*bad, "no stability column"]
+    if not (rows["stable"] == True).all():  # noqa: E712 (NA is not stable)
+        bad.append("unstable")
+    if "response" in rows and (rows["response"] != "periodic").any():
+        bad.append("no stable mesh-periodic response written with values")
+    if "harmonic_error [-]" in rows and not (rows["harmonic_error [-]"] <= HARMONIC_RTOL).all():
+        bad.append(f"harmonic error above {HARMONIC_RTOL} or unknown")
+    return bad
+
+
+def scan_csvs(folder: Path) -> dict[str, list[str]]:
+    found = {}
+    for p in sorted(folder.glob("*.csv")):
+        if why := unphysical_rows(pd.read_csv(p), time_integration=p.name.endswith("_td.csv")):
+            found[p.name] = why
+    return found
+
+
+@pytest.mark.notebook
+@pytest.mark.parametrize("name", NAMES)
+def test_every_written_response_is_converged_and_stable(outputs, name):
+    """Every CSV a notebook run writes (fast mode; the full runs of ``make reports`` take
+    the same code paths with more points: 2026-12-01 they passed this scan too, reports/
+    being generated, not committed)."""
+    out = outputs(name)
+    assert any("stable" in pd.read_csv(p) for p in out.glob("*.csv"))  # the scan sees sweep tables
+    assert scan_csvs(out) == {}
+
+
+def test_scan_catches_unstable_and_unconverged_rows():
+    """The scan is not vacuous: each defect alone is reported."""
+    good = pd.DataFrame(
+        {
+            "direction": ["up", "down"],
+            "converged": [True, True],
+            "stable": [True, True],
+            "response": ["periodic", "periodic"],
+            "H": [13, 13],
+            "harmonic_error [-]": [1e-4, 2e-3],
+            "dslr [-]": [1.2, 2.0],
+        }
+    )
+    assert unphysical_rows(good) == []
+    for col, value, why in (
+        ("converged", False, "not converged"),
+        ("stable", False, "unstable"),
+        (
+            "response",
+            "no stable mesh-periodic response",
+            "no stable mesh-periodic response written with values",
+        ),
+        ("harmonic_error [-]", 0.02, "harmonic error above"),
+    ):
+        bad = good.copy()
+        bad.loc[1, col] = value
+        assert any(w.startswith(why) for w in unphysical_rows(bad)), col
+    assert unphysical_rows(good.drop(columns="stable")) == ["no stability column"]
