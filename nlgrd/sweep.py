@@ -455,10 +455,11 @@ def sweep(
         S-shaped response curve. "restart" instead restarts Newton from the full-contact
         linear response and keeps the result if it converges (and is stable, when
         stability is computed): much cheaper, but it may pick another coexisting stable
-        branch than a slow sweep would. "auto" tries both and lands on the stable solution
-        nearest the orbit that folded (the arc-length landing, or "restart"'s when that is
-        nearer or arc length fails): where the curve folds more than once, the far branch
-        of arc length can be an orbit a slow sweep does not reach. "none"
+        branch than a slow sweep would. "auto" takes, of the arc-length landing (or
+        "restart"'s when arc length fails) and the other sweep directions' stable
+        solutions at that frequency, the one nearest the orbit that folded (a second pass
+        when another direction's is nearer): where the curve folds more than once, the far
+        branch of arc length can be an orbit a slow sweep does not reach. "none"
         leaves the point flagged as not converged.
     leave_unstable : bool
         With stability: at a point where the branch followed is unstable (by a fold or
