@@ -162,7 +162,8 @@ def check_harmonics(
         error[i] = float(np.max(np.abs(v2 - values[i]) / np.maximum(np.abs(v2), scale)))
     fine = {i: sol.harmonics for i, sol in sols.items() if sol is not None and checked[i]}
     starts = _jump_starts(result) if jumps else []
-    held = all(_jump_holds(model, result, i, fine, H2, tol, rtol) for i in starts)
+    left = {i: sol.harmonics for i, sol in sols.items() if sol is not None}
+    held = all(_jump_holds(model, result, i, left, fine, H2, tol, rtol) for i in starts)
     err_max = float(np.max(error[~np.isnan(error)])) if np.any(~np.isnan(error)) else 0.0
     return HarmonicCheck(H, H2, error, held, ((H, err_max, held),), sols)
 
@@ -177,12 +178,16 @@ def _jump_starts(result: SweepResult) -> list[int]:
     return starts
 
 
-def _jump_holds(model, result, i, fine, H2, tol, rtol) -> bool:
-    """False when the branch left at row i continues, stable, to row i + 1 at H2."""
-    if i not in fine:
-        return True  # the point before the jump is itself unchecked or failed (counted there)
+def _jump_holds(model, result, i, left, fine, H2, tol, rtol) -> bool:
+    """False when the branch left at row i continues, stable, to row i + 1 at H2.
+
+    ``left``: the H2 solutions of every converged row (the unstable ones too: a sweep
+    leaving a range without a stable response jumps from an unstable orbit); ``fine``:
+    those of the checked rows."""
+    if i not in left:
+        return True  # the point before the jump failed at H2 (counted there when checked)
     w = float(result.omega[i + 1])
-    sol = _resolve(model, w, fine[i], H2, tol)
+    sol = _resolve(model, w, left[i], H2, tol)
     if sol is None:
         return True  # the branch folds at H2 too
     z = sol.harmonics

@@ -14,7 +14,8 @@ the index are byte-identical on a rerun (no times; the index names the git commi
 papermill's timestamps and absolute paths are removed from the executed notebooks.
 
 Options: ``--fast`` (the notebooks' quick mode, fewer Campbell speeds), ``--only PART``
-and ``--notebook NAME`` (rebuild some, keep the rest), ``--out DIR``.
+and ``--notebook NAME`` (rebuild some, keep the rest), ``-p NAME VALUE`` (a notebook
+parameter, checked against every notebook run before anything is built), ``--out DIR``.
 """
 
 from __future__ import annotations
@@ -74,6 +75,7 @@ class Build:
     fast: bool = False
     notebooks: tuple[str, ...] | None = None
     stream: Any = None
+    parameters: Mapping[str, Any] | None = None  # passed to every notebook (``-p NAME VALUE``)
 
     @property
     def mode(self) -> str:
@@ -376,7 +378,8 @@ def build_notebook_reports(build: Build) -> list[Path]:
         )
         t0 = time.perf_counter()
         log = build.stage / f".{name}.kernel.log"
-        executed = run_notebook(nb, target, {"fast": build.fast}, stream=stream, kernel_log=log)
+        params = {"fast": build.fast, **(build.parameters or {})}
+        executed = run_notebook(nb, target, params, stream=stream, kernel_log=log)
         log.unlink(missing_ok=True)
         make_deterministic(executed, out_dir=_relative(build.out / name, NOTEBOOKS))
         export_html(executed)
@@ -537,6 +540,7 @@ def build_reports(
     fast: bool = False,
     notebooks: tuple[str, ...] | None = None,
     stream=None,
+    parameters: Mapping[str, Any] | None = None,
 ) -> int:
     """Build ``parts`` into a stage and publish it to ``out``; returns the exit status.
 
@@ -548,7 +552,7 @@ def build_reports(
     out = Path(out).resolve()
     out.parent.mkdir(parents=True, exist_ok=True)
     clean_stale(out)
-    build = Build(out, staging_dir(out), fast, notebooks, stream)
+    build = Build(out, staging_dir(out), fast, notebooks, stream, parameters)
     name = out.name + "/"
     previous = (
         f"{name} keeps the previous complete set"
@@ -600,6 +604,16 @@ def build_reports(
             signal.signal(signal.SIGTERM, old_term)
 
 
+def _literal(text: str) -> Any:
+    """A ``-p`` value: a Python literal (number, bool, None, list ...) or else the text."""
+    import ast
+
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return text
+
+
 def main(argv: list[str] | None = None) -> int:
     """Build all reports; returns the exit status."""
     parser = argparse.ArgumentParser(prog="python -m nlgrd.reports", description=__doc__.splitlines()[0])
@@ -607,14 +621,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--only", choices=PARTS, action="append", help="build only these parts")
     parser.add_argument("--notebook", action="append", help="run only this notebook (name without .ipynb)")
     parser.add_argument("--out", default=str(REPORTS), help="folder to publish to (default: reports/)")
+    parser.add_argument(
+        "-p",
+        "--parameter",
+        nargs=2,
+        action="append",
+        metavar=("NAME", "VALUE"),
+        help="a notebook parameter for every notebook run (VALUE read as a Python literal, else text)",
+    )
     args = parser.parse_args(argv)
     parts = tuple(args.only or PARTS)
     try:
-        if args.notebook:
-            notebook_names(tuple(args.notebook))  # fail early on a misspelt name
-        return build_reports(
-            Path(args.out), parts, args.fast, tuple(args.notebook) if args.notebook else None
-        )
+        selected = tuple(args.notebook) if args.notebook else None
+        names = notebook_names(selected)  # fail early on a misspelt name
+        params = {name: _literal(value) for name, value in args.parameter or ()}
+        if params and "notebooks" in parts:
+            for name in names:  # fail early on a misspelt parameter
+                check_parameters(NOTEBOOKS / f"{name}.ipynb", params)
+        return build_reports(Path(args.out), parts, args.fast, selected, parameters=params)
     except KeyboardInterrupt:  # before the build started: nothing was touched
         _say(f"interrupted before the build started: {Path(args.out).name}/ is unchanged")
         return INTERRUPTED

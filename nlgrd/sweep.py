@@ -466,12 +466,15 @@ def sweep(
         not), do what a slow physical sweep does. A real multiplier > 1 (the orbit
         departs along one direction, as past a fold): leave for a stable mesh-periodic
         solution at that frequency (Newton from the full-contact response and from the
-        unstable orbit with its alternating part scaled by 1/4 .. 4; the nearest stable
-        one, :func:`nlgrd.sweep_landing.restart`), listed as a jump. A complex pair or a real multiplier
-        < -1 (a torus or a period-2 orbit grows around the orbit; time integration stays
-        near it, tests/test_geared_time_domain.py), or no stable solution found: flag the
-        point ``no_stable`` with NaN metrics and its dominant multiplier, and go on from
-        the unstable orbit. False: stay on the branch and flag its points unstable.
+        unstable orbit with its alternating part scaled by 1/4 .. 4, and with
+        ``jump="auto"`` the other directions' stable solutions there; the nearest one,
+        :func:`nlgrd.sweep_landing.restart`), listed as a jump. A complex pair or a real
+        multiplier < -1 (a torus or a period-2 orbit grows around the orbit; time
+        integration stays near it where the multiplier has just crossed,
+        tests/test_geared_time_domain.py; see docs/verification.md, "Leaving an unstable
+        orbit", for stronger instabilities), or no stable solution found: flag the point
+        ``no_stable`` with NaN metrics and its dominant multiplier, and go on from the
+        unstable orbit. False: stay on the branch and flag its points unstable.
 
     Returns
     -------
@@ -502,7 +505,17 @@ def sweep(
     for direction, w, z_prev, z_land in landings:
         if any(landing.nearer(z, z_land, z_prev) for d, z in pool.get(w, ()) if d != direction):
             return _sweep_pass(model, omegas, H, directions, pool=pool, **kw)[0]
+    for i in np.nonzero(result.no_stable & _fold_kind(result.dominant_multiplier))[0]:
+        # the restarts found nothing stable there, but another direction did
+        if any(d != result.direction[i] for d, _ in pool.get(float(result.omega[i]), ())):
+            return _sweep_pass(model, omegas, H, directions, pool=pool, **kw)[0]
     return result
+
+
+def _fold_kind(mu: NDArray) -> NDArray[np.bool_]:
+    """Real multipliers > 1: the orbit departs along one direction, as past a fold."""
+    mu = np.asarray(mu, dtype=complex)
+    return (np.abs(mu.imag) <= 1e-6 * np.abs(mu)) & (mu.real > 0)
 
 
 def _pool(result: SweepResult, stability: bool) -> dict[float, list]:

@@ -238,12 +238,28 @@ def test_misspelt_notebook_is_refused_before_anything_is_built(tmp_path, capsys)
     assert not out.exists() and siblings(out) == []
 
 
+def test_misspelt_parameter_is_refused_before_anything_is_built(tmp_path, capsys):
+    out = tmp_path / "reports"
+    argv = ["--only", "notebooks", "--notebook", "03_flexibility", "-p", "pionts", "8", "--out", str(out)]
+    assert reports.main(argv) == 2
+    err = capsys.readouterr().err
+    assert "parameters.pionts" in err and "03_flexibility.ipynb" in err and "points" in err
+    assert not out.exists() and siblings(out) == []
+
+
+def test_parameter_values_are_literals_or_text():
+    assert reports._literal("8") == 8 and reports._literal("0.5") == 0.5
+    assert reports._literal("True") is True and reports._literal("kubo.toml") == "kubo.toml"
+
+
 # --------------------------------------------------------------------------------------
 # The real build, interrupted
 # --------------------------------------------------------------------------------------
 
-#: The real parts the slow test builds (fast mode): quick, and one notebook through papermill.
+#: The real parts the slow test builds (fast mode): quick, and one notebook through papermill
+#: (8 points per sweep: what is tested is the build's interruption, not the curves).
 REAL = ["--fast", "--only", "gears", "--only", "notebooks", "--notebook", "03_flexibility"]
+REAL += ["-p", "points", "8"]
 
 
 def start(out: Path) -> subprocess.Popen:
@@ -286,6 +302,8 @@ def test_sigint_at_random_moments_never_leaves_a_mixed_set(tmp_path):
             continue
         if proc.returncode == -signal.SIGINT:  # still starting Python: the builder never ran
             assert stdout == "", what
+        elif lines and lines[-1].startswith("interrupted before the build started"):
+            assert proc.returncode == reports.INTERRUPTED and stdout == "", what  # checking the arguments
         else:
             assert proc.returncode == reports.INTERRUPTED, what
             assert lines[-1].startswith("interrupted"), what
