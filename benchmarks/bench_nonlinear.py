@@ -69,6 +69,7 @@ import nlgrd.geared_response as nl_geared
 import nlgrd.harmonic_balance as nl_hb
 import nlgrd.receptance as nl_receptance
 import nlgrd.sweep as nl_sweep
+import nlgrd.sweep_landing as nl_landing
 from nlgrd.geared_response import build_geared_model, gear_pair_mode, geared_sweep, time_response
 from nlgrd.harmonic_balance import LinearStateSpace
 from nlgrd.model_file import load_model
@@ -245,8 +246,8 @@ class Probe:
         probe = self
 
         def wrapper(*args, **kwargs):
-            if probe.stack and probe.stack[-1][1]:
-                return orig(*args, **kwargs)
+            if probe.stack and (probe.stack[-1][1] or (boundary and probe.stack[-1][0] == phase)):
+                return orig(*args, **kwargs)  # inside a sticky phase, or a boundary call nested in one
             probe._charge(time.perf_counter())
             probe.stack.append((phase, sticky))
             try:
@@ -273,7 +274,8 @@ class Probe:
         w(nl_sweep, "metrics_from_harmonics", "output metrics", boundary=True)
         w(nl_sweep.MeshMetrics, "nan", "output metrics", boundary=True)  # a point without a stable response
         w(nl_continuation, "jump_to_branch", "jump", sticky=True)
-        w(nl_sweep, "_restart", "jump", sticky=True)
+        for name in ("restart", "follow_branch", "pool_candidates", "approach"):  # landings
+            w(nl_landing, name, "jump", sticky=True)
         w(nl_geared, "bearing_response", "bearing recovery", sticky=True)
         self.stack = [("other", False)]
         self.seg = time.perf_counter()

@@ -80,6 +80,7 @@ def test_continuation_residual_is_the_sweep_residual_and_converged_is_computed()
     np.testing.assert_array_equal(curve.converged, curve.residual <= 1e-9)
 
 
+@pytest.mark.slow  # about 40 s: the inner loop (-m "not slow") leaves it to make test
 def test_modal_receptances_and_floquet_are_byte_identical_in_one_process():
     """Two models built one after the other in one process (the iterative eigensolvers'
     state differs between them) give byte-identical sweep outputs, floquet_max included."""

@@ -60,6 +60,7 @@ def test_back_side_impact_orbit_exists_and_attracts(kubo_sdof):
     assert td.metrics["dslr"][0] == pytest.approx(arc.metrics["dslr"][48], rel=5e-3)
 
 
+@pytest.mark.slow  # a time-domain sweep, about 15 s
 def test_up_sweep_lands_where_a_slow_time_domain_sweep_does(kubo_sdof):
     """A slow up sweep in time (from the 10 329 rpm orbit, five steps to 10 506 rpm, each
     from the last state) ends on the 12 um orbit, not on the back-side impact orbit; the
