@@ -423,20 +423,22 @@ def _dominant(Phi: NDArray) -> NDArray[np.complex128]:
     return np.linalg.eigvals(Phi)
 
 
-def _expm_reference(ss: LinearStateSpace, breaks: NDArray, Kt: NDArray, omega: float) -> NDArray:
-    """The library's method before issue 10 (``method="expm"``), kept for comparison."""
+def _state_matrix(ss: LinearStateSpace) -> tuple[NDArray, NDArray]:
+    """M⁻¹ and the state matrix of (q, q') with the stiffness block still empty."""
     N = ss.M.shape[0]
     Minv = np.linalg.inv(ss.M)
-    MD = Minv @ ss.D
-    Phi = np.eye(2 * N)
     A = np.zeros((2 * N, 2 * N))
     A[:N, N:] = np.eye(N)
-    A[N:, N:] = -MD
-    if all(np.array_equal(Kt[i], Kt[0]) for i in range(1, Kt.shape[0])):
-        A[N:, :N] = -Minv @ (ss.K + ss.W @ Kt[0] @ ss.W.T)
-        key = ("expm-eig", hashlib.blake2b(A.tobytes(), digest_size=20).digest())
-        lam = ss.floquet_cache.get(key, lambda: np.linalg.eigvals(A))
-        return np.exp(lam * (breaks[-1] - breaks[0]) / omega)
+    A[N:, N:] = -Minv @ ss.D
+    return Minv, A
+
+
+def expm_monodromy(ss: LinearStateSpace, breaks: NDArray, Kt: NDArray, omega: float) -> NDArray:
+    """Π exp(A_i Δt_i) over the pieces from ``breaks[0]`` (the first acts first) in the
+    unscaled state (q, q'), by scipy's ``expm``: the reference product (``method="expm"``)."""
+    Minv, A = _state_matrix(ss)
+    N = ss.M.shape[0]
+    Phi = np.eye(2 * N)
     cache: dict = {}
     for i in range(Kt.shape[0]):
         dt = (breaks[i + 1] - breaks[i]) / omega
@@ -446,7 +448,19 @@ def _expm_reference(ss: LinearStateSpace, breaks: NDArray, Kt: NDArray, omega: f
             Ai[N:, :N] = -Minv @ (ss.K + ss.W @ Kt[i] @ ss.W.T)
             cache[key] = Ai
         Phi = sla.expm(cache[key] * dt) @ Phi
-    return np.linalg.eigvals(Phi)
+    return Phi
+
+
+def _expm_reference(ss: LinearStateSpace, breaks: NDArray, Kt: NDArray, omega: float) -> NDArray:
+    """The library's method before issue 10 (``method="expm"``), kept for comparison."""
+    if all(np.array_equal(Kt[i], Kt[0]) for i in range(1, Kt.shape[0])):
+        Minv, A = _state_matrix(ss)
+        N = ss.M.shape[0]
+        A[N:, :N] = -Minv @ (ss.K + ss.W @ Kt[0] @ ss.W.T)
+        key = ("expm-eig", hashlib.blake2b(A.tobytes(), digest_size=20).digest())
+        lam = ss.floquet_cache.get(key, lambda: np.linalg.eigvals(A))
+        return np.exp(lam * (breaks[-1] - breaks[0]) / omega)
+    return np.linalg.eigvals(expm_monodromy(ss, breaks, Kt, omega))
 
 
 def floquet_multipliers(

@@ -13,10 +13,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 
-from nlgrd.floquet import _tangent_pieces
+from nlgrd.floquet import _tangent_pieces, expm_monodromy
+from nlgrd.sweep import instability_kind
 
 
 @dataclass(frozen=True)
@@ -32,30 +32,18 @@ class FloquetMode:
     def kind(self) -> str:
         """The instability: "real > 1", "real < -1", "complex", or "stable" (|μ| <= 1)."""
         mu = self.multiplier
-        if abs(mu) <= 1:
-            return "stable"
-        if abs(mu.imag) <= 1e-6 * abs(mu):
-            return "real > 1" if mu.real > 0 else "real < -1"
-        return "complex"
+        return instability_kind(np.array([mu]), np.array([abs(mu) <= 1]))[0] or "stable"
 
 
 def monodromy_from_zero(
     state_space, nonlinearities: Sequence, harmonics: ArrayLike, omega: float
 ) -> NDArray[np.float64]:
     """Φ = Π exp(A_i Δt_i) over the contact intervals from θ = 0 (the first acts first), in
-    the state (q, q') of ``state_space``, by scipy's ``expm`` (no deflation, no scaling)."""
+    the state (q, q') of ``state_space``: :func:`nlgrd.floquet.expm_monodromy` (scipy's
+    ``expm``, no deflation, no scaling)."""
     Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
     breaks, Kt = _tangent_pieces(nonlinearities, Y, state_space.W.shape[1])
-    M, D, K, W = state_space.M, state_space.D, state_space.K, state_space.W
-    N = M.shape[0]
-    A = np.zeros((2 * N, 2 * N))
-    A[:N, N:] = np.eye(N)
-    A[N:, N:] = -np.linalg.solve(M, D)
-    Phi = np.eye(2 * N)
-    for i in range(Kt.shape[0]):
-        A[N:, :N] = -np.linalg.solve(M, K + W @ Kt[i] @ W.T)
-        Phi = sla.expm(A * ((breaks[i + 1] - breaks[i]) / omega)) @ Phi
-    return Phi
+    return expm_monodromy(state_space, breaks, Kt, omega)
 
 
 def dominant_floquet_mode(

@@ -505,17 +505,12 @@ def sweep(
     for direction, w, z_prev, z_land in landings:
         if any(landing.nearer(z, z_land, z_prev) for d, z in pool.get(w, ()) if d != direction):
             return _sweep_pass(model, omegas, H, directions, pool=pool, **kw)[0]
-    for i in np.nonzero(result.no_stable & _fold_kind(result.dominant_multiplier))[0]:
+    fold = instability_kind(result.dominant_multiplier, result.stable) == "real > 1"
+    for i in np.nonzero(result.no_stable & fold)[0]:
         # the restarts found nothing stable there, but another direction did
         if any(d != result.direction[i] for d, _ in pool.get(float(result.omega[i]), ())):
             return _sweep_pass(model, omegas, H, directions, pool=pool, **kw)[0]
     return result
-
-
-def _fold_kind(mu: NDArray) -> NDArray[np.bool_]:
-    """Real multipliers > 1: the orbit departs along one direction, as past a fold."""
-    mu = np.asarray(mu, dtype=complex)
-    return (np.abs(mu.imag) <= 1e-6 * np.abs(mu)) & (mu.real > 0)
 
 
 def _pool(result: SweepResult, stability: bool) -> dict[float, list]:
