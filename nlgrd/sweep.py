@@ -502,14 +502,21 @@ def sweep(
         return result
     # a second pass where another direction's stable solution is a nearer landing
     pool = _pool(result, stability)
-    for direction, w, z_prev, z_land in landings:
-        if any(landing.nearer(z, z_land, z_prev) for d, z in pool.get(w, ()) if d != direction):
-            return _sweep_pass(model, omegas, H, directions, pool=pool, **kw)[0]
+    nearer_landing = any(
+        landing.nearer(z, z_land, z_prev)
+        for direction, w, z_prev, z_land in landings
+        for d, z in pool.get(w, ())
+        if d != direction
+    )
+    # or a point of fold kind whose restarts found nothing stable, where another direction did
     fold = instability_kind(result.dominant_multiplier, result.stable) == "real > 1"
-    for i in np.nonzero(result.no_stable & fold)[0]:
-        # the restarts found nothing stable there, but another direction did
-        if any(d != result.direction[i] for d, _ in pool.get(float(result.omega[i]), ())):
-            return _sweep_pass(model, omegas, H, directions, pool=pool, **kw)[0]
+    missed = any(
+        d != result.direction[i]
+        for i in np.nonzero(result.no_stable & fold)[0]
+        for d, _ in pool.get(float(result.omega[i]), ())
+    )
+    if nearer_landing or missed:
+        return _sweep_pass(model, omegas, H, directions, pool=pool, **kw)[0]
     return result
 
 

@@ -83,12 +83,18 @@ def pool_candidates(model, problem, pool, w, direction, tol, max_iter) -> list[H
 SAME_ORBIT_RTOL = 1e-6
 
 
+def same_orbit(a, b) -> bool:
+    """Harmonics ``a`` and ``b`` within SAME_ORBIT_RTOL of the larger norm of the two."""
+    a, b = np.ravel(a), np.ravel(b)
+    scale = max(float(np.linalg.norm(a)), float(np.linalg.norm(b)))
+    return bool(np.linalg.norm(a - b) <= SAME_ORBIT_RTOL * scale)
+
+
 def nearer(cand, best, z_prev) -> bool:
     """``cand`` is another orbit than ``best`` and nearer ``z_prev`` (arrays of harmonics)."""
-    c, b, p = (np.ravel(x) for x in (cand, best, z_prev))
-    scale = max(float(np.linalg.norm(c)), float(np.linalg.norm(b)))
-    if np.linalg.norm(c - b) <= SAME_ORBIT_RTOL * scale:
+    if same_orbit(cand, best):
         return False
+    c, b, p = (np.ravel(x) for x in (cand, best, z_prev))
     return float(np.linalg.norm(c - p)) < float(np.linalg.norm(b - p))
 
 
@@ -139,8 +145,7 @@ def follow_branch(model, problem, sol, z_prev, w_prev, w, H, method, tol, max_it
     )
     if folds:
         fol = nearest_landing(fol, z_prev, others=(sol, *others))
-    scale = max(float(np.linalg.norm(fol.harmonics)), float(np.linalg.norm(sol.harmonics)))
-    if distance(fol, sol.harmonics) <= 1e-6 * scale:
+    if same_orbit(fol.harmonics, sol.harmonics):
         return sol, folds > 0
     return fol, folds > 0
 
