@@ -72,8 +72,11 @@ class _Tracer:
         t /= np.linalg.norm(t)
         return t if t @ previous >= 0 else -t
 
-    def correct(self, u_pred: NDArray, t: NDArray, max_iter: int = 12) -> tuple[NDArray | None, int, float]:
-        """Newton on [R(u); tᵀ(u - u_pred)] = 0; returns (u or None, Newton updates, residual).
+    def correct(
+        self, u_pred: NDArray, t: NDArray, max_iter: int = 12
+    ) -> tuple[NDArray | None, int, float, NDArray | None]:
+        """Newton on [R(u); tᵀ(u - u_pred)] = 0; returns (u or None, Newton updates,
+        residual, the Jacobian at u).
 
         Converged when, after at least one update, the relative residual is below ``tol``
         and the arc-length constraint holds to 1e-12."""
@@ -82,18 +85,18 @@ class _Tracer:
         for it in range(max_iter + 1):
             R, A, res = self.system(u)
             if it > 0 and res < self.tol and abs(t @ (u - u_pred)) < 1e-12:
-                return u, it, res
+                return u, it, res, A
             if it == max_iter:
                 break
             B = np.vstack([A, t])
             try:
                 du = -np.linalg.solve(B, np.append(R, t @ (u - u_pred)))
             except np.linalg.LinAlgError:
-                return None, it + 1, np.inf
+                return None, it + 1, np.inf, None
             if not np.all(np.isfinite(du)):
-                return None, it + 1, np.inf
+                return None, it + 1, np.inf, None
             u = u + du
-        return None, max_iter, res
+        return None, max_iter, res, None
 
     def trace(
         self,
@@ -119,9 +122,8 @@ class _Tracer:
         for _ in range(max_steps):
             while True:
                 u_pred = u + ds * t
-                un, its, res = self.correct(u_pred, t)
+                un, its, res, A = self.correct(u_pred, t)
                 if un is not None:
-                    _, A, _ = self.system(un)
                     tn = self.tangent(A, t)
                     # accept only small corrections and tangent turns (< ~25 degrees)
                     if ds <= 2 * ds_min or (tn @ t > 0.9 and np.linalg.norm(un - u_pred) < 0.5 * ds):
