@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 reports: $(STAMP)
-	$(PY) -m nlgrd.reports
+	$(PY) -m nlgrd.studies.reports
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .

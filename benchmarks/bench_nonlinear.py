@@ -16,7 +16,7 @@ Three cases, each printed as a table (figures and machine in ``benchmarks/README
    shared by the model's state spaces). Target: under 2 s. Then Floquet per point side
    by side on the sweep's harmonics: the reference ``method="expm"`` (the method before
    issue 10) against the default, verdicts compared. Target: <= 1 ms per point.
-2. Time integration (HHT-α, :func:`nlgrd.geared_response.time_response`) against
+2. Time integration (HHT-α, :func:`nlgrd.timedomain.geared.time_response`) against
    harmonic balance at the same points and equal accuracy (DTE RMS within 0.5 % of
    HB with H = 9), both as sweeps (each point starts from the previous one).
    Target: TI / HB per point >= 1000.
@@ -63,16 +63,16 @@ import scipy
 import scipy.linalg  # noqa: F401  (loads scipy's OpenBLAS so that its threads can be set)
 import scipy.sparse.linalg  # noqa: F401
 
-import nlgrd.continuation as nl_continuation
-import nlgrd.floquet as nl_floquet
-import nlgrd.geared_response as nl_geared
-import nlgrd.harmonic_balance as nl_hb
-import nlgrd.receptance as nl_receptance
-import nlgrd.sweep as nl_sweep
-import nlgrd.sweep_landing as nl_landing
-from nlgrd.geared_response import build_geared_model, gear_pair_mode, geared_sweep, time_response
-from nlgrd.harmonic_balance import LinearStateSpace
-from nlgrd.model_file import load_model
+import nlgrd.nonlinear.floquet as nl_floquet
+import nlgrd.nonlinear.geared as nl_geared
+import nlgrd.nonlinear.harmonic_balance as nl_hb
+import nlgrd.nonlinear.landing as nl_landing
+import nlgrd.nonlinear.receptance as nl_receptance
+import nlgrd.nonlinear.sweep as nl_sweep
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.state_space import LinearStateSpace
+from nlgrd.timedomain.geared import time_response
 
 ROOT = Path(__file__).resolve().parents[1]
 MODEL_FILE = ROOT / "data" / "models" / "two_shaft.toml"
@@ -273,7 +273,7 @@ class Probe:
         w(nl_sweep, "floquet_multipliers", "stability")
         w(nl_sweep, "metrics_from_harmonics", "output metrics", boundary=True)
         w(nl_sweep.MeshMetrics, "nan", "output metrics", boundary=True)  # a point without a stable response
-        w(nl_continuation, "jump_to_branch", "jump", sticky=True)
+        w(nl_sweep, "jump_to_branch", "jump", sticky=True)
         for name in ("restart", "follow_branch", "pool_candidates", "approach"):  # landings
             w(nl_landing, name, "jump", sticky=True)
         w(nl_geared, "bearing_response", "bearing recovery", sticky=True)
@@ -526,7 +526,7 @@ def case_sweep(cfg) -> dict:
 
 
 def with_shared_floquet_cache(model):
-    """``model`` whose state spaces share one :class:`nlgrd.floquet.FloquetCache`.
+    """``model`` whose state spaces share one :class:`nlgrd.nonlinear.floquet.FloquetCache`.
 
     What ``build_geared_model`` would do with the proposed one-line change (its
     ``state_space_at`` passing ``cache=``); built here from the public pieces, the

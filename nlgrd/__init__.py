@@ -6,14 +6,14 @@ multi-harmonic balance with describing functions reduced by receptances.
 Reference: Maliha, Doğruer & Özgüven (2004), J. Mech. Des. 126:534-541.
 """
 
-from nlgrd.assembly import LinearModel, assemble
-from nlgrd.bearing import Bearing
-from nlgrd.coupling import Coupling
-from nlgrd.disk import Disk
 from nlgrd.errors import ModelError
-from nlgrd.materials import STEEL, Material
-from nlgrd.shaft import Shaft, ShaftElement
-from nlgrd.system import DofMap, RotorSystem
+from nlgrd.rotor.assembly import LinearModel, assemble
+from nlgrd.rotor.bearing import Bearing
+from nlgrd.rotor.coupling import Coupling
+from nlgrd.rotor.disk import Disk
+from nlgrd.rotor.materials import STEEL, Material
+from nlgrd.rotor.shaft import Shaft, ShaftElement
+from nlgrd.rotor.system import DofMap, RotorSystem
 
 __version__ = "0.1.0"
 

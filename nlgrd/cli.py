@@ -1,6 +1,6 @@
 """The ``nlgrd`` command line.
 
-Every sub-command reads a TOML model file (see :mod:`nlgrd.model_file`) and writes
+Every sub-command reads a TOML model file (see :mod:`nlgrd.io.model_file`) and writes
 CSV tables and PNG figures next to each other in ``--out`` (default: the current
 directory).
 
@@ -18,7 +18,7 @@ The command line never prints a traceback:
   environment variable ``NLGRD_DEBUG=1`` its traceback is printed first.
 
 The option checks, the range parsing and the atomic output writer are in
-:mod:`nlgrd.cli_io`; this module has the sub-commands, the parser and :func:`main`.
+:mod:`nlgrd.io.command_line`; this module has the sub-commands, the parser and :func:`main`.
 """
 
 from __future__ import annotations
@@ -31,7 +31,8 @@ import traceback
 import warnings
 from pathlib import Path
 
-from nlgrd.cli_io import (
+from nlgrd.errors import ModelError
+from nlgrd.io.command_line import (
     MAX_POINTS,
     Outputs,
     check_at_least,
@@ -44,7 +45,6 @@ from nlgrd.cli_io import (
     parse_speed,
     pyplot,
 )
-from nlgrd.errors import ModelError
 
 __all__ = [
     "EPILOG",
@@ -87,8 +87,8 @@ def cmd_modes(args) -> int:
     """Modal analysis: table on screen, CSV and mode-shape PNG."""
     import numpy as np
 
-    from nlgrd.modal import modal_analysis
-    from nlgrd.model_file import load_model
+    from nlgrd.io.model_file import load_model
+    from nlgrd.rotor.modal import modal_analysis
 
     rpm = parse_speed(args.rpm)
     check_at_least("--n-modes", args.n_modes, 1)
@@ -124,8 +124,8 @@ def cmd_campbell(args) -> int:
     """Campbell diagram: CSV of frequencies, CSV of critical speeds, PNG."""
     import numpy as np
 
-    from nlgrd.modal import campbell
-    from nlgrd.model_file import load_model
+    from nlgrd.io.model_file import load_model
+    from nlgrd.rotor.modal import campbell
 
     rpm = parse_range(args.rpm, "--rpm")
     orders = parse_orders(args.orders)
@@ -155,7 +155,7 @@ def cmd_campbell(args) -> int:
 
 def cmd_lste(args) -> int:
     """Loaded static transmission error of a gear pair: CSV and PNG; the k_h of the dynamics."""
-    from nlgrd.model_file import load_model
+    from nlgrd.io.model_file import load_model
 
     folder = output_folder("--out", args.out)
     system = load_model(args.model)
@@ -204,7 +204,7 @@ def _lste_from_file(mesh, out: Outputs, csv: Path, png: Path, plt) -> tuple[str,
     import numpy as np
     import pandas as pd
 
-    from nlgrd.lste_file import read_excitation
+    from nlgrd.gear.lste_file import read_excitation
 
     ex = read_excitation(mesh.lste_file, teeth_pinion=mesh.geometry.teeth_pinion)
     phase = np.arange(mesh.lste_points) / mesh.lste_points
@@ -282,9 +282,9 @@ def cmd_sweep(args) -> int:
     """Nonlinear harmonic-balance sweep (or continuation) of the geared model: CSV, PNG, summary."""
     import numpy as np
 
-    from nlgrd.geared_response import build_geared_model
-    from nlgrd.harmonic_convergence import LADDER
-    from nlgrd.model_file import load_model
+    from nlgrd.io.model_file import load_model
+    from nlgrd.nonlinear.geared import build_geared_model
+    from nlgrd.nonlinear.harmonic_convergence import LADDER
 
     if (args.rpm is None) == (args.hz is None):
         raise ModelError(
@@ -319,7 +319,7 @@ def cmd_sweep(args) -> int:
     pyplot()
     if args.continuation:
         return _continuation(args, system, model, unit, omegas, count, quantity, out, png)
-    from nlgrd.geared_response import geared_sweep
+    from nlgrd.nonlinear.geared import geared_sweep
 
     res = geared_sweep(
         system,
@@ -368,8 +368,8 @@ def _continuation(args, system, model, unit, omegas, count, quantity, out, png) 
 
     import pandas as pd
 
-    from nlgrd.continuation import continuation
-    from nlgrd.geared_response import geared_continuation
+    from nlgrd.nonlinear.continuation import continuation
+    from nlgrd.nonlinear.geared import geared_continuation
     from nlgrd.plotting.nonlinear import plot_continuation
 
     lo, hi = float(omegas.min()), float(omegas.max())

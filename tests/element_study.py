@@ -8,13 +8,13 @@ prints the table of docs/verification.md ("Shaft element: mesh convergence of th
 matrix"); ``tests/test_element_convergence.py`` imports these functions and asserts the
 orders and the comparison.
 
-Method. :class:`nlgrd.shaft.ShaftElement` accepts two mass matrices, ``"consistent"`` (the
+Method. :class:`nlgrd.rotor.shaft.ShaftElement` accepts two mass matrices, ``"consistent"`` (the
 default, chosen by this study) and ``"blended"``; no other formulation exists (``shear`` and
 ``rotary_inertia`` change the beam theory, not its discretisation). For each case every
 original shaft element is split into f = 1, 2, 4, 8, 16 equal elements, the nodes of
 disks, bearings, couplings and gear pairs mapped n -> f n as
 ``benchmarks/bench_nonlinear.py`` ``refine`` does, and the undamped natural frequencies
-come from :func:`nlgrd.modal.modal_analysis` (``damped=False``). Each mode's observed
+come from :func:`nlgrd.rotor.modal.modal_analysis` (``damped=False``). Each mode's observed
 order is p = log2((ω_4 - ω_8) / (ω_8 - ω_16)) and its reference the Richardson
 extrapolation ω_16 + (ω_16 - ω_8) / (2^p - 1) from the two finest meshes, separately for
 each formulation; both tend to the same limit, and the two references agree to within a
@@ -40,8 +40,8 @@ from pathlib import Path
 import numpy as np
 
 from nlgrd import Bearing, Disk, Material, RotorSystem, Shaft
-from nlgrd.modal import modal_analysis
-from nlgrd.model_file import load_model
+from nlgrd.io.model_file import load_model
+from nlgrd.rotor.modal import modal_analysis
 
 ROOT = Path(__file__).resolve().parents[1]
 STEEL = Material("steel", density=7850.0, young_modulus=2.1e11, poisson_ratio=0.3)

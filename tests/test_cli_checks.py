@@ -20,11 +20,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import nlgrd.geared_response
-import nlgrd.modal
+import nlgrd.nonlinear.geared
+import nlgrd.rotor.modal
 from nlgrd.cli import main
 from nlgrd.errors import ModelError
-from nlgrd.lste_file import write_lste_csv
+from nlgrd.gear.lste_file import write_lste_csv
 
 ROOT = Path(__file__).resolve().parents[1]
 KUBO = ROOT / "data" / "case_studies" / "kubo.toml"
@@ -52,9 +52,9 @@ def no_computation(monkeypatch):
         raise AssertionError("computation started before the options were checked")
 
     for name in ("build_geared_model", "geared_sweep", "geared_continuation"):
-        monkeypatch.setattr(nlgrd.geared_response, name, forbidden)
+        monkeypatch.setattr(nlgrd.nonlinear.geared, name, forbidden)
     for name in ("modal_analysis", "campbell"):
-        monkeypatch.setattr(nlgrd.modal, name, forbidden)
+        monkeypatch.setattr(nlgrd.rotor.modal, name, forbidden)
 
 
 # ------------------------------------------------------------------------- Ctrl-C
@@ -68,7 +68,7 @@ def test_interrupted_sweep_keeps_the_previous_outputs(tmp_path, capsys, monkeypa
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(nlgrd.geared_response, "geared_sweep", interrupted)
+    monkeypatch.setattr(nlgrd.nonlinear.geared, "geared_sweep", interrupted)
     rc, _, err = run(capsys, "sweep", KUBO, "--hz", "3000:4000:3", "--out", out)
     assert rc == 130 and "interrupted" in one_line(err)
     assert out.read_text() == "previous\n" and png.read_bytes() == b"previous png"
@@ -351,14 +351,14 @@ def _boom(*args, **kwargs):
 
 def test_unexpected_error_is_one_line(tmp_path, capsys, monkeypatch):
     monkeypatch.delenv("NLGRD_DEBUG", raising=False)
-    monkeypatch.setattr(nlgrd.modal, "modal_analysis", _boom)
+    monkeypatch.setattr(nlgrd.rotor.modal, "modal_analysis", _boom)
     rc, _, err = run(capsys, "modes", TWO, "--out", tmp_path)
     assert rc == 1 and one_line(err) == "nlgrd: error: RuntimeError: boom second line"
 
 
 def test_debug_shows_the_traceback(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("NLGRD_DEBUG", "1")
-    monkeypatch.setattr(nlgrd.modal, "modal_analysis", _boom)
+    monkeypatch.setattr(nlgrd.rotor.modal, "modal_analysis", _boom)
     rc, _, err = run(capsys, "modes", TWO, "--out", tmp_path)
     assert (
         rc == 1
@@ -373,6 +373,6 @@ def test_late_model_errors_name_the_file(tmp_path, capsys, monkeypatch):
     def unbalanced(*args, **kwargs):
         raise ModelError("torque", "the loads are not balanced")
 
-    monkeypatch.setattr(nlgrd.modal, "modal_analysis", unbalanced)
+    monkeypatch.setattr(nlgrd.rotor.modal, "modal_analysis", unbalanced)
     rc, _, err = run(capsys, "modes", TWO, "--out", tmp_path)
     assert rc == 2 and one_line(err) == f"nlgrd: error: {TWO}: torque: the loads are not balanced"

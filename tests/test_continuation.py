@@ -5,13 +5,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nlgrd.continuation import continuation
-from nlgrd.describing_functions import BacklashMesh
-from nlgrd.harmonic_balance import ReducedModel, floquet_multipliers, solve
-from nlgrd.nonlinear_results import metrics_from_harmonics
-from nlgrd.sdof import SDOFGearPair
-from nlgrd.sweep import sweep
-from nlgrd.time_domain import integrate_fe, static_solution
+from nlgrd.nonlinear.continuation import continuation
+from nlgrd.nonlinear.floquet import floquet_multipliers
+from nlgrd.nonlinear.force_laws import BacklashMesh
+from nlgrd.nonlinear.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.metrics import metrics_from_harmonics
+from nlgrd.nonlinear.sdof import SDOFGearPair
+from nlgrd.nonlinear.solvers import solve
+from nlgrd.nonlinear.sweep import sweep
+from nlgrd.timedomain.integrator import integrate_fe, static_solution
 
 LSTE = np.array([0.0, 1.24e-6, 0.0, 0.50e-6, 0.30e-6, 0.10e-6, -0.05e-6])
 MAIN = SDOFGearPair(0.261, 0.2587e9, 50e-6, 2295.0, LSTE, damping_ratio=0.02)
@@ -143,8 +145,8 @@ def test_sparse_static_solution_equals_dense_least_squares():
     the rigid-body decision), to 1e-9 relative: on the two-shaft FE
     model (132 DOFs, a free rolling mode of the drive train), on the small torsional chain
     and on a 1600-DOF chain (rigid-body modes by the sparse eigensolver)."""
-    from nlgrd.assembly import assemble
-    from nlgrd.model_file import load_model
+    from nlgrd.io.model_file import load_model
+    from nlgrd.rotor.assembly import assemble
 
     s = load_model(Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml")
     lm = assemble(s, mesh_stiffness=False)
@@ -176,7 +178,7 @@ def test_plots_return_axes():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from nlgrd.nonlinear_results import time_history
+    from nlgrd.nonlinear.metrics import time_history
 
     rm = MAIN.reduced_model()
     sw = sweep(rm, np.linspace(0.85, 1.0, 7) * WN, 3)

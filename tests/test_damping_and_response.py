@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from nlgrd import Bearing, Coupling, Disk, LinearModel, Material, RotorSystem, Shaft, ShaftElement, assemble
-from nlgrd.frequency_response import frequency_response
-from nlgrd.modal import modal_analysis
+from nlgrd.rotor.frequency_response import frequency_response
+from nlgrd.rotor.modal import modal_analysis
 
 
 def test_two_dof_receptance_closed_form():

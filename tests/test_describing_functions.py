@@ -3,24 +3,25 @@
 import numpy as np
 import pytest
 
-from nlgrd.describing_functions import (
-    AFTNonlinearity,
-    BacklashMesh,
+from nlgrd.errors import ModelError
+from nlgrd.nonlinear.describing_functions import (
     aft_convergence,
-    analyse,
-    complex_to_real,
     contact_intervals,
     deadzone,
     describing_gains,
-    differentiate,
-    evaluate,
     fourier_aft,
     fourier_exact,
     one_sided_describing_function,
+)
+from nlgrd.nonlinear.force_laws import AFTNonlinearity, BacklashMesh
+from nlgrd.nonlinear.harmonics import (
+    analyse,
+    complex_to_real,
+    differentiate,
+    evaluate,
     real_to_complex,
     sample,
 )
-from nlgrd.errors import ModelError
 
 
 def _random_signal(rng, H, scale=1.0, mean=0.0):

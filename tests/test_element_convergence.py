@@ -16,7 +16,7 @@ What is asserted:
   converges as h^2, like the consistent mass.
 - The two formulations' references agree to within the f = 16 error, so the errors
   on the meshes users run (f = 1-8) do not depend on which reference is taken.
-- Premise of the default (``"consistent"``, :class:`nlgrd.shaft.ShaftElement`): on the model files of
+- Premise of the default (``"consistent"``, :class:`nlgrd.rotor.shaft.ShaftElement`): on the model files of
   data/ at their own element count (f = 1, 4-12 elements per shaft, L/D 1-2) and
   at twice it, the consistent mass has the smaller largest error in every mode group;
   it converges from above (Ritz upper bounds) where the blended error takes either
@@ -127,8 +127,8 @@ def test_consistent_mass_is_more_accurate_at_the_users_element_counts(runs):
 def test_default_mass_matrix_is_the_one_the_study_chose():
     """The default follows the test above: an element built without ``mass_matrix``
     has the consistent matrices, and a model file element without the key too."""
-    from nlgrd.materials import STEEL
-    from nlgrd.shaft import ShaftElement
+    from nlgrd.rotor.materials import STEEL
+    from nlgrd.rotor.shaft import ShaftElement
 
     el = ShaftElement(0.05, 0.045, material=STEEL)
     assert el.mass_matrix == "consistent"

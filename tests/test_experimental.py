@@ -1,4 +1,4 @@
-"""Measured-curve files and their scores (nlgrd.experimental), on SYNTHETIC data only.
+"""Measured-curve files and their scores (nlgrd.studies.experimental), on SYNTHETIC data only.
 
 No measured curve is shipped (data/experimental/README.md). Every data set here is made up
 in the test, written to tmp_path and labelled SYNTHETIC in its header; the expected scores
@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from nlgrd.errors import ModelError
-from nlgrd.experimental import (
+from nlgrd.studies.experimental import (
     compare,
     curve_landmarks,
     find_experimental,

@@ -1,4 +1,4 @@
-"""Floquet stability (:mod:`nlgrd.floquet`): the fast default against the reference monodromy.
+"""Floquet stability (:mod:`nlgrd.nonlinear.floquet`): the fast default against the reference monodromy.
 
 The reference is ``method="expm"``, the library's method before issue 10: scipy's
 ``expm`` of the unscaled state matrix per contact interval and every eigenvalue of the
@@ -32,13 +32,16 @@ import pytest
 import scipy.linalg as sla
 from threadpoolctl import threadpool_limits
 
-import nlgrd.floquet as fl
-import nlgrd.harmonic_balance as hb
+import nlgrd.nonlinear.floquet as fl
+import nlgrd.nonlinear.harmonic_balance as hb
+import nlgrd.nonlinear.linear_algebra as la
+import nlgrd.nonlinear.solvers as hb_solvers
+import nlgrd.nonlinear.state_space as hb_state_space
 from nlgrd.errors import ModelError
-from nlgrd.geared_response import build_geared_model, gear_pair_mode, geared_sweep
-from nlgrd.harmonic_balance import LinearStateSpace
-from nlgrd.model_file import load_model
-from nlgrd.rigid_body import rigid_body_modes
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.state_space import LinearStateSpace
+from nlgrd.rotor.rigid_body import rigid_body_modes
 
 TWO_SHAFT = Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml"
 STABLE = 1 + 1e-6
@@ -138,13 +141,13 @@ def test_neutral_mode_is_an_exact_multiplier_of_every_state(swept):
     w, z = pts[0]
     ss = model.reduced.linear_state_space(w)
     assert ss.rigid_body_modes().shape[1] == 0
-    ok, Z = fl.psd_null_space(ss.K + model.mesh.stiffness * ss.W @ ss.W.T)
+    ok, Z = la.psd_null_space(ss.K + model.mesh.stiffness * ss.W @ ss.W.T)
     assert ok and Z.shape[1] == 1
     phi = Z[:, 0]
     assert np.linalg.norm(ss.K @ phi) <= 1e-9 * np.linalg.norm(ss.K)
     assert np.linalg.norm(ss.W.T @ phi) <= 1e-9 * np.linalg.norm(ss.W)
     assert np.linalg.norm(ss.D @ phi) > 1e-6 * np.linalg.norm(ss.D)
-    assert fl.psd_to_tolerance(ss.D) and fl._spd(ss.M)
+    assert la.psd_to_tolerance(ss.D) and fl._spd(ss.M)
 
 
 def test_certificate_refuses_circulatory_stiffness(swept):
@@ -188,7 +191,7 @@ def test_free_modes_agree_with_rigid_body_modes(swept):
     w2 = np.array([0.05, 0.06])
     cases.append((np.zeros((2, 2)), 10.0 * np.outer(w2, w2), w2[:, None], np.diag([1e-3, 2e-3])))
     for (K, D, W, M), expect in zip(cases, (0, 0, 1), strict=True):
-        F = fl.free_modes(K, D, W)
+        F = la.free_modes(K, D, W)
         assert F is not None and F.shape[1] == expect
         assert rigid_body_modes((K + K.T) / 2, M, constraints=(K, D, W.T)).shape[1] == expect
 
@@ -224,19 +227,19 @@ def test_psd_helpers():
     B = rng.standard_normal((12, 9))
     s = np.logspace(0, 4, 12)
     A = (B @ B.T) * np.outer(s, s)
-    ok, Z = fl.psd_null_space(A)
+    ok, Z = la.psd_null_space(A)
     assert ok and Z.shape == (12, 3)
     d = np.sqrt(np.diag(A))
     Zs = Z * d[:, None]  # the null vectors of the Jacobi-scaled matrix
     assert np.linalg.norm((A / np.outer(d, d)) @ Zs) <= 1e-10 * np.linalg.norm(Zs)
-    assert fl.psd_to_tolerance(A)
+    assert la.psd_to_tolerance(A)
     C = A.copy()
     C[0, 0] = -1e-3 * A[0, 0]
-    assert fl.psd_null_space(C) == (False, None)
-    assert not fl.psd_to_tolerance(C)
+    assert la.psd_null_space(C) == (False, None)
+    assert not la.psd_to_tolerance(C)
     E = np.diag([1.0, -1.0])
-    assert not fl.psd_null_space(E)[0] and not fl.psd_to_tolerance(E)
-    assert fl.psd_null_space(np.zeros((2, 2)))[1].shape == (2, 2)
+    assert not la.psd_null_space(E)[0] and not la.psd_to_tolerance(E)
+    assert la.psd_null_space(np.zeros((2, 2)))[1].shape == (2, 2)
 
 
 def test_expm_matches_scipy():
@@ -249,19 +252,19 @@ def test_expm_matches_scipy():
     for scale in (1e-3, 0.3, 5.0, 40.0, 120.0):
         X = scale * base / np.linalg.norm(base, 1)
         ref = sla.expm(X)
-        assert np.linalg.norm(fl.expm(X) - ref) <= 1e-12 * np.linalg.norm(ref)
+        assert np.linalg.norm(la.expm(X) - ref) <= 1e-12 * np.linalg.norm(ref)
 
 
 def test_small_systems_return_every_multiplier():
     """Up to DENSE_STATE_LIMIT the default is the dense method: the 2 x 2 single-DOF gear
     pair gets both multipliers, equal to the reference."""
-    from nlgrd.sdof import SDOFGearPair
+    from nlgrd.nonlinear.sdof import SDOFGearPair
 
     LSTE = np.array([0.0, 2e-6, 1e-6])
     sd = SDOFGearPair(4.7e-2, 0.2587e9, 50e-6, 2295.0, LSTE, damping_ratio=0.02)
     rm = sd.reduced_model()
     om = 0.8 * sd.natural_frequency
-    sol = hb.solve(rm.at(om, 5))
+    sol = hb_solvers.solve(rm.at(om, 5))
     mu = fl.floquet_multipliers(rm.state_space, rm.nonlinearities, sol.harmonics, om)
     ref = fl.floquet_multipliers(rm.state_space, rm.nonlinearities, sol.harmonics, om, method="expm")
     assert mu.size == ref.size == 2
@@ -276,18 +279,15 @@ def test_cache_is_bounded_and_on_objects():
         assert c.get(i, lambda i=i: i * i) == i * i
     assert len(c) == 3 and c.peek(0) is None and c.peek(4) == 16
     assert not hasattr(hb, "_EIG_CACHE")
-    for mod in (fl, hb):
+    for mod in (fl, hb, hb_state_space):
         globals_ = [k for k, v in vars(mod).items() if isinstance(v, dict | OrderedDict | fl.FloquetCache)]
         assert [k for k in globals_ if not k.startswith("__")] == []
     ss = LinearStateSpace([[1.0]], [[0.1]], [[0.0]], [[1.0]])
     assert ss.floquet_cache is ss.floquet_cache and LinearStateSpace([[1.0]], [[0.1]], [[0.0]], [[1.0]]) == ss
 
 
-def test_reexports_and_method_check():
-    """harmonic_balance re-exports the stability functions; an unknown method is a ModelError."""
-    names = ("floquet_multipliers", "hill_multipliers", "tangent_spectrum", "harmonic_solution_stability")
-    for name in names:
-        assert getattr(hb, name) is getattr(fl, name)
+def test_unknown_method_is_a_model_error():
+    """An unknown Floquet method is a ModelError naming the method."""
     ss = LinearStateSpace([[1.0]], [[0.1]], [[0.0]], [[1.0]])
     with pytest.raises(ModelError):
         fl.floquet_multipliers(ss, (), np.zeros((1, 3)), 1.0, method="fast")
@@ -302,18 +302,18 @@ def test_mesh_block_splits_off_only_what_the_model_decouples(swept):
     between GAP_RTOL and BLOCK_RTOL (neither rounding nor clearly physical) keeps all."""
     model, pts = _points(swept)
     ss = model.reduced.linear_state_space(pts[0][0])
-    block = fl.mesh_block(ss.M, ss.D, ss.K, ss.W)
+    block = la.mesh_block(ss.M, ss.D, ss.K, ss.W)
     side = np.nonzero(~block)[0]
     assert 0 < side.size < block.size // 4
     for A in (ss.M, ss.D, ss.K):
-        assert np.max(np.abs(A[np.ix_(block, ~block)])) <= fl.GAP_RTOL * np.max(np.abs(A))
+        assert np.max(np.abs(A[np.ix_(block, ~block)])) <= la.GAP_RTOL * np.max(np.abs(A))
     M = ss.M.copy()
     i, j = side[0], np.nonzero(block)[0][0]
     M[i, j] = M[j, i] = 1e-9 * np.max(np.abs(M))
-    grown = fl.mesh_block(M, ss.D, ss.K, ss.W)
+    grown = la.mesh_block(M, ss.D, ss.K, ss.W)
     assert grown[i] and 0 < np.sum(~grown) < side.size  # i and what it couples to
     M[i, j] = M[j, i] = 3e-11 * np.max(np.abs(M))
-    assert fl.mesh_block(M, ss.D, ss.K, ss.W).all()
+    assert la.mesh_block(M, ss.D, ss.K, ss.W).all()
     lam = fl._prepared(ss).side
     assert lam.size == 2 * side.size and np.all(lam.real <= 1e-9 * np.abs(lam).max())
 

@@ -1,4 +1,4 @@
-"""The dominant Floquet multiplier's eigenvector (:mod:`nlgrd.floquet_mode`), the direction
+"""The dominant Floquet multiplier's eigenvector (:mod:`nlgrd.nonlinear.floquet_mode`), the direction
 in which a sweep's unstable orbit departs (issue 10 item 3, kept for period-doubling
 branch switching).
 
@@ -22,12 +22,12 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from nlgrd.describing_functions import evaluate
-from nlgrd.floquet_mode import dominant_floquet_mode
-from nlgrd.geared_response import build_geared_model, gear_pair_mode
-from nlgrd.harmonic_balance import floquet_multipliers
-from nlgrd.model_file import load_model
-from nlgrd.sweep import sweep
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.floquet import floquet_multipliers
+from nlgrd.nonlinear.floquet_mode import dominant_floquet_mode
+from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode
+from nlgrd.nonlinear.harmonics import evaluate
+from nlgrd.nonlinear.sweep import sweep
 
 TWO_SHAFT = Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml"
 

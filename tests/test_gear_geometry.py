@@ -1,4 +1,4 @@
-"""Tests of nlgrd.gear_geometry against textbook closed forms and input validation."""
+"""Tests of nlgrd.gear.geometry against textbook closed forms and input validation."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import warnings
 import pytest
 
 from nlgrd.errors import ModelError
-from nlgrd.gear_geometry import GearGeometry, involute
+from nlgrd.gear.geometry import GearGeometry, involute
 
 ALPHA = math.radians(20.0)
 

@@ -14,10 +14,10 @@ import pytest
 
 from nlgrd import Bearing, Disk, Material, RotorSystem, Shaft, ShaftElement, assemble
 from nlgrd.errors import ModelError
-from nlgrd.frequency_response import static_deflection
-from nlgrd.gear_geometry import GearGeometry
-from nlgrd.gear_mesh import GearMesh
-from nlgrd.modal import modal_analysis
+from nlgrd.gear.geometry import GearGeometry
+from nlgrd.gear.mesh import GearMesh
+from nlgrd.rotor.frequency_response import static_deflection
+from nlgrd.rotor.modal import modal_analysis
 
 KUBO = GearGeometry(teeth_pinion=25, teeth_gear=25, module=4e-3, face_width=15e-3, backlash=0.1e-3)
 

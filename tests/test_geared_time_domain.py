@@ -1,7 +1,7 @@
 """Harmonic balance of the geared FE model against direct time integration.
 
 The independent reference is the HHT-α integration of the same equations of motion of
-the full finite-element model (:func:`nlgrd.geared_response.time_sweep`), run to a
+the full finite-element model (:func:`nlgrd.timedomain.geared.time_sweep`), run to a
 periodic steady state at every frequency and swept up and down with each point starting
 from the previous state, exactly like the harmonic-balance sweep. Model: Kubo's rig
 (data/case_studies/kubo.toml) with every element split in two (144 DOFs) and mesh damping
@@ -27,8 +27,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nlgrd.geared_response import build_geared_model, geared_sweep, time_sweep
-from nlgrd.model_file import load_model
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.geared import build_geared_model, geared_sweep
+from nlgrd.timedomain.geared import time_sweep
 
 KUBO = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
 

@@ -4,16 +4,15 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from nlgrd.describing_functions import AFTNonlinearity, BacklashMesh, deadzone, evaluate
-from nlgrd.harmonic_balance import (
-    ReducedModel,
-    ReducedProblem,
-    floquet_multipliers,
-    hill_multipliers,
-    solve,
-)
-from nlgrd.sdof import SDOFGearPair
-from nlgrd.sweep import sweep
+from nlgrd.nonlinear.describing_functions import deadzone
+from nlgrd.nonlinear.floquet import floquet_multipliers
+from nlgrd.nonlinear.force_laws import AFTNonlinearity, BacklashMesh
+from nlgrd.nonlinear.harmonic_balance import ReducedModel, ReducedProblem
+from nlgrd.nonlinear.harmonics import evaluate
+from nlgrd.nonlinear.hill import hill_multipliers
+from nlgrd.nonlinear.sdof import SDOFGearPair
+from nlgrd.nonlinear.solvers import solve
+from nlgrd.nonlinear.sweep import sweep
 
 # Kubo et al. (1972) single-DOF data as decoded in model.md §5, with an LSTE of three
 # harmonics (first-harmonic amplitude 1.24 µm = half the 2.479 µm STE amplitude).
@@ -198,7 +197,7 @@ def test_floquet_monodromy_matches_integrated_variational_equation():
     model = kubo()
     wn = model.natural_frequency
     rm = model.reduced_model()
-    from nlgrd.continuation import continuation
+    from nlgrd.nonlinear.continuation import continuation
 
     c = continuation(rm, 1.1 * wn, 0.7 * wn, 5, stability=True)
     i = int(np.argmax(c.curve.floquet_max))

@@ -1,4 +1,4 @@
-"""The number of harmonics chosen by the error estimate (nlgrd.harmonic_convergence).
+"""The number of harmonics chosen by the error estimate (nlgrd.nonlinear.harmonic_convergence).
 
 Independent reference: the same sweep at H = 25 (the harmonics of the kinked backlash
 force decay algebraically; on these cases H = 25 and H = 17 differ by < 1e-4, two
@@ -17,8 +17,9 @@ import numpy as np
 import pytest
 
 from nlgrd.errors import ModelError
-from nlgrd.geared_response import sdof_model
-from nlgrd.harmonic_convergence import (
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.geared import sdof_model
+from nlgrd.nonlinear.harmonic_convergence import (
     FOLD_RTOL,
     OUTPUT_RTOL,
     check_harmonics,
@@ -26,8 +27,7 @@ from nlgrd.harmonic_convergence import (
     next_harmonics,
     pad_harmonics,
 )
-from nlgrd.model_file import load_model
-from nlgrd.sweep import sweep
+from nlgrd.nonlinear.sweep import sweep
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 
@@ -120,9 +120,9 @@ def test_continuation_chooses_h_like_the_sweep():
     frequency (main and superharmonic resonances, with folds): every stable point of the
     curve meets the tolerance against H = 25 solved at the same frequency from it
     (Newton at H = 25, an independent solve), and the ladder had to climb past H = 5."""
-    from nlgrd.harmonic_balance import solve
-    from nlgrd.harmonic_convergence import converged_continuation
-    from nlgrd.nonlinear_results import metrics_from_harmonics
+    from nlgrd.nonlinear.harmonic_convergence import converged_continuation
+    from nlgrd.nonlinear.metrics import metrics_from_harmonics
+    from nlgrd.nonlinear.solvers import solve
 
     sdof = sdof_model(load_model(DATA / "case_studies/kubo.toml"))
     rm = sdof.reduced_model()

@@ -16,8 +16,9 @@ import pytest
 
 from nlgrd.cli import main
 from nlgrd.errors import ModelError
-from nlgrd.lste_file import write_lste_csv
-from nlgrd.model_file import load_model, model_from_dict, save_model
+from nlgrd.gear.lste_file import write_lste_csv
+from nlgrd.io.model_file import load_model, model_from_dict
+from nlgrd.io.model_writer import save_model
 
 ROOT = Path(__file__).resolve().parents[1]
 KUBO = ROOT / "data" / "case_studies" / "kubo.toml"

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from nlgrd import Bearing, Coupling, Disk, Material, RotorSystem, Shaft, ShaftElement, assemble
-from nlgrd.frequency_response import static_deflection
-from nlgrd.modal import campbell, modal_analysis
+from nlgrd.rotor.frequency_response import static_deflection
+from nlgrd.rotor.modal import campbell, modal_analysis
 
 STEEL = Material("steel", density=7850.0, young_modulus=2.1e11, poisson_ratio=0.3)
 K_PIN = 1e13  # pin supports for the Jeffcott rotor: 1e9 x its shaft's EI/L³

@@ -1,4 +1,4 @@
-"""Tests of nlgrd.lste_file: Fourier convention, file round trips and file errors."""
+"""Tests of nlgrd.gear.lste_file: Fourier convention, file round trips and file errors."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from nlgrd.errors import ModelError
-from nlgrd.lste_file import (
+from nlgrd.gear.lste_file import (
     MeshExcitation,
     fourier_fit,
     read_excitation,

@@ -24,12 +24,12 @@ import scipy.sparse as sp
 from test_geared_time_domain import refined_kubo
 from threadpoolctl import threadpool_limits
 
-from nlgrd.assembly import LinearModel, assemble
 from nlgrd.errors import ModelError
-from nlgrd.geared_response import geared_sweep
-from nlgrd.modal import modal_analysis
-from nlgrd.model_file import load_model
-from nlgrd.rigid_body import check_balanced, rigid_body_modes
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.geared import geared_sweep
+from nlgrd.rotor.assembly import LinearModel, assemble
+from nlgrd.rotor.modal import modal_analysis
+from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 MODELS = sorted(DATA.glob("**/*.toml"))
@@ -263,7 +263,7 @@ def test_campbell_lists_no_pseudo_modes_of_the_free_rotation():
     rounding) are not listed either. Reference: the lowest flexible mode is the
     torsional coupling mode at 290 Hz (17 400 rpm), so no 1x critical speed lies below
     10 000 rpm and no listed frequency lies below 200 Hz."""
-    from nlgrd.modal import campbell
+    from nlgrd.rotor.modal import campbell
 
     kubo = load_model(DATA / "case_studies" / "kubo.toml")
     res = campbell(kubo, np.linspace(0, 10000, 11) * np.pi / 30, n_modes=6)

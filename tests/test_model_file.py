@@ -12,16 +12,17 @@ from typing import Literal
 import numpy as np
 import pytest
 
-from nlgrd import model_file
-from nlgrd.assembly import assemble
-from nlgrd.bearing import Bearing
-from nlgrd.coupling import Coupling
-from nlgrd.disk import Disk
 from nlgrd.errors import ModelError
-from nlgrd.materials import Material
-from nlgrd.model_file import load_model, model_from_dict, model_to_dict, save_model
-from nlgrd.shaft import Shaft, ShaftElement
-from nlgrd.system import RotorSystem
+from nlgrd.io import model_file, model_writer
+from nlgrd.io.model_file import load_model, model_from_dict
+from nlgrd.io.model_writer import model_to_dict, save_model
+from nlgrd.rotor.assembly import assemble
+from nlgrd.rotor.bearing import Bearing
+from nlgrd.rotor.coupling import Coupling
+from nlgrd.rotor.disk import Disk
+from nlgrd.rotor.materials import Material
+from nlgrd.rotor.shaft import Shaft, ShaftElement
+from nlgrd.rotor.system import RotorSystem
 
 MODELS = Path(__file__).resolve().parents[1] / "data" / "models"
 EXAMPLES = ["single_shaft.toml", "two_shaft.toml"]
@@ -302,7 +303,7 @@ def test_save_is_atomic(tmp_path, monkeypatch):
     def boom(src, dst):
         raise OSError("disk full")
 
-    monkeypatch.setattr(model_file.os, "replace", boom)
+    monkeypatch.setattr(model_writer.os, "replace", boom)
     with pytest.raises(OSError, match="disk full"):
         save_model(_awkward_system(), path)
     assert path.read_bytes() == before
@@ -323,7 +324,7 @@ def test_save_replaces_existing_file(tmp_path):
 
 @dataclass(frozen=True)
 class FakeGeometry:
-    """Stands in for nlgrd.gear_geometry.GearGeometry."""
+    """Stands in for nlgrd.gear.geometry.GearGeometry."""
 
     teeth_pinion: int
     teeth_gear: int
@@ -338,7 +339,7 @@ class FakeGeometry:
 
 @dataclass(frozen=True)
 class FakeMesh:
-    """Stands in for nlgrd.gear_mesh.GearMesh: node references and a nested geometry table."""
+    """Stands in for nlgrd.gear.mesh.GearMesh: node references and a nested geometry table."""
 
     pinion_shaft: int
     pinion_node: int

@@ -1,7 +1,7 @@
 """The case-study notebooks, executed by papermill in fast mode and checked as numbers.
 
 Each notebook of ``notebooks/`` runs once per test module through
-:func:`nlgrd.reports.run_notebook` (kernel ``python3``, a per-cell execution timeout, the
+:func:`nlgrd.studies.notebooks.run_notebook` (kernel ``python3``, a per-cell execution timeout, the
 parameter names checked against ``papermill.inspect_notebook``: a misspelt parameter fails
 the run instead of silently running the defaults) with ``fast=True`` into a temporary
 directory, with a clearly labelled SYNTHETIC measured data set for the notebooks that
@@ -67,10 +67,10 @@ import pandas as pd
 import pytest
 
 from nlgrd.errors import ModelError
-from nlgrd.experimental import directions_of, hysteresis_bands, local_peak, resonance_jumps
-from nlgrd.geared_response import gear_pair_mode, sdof_model
-from nlgrd.model_file import load_model
-from nlgrd.reports import NOTEBOOKS, notebook_parameters, run_notebook
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.geared import gear_pair_mode, sdof_model
+from nlgrd.studies.experimental import directions_of, hysteresis_bands, local_peak, resonance_jumps
+from nlgrd.studies.notebooks import NOTEBOOKS, notebook_parameters, run_notebook
 
 ROOT = Path(__file__).resolve().parent.parent
 GOLDEN = Path(__file__).resolve().parent / "golden"
@@ -226,8 +226,8 @@ def test_linear_goldens_match_a_refined_mesh():
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from element_study import refine
 
-    from nlgrd.assembly import assemble
-    from nlgrd.modal import modal_analysis
+    from nlgrd.rotor.assembly import assemble
+    from nlgrd.rotor.modal import modal_analysis
 
     kb = load_model(ROOT / "data" / "case_studies" / "kahraman_blankenship.toml")
     golden = pd.read_csv(GOLDEN / NAMES[1] / "mesh_modes.csv")["natural frequency [Hz]"].to_numpy()
@@ -532,7 +532,7 @@ def test_flexibility_linear_study_and_bearing_forces(outputs, kubo):
 
 #: Columns that carry a response value in a sweep table.
 RESPONSE_COLUMNS = ("dslr [-]", "dte_rms [um]", "force_max [N]")
-#: The default output tolerance of the harmonic estimate (nlgrd.harmonic_convergence).
+#: The default output tolerance of the harmonic estimate (nlgrd.nonlinear.harmonic_convergence).
 HARMONIC_RTOL = 5e-3
 
 

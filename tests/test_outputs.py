@@ -18,13 +18,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nlgrd.continuation import continuation
 from nlgrd.errors import ModelError
-from nlgrd.geared_response import build_geared_model, gear_pair_mode, geared_sweep
-from nlgrd.model_file import load_model
-from nlgrd.receptance import MeshReceptance, ModeCapWarning, _lowest_modes
-from nlgrd.sdof import SDOFGearPair
-from nlgrd.sweep import sweep
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.continuation import continuation
+from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.receptance import MeshReceptance, ModeCapWarning, _lowest_modes
+from nlgrd.nonlinear.sdof import SDOFGearPair
+from nlgrd.nonlinear.sweep import sweep
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 LSTE = np.array([0.0, 3e-6, 0.0, 1e-6, 0.0])
@@ -126,7 +126,7 @@ def test_pole_residue_receptances_are_checked_and_fall_back_to_a_direct_solve(mo
     """The a-posteriori check of the pole-residue form passes on the two-shaft model
     (difference < 1e-8 for every harmonic); with the check's tolerance forced to fail,
     each harmonic falls back to the direct reduced solve and gives the same h_k to 1e-8."""
-    import nlgrd.receptance as rec
+    import nlgrd.nonlinear.receptance as rec
 
     s = _two_shaft()
     f0 = 2 * np.pi * gear_pair_mode(s)[0]
@@ -178,7 +178,7 @@ def test_continuation_that_turns_back_is_not_complete():
     turning point (near 4273 Hz) and leaves the range below 3000 Hz; that is not a
     complete curve (it was flagged complete before). From 1000 to 1400 Hz (no fold)
     it is."""
-    from nlgrd.geared_response import geared_continuation
+    from nlgrd.nonlinear.geared import geared_continuation
 
     kubo = load_model(DATA / "case_studies" / "kubo.toml")
     c = geared_continuation(kubo, 2 * np.pi * 3000, 2 * np.pi * 5000, 5)

@@ -25,9 +25,9 @@ from matplotlib.colors import to_rgba  # noqa: E402
 
 from nlgrd.plotting import save_figure  # noqa: E402
 from nlgrd.plotting.common import NC_HEIGHT, stability_codes  # noqa: E402
-from nlgrd.plotting.index_page import NO_CAPTION, index_html  # noqa: E402
 from nlgrd.plotting.nonlinear import plot_continuation, plot_sweep, plot_sweep_frame  # noqa: E402
 from nlgrd.plotting.rotor import campbell_breaks, plot_campbell  # noqa: E402
+from nlgrd.studies.index_page import NO_CAPTION, index_html  # noqa: E402
 
 X, Y = "mesh_frequency [Hz]", "dte_rms [um]"
 
@@ -361,7 +361,8 @@ def test_save_figure_records_its_caption(tmp_path):
 
 
 def test_index_page_lists_every_figure_with_its_caption_and_settings(tmp_path):
-    from nlgrd.reports import ROOT, record_settings
+    from nlgrd.studies.index_page import record_settings
+    from nlgrd.studies.reports import ROOT
 
     part = tmp_path / "models"
     part.mkdir()

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nlgrd.model_file import load_model
-from nlgrd.receptance import MeshReceptance, dense_reference
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.receptance import MeshReceptance, dense_reference
 
 MODEL = Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml"
 
@@ -63,8 +63,8 @@ def test_recovered_mean_deflection_matches_linear_static(system):
     """With the mesh in full contact (G_0 = k_h (Y_0 - b)), the recovered mean deflection of
     every DOF equals the linear static solution of the full model with the mesh spring
     preloaded by b, to 1e-9 relative."""
-    from nlgrd.assembly import assemble
-    from nlgrd.frequency_response import static_deflection
+    from nlgrd.rotor.assembly import assemble
+    from nlgrd.rotor.frequency_response import static_deflection
 
     mr = MeshReceptance(system)
     mesh = system.gear_pairs[0]

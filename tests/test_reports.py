@@ -1,4 +1,4 @@
-"""Reports that are complete or clearly not (``python -m nlgrd.reports``).
+"""Reports that are complete or clearly not (``python -m nlgrd.studies.reports``).
 
 In-process tests with stand-in parts (a few milliseconds each): a run publishes only when
 every part succeeded, by swapping whole folders; a failed or interrupted run (SIGINT,
@@ -27,8 +27,8 @@ from pathlib import Path
 
 import pytest
 
-from nlgrd import reports
-from nlgrd.plotting.index_page import NO_CAPTION, record_settings
+from nlgrd.studies import reports
+from nlgrd.studies.index_page import NO_CAPTION, record_settings
 
 PNG = b"\x89PNG\r\n\x1a\n" + b"\0" * 16
 
@@ -265,7 +265,7 @@ REAL += ["-p", "points", "8"]
 def start(out: Path) -> subprocess.Popen:
     """The report build as ``make reports`` runs it, SIGINT at its default (as in a terminal)."""
     return subprocess.Popen(
-        [sys.executable, "-m", "nlgrd.reports", *REAL, "--out", str(out)],
+        [sys.executable, "-m", "nlgrd.studies.reports", *REAL, "--out", str(out)],
         cwd=reports.ROOT,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,

@@ -3,10 +3,11 @@
 import numpy as np
 import pytest
 
-from nlgrd.describing_functions import differentiate, evaluate
-from nlgrd.nonlinear_results import metrics_from_history
-from nlgrd.sdof import SDOFGearPair, integrate, time_sweep
-from nlgrd.sweep import sweep
+from nlgrd.nonlinear.harmonics import differentiate, evaluate
+from nlgrd.nonlinear.metrics import metrics_from_history
+from nlgrd.nonlinear.sdof import SDOFGearPair
+from nlgrd.nonlinear.sweep import sweep
+from nlgrd.timedomain.sdof import integrate, time_sweep
 
 # Kubo et al. (1972) single-DOF data (model.md §5): m_eq = 0.261 kg, k_h = 0.2587e9 N/m,
 # b = 50 µm, W_0 = 2295 N; ζ = 0.02 (the paper's 0.005 makes the time-domain reference

@@ -11,7 +11,7 @@ time-domain up sweep from the 10 329 rpm orbit falls to the down sweep's branch 
 notebooks) lands on the stable solution nearest the departed orbit, the other
 directions' solutions at that speed included, and so does what the slow sweep does.
 
-Time integration: nlgrd.sdof.time_sweep (the paper's DYTE, all LSTE harmonics), periodic
+Time integration: nlgrd.timedomain.sdof.time_sweep (the paper's DYTE, all LSTE harmonics), periodic
 steady state to 1e-4 of the DTE range, as in the notebooks; its DTE RMS agrees with
 harmonic balance at H >= 9 to about 1e-4 where both hold the same orbit, hence 0.5 %.
 """
@@ -23,11 +23,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nlgrd.describing_functions import differentiate, evaluate
-from nlgrd.geared_response import sdof_model
-from nlgrd.model_file import load_model
-from nlgrd.sdof import time_sweep
-from nlgrd.sweep import sweep
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.geared import sdof_model
+from nlgrd.nonlinear.harmonics import differentiate, evaluate
+from nlgrd.nonlinear.sweep import sweep
+from nlgrd.timedomain.sdof import time_sweep
 
 KUBO = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
 

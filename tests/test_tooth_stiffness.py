@@ -1,4 +1,4 @@
-"""Tests of nlgrd.tooth_stiffness: geometry of the generated tooth, formulas, ISO 6336-1 check."""
+"""Tests of nlgrd.gear.tooth_stiffness: geometry of the generated tooth, formulas, ISO 6336-1 check."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-import nlgrd.tooth_stiffness as ts
-from nlgrd.gear_geometry import GearGeometry, involute
-from nlgrd.tooth_stiffness import (
+import nlgrd.gear.tooth_stiffness as ts
+from nlgrd.gear.geometry import GearGeometry, involute
+from nlgrd.gear.tooth_stiffness import (
     hertz_stiffness,
     pair_compliance,
     pair_stiffness,
@@ -17,7 +17,7 @@ from nlgrd.tooth_stiffness import (
     sainsot_coefficients,
     tooth_profile,
 )
-from nlgrd.transmission_error import loaded_static_transmission_error
+from nlgrd.gear.transmission_error import loaded_static_transmission_error
 
 PAIRS = [
     # z1, z2, module, face width, x1, x2, mesh load along the LOA [N]

@@ -1,4 +1,4 @@
-"""Tests of nlgrd.transmission_error: load sharing, LSTE, Kubo's case, tip-relief sweep."""
+"""Tests of nlgrd.gear.transmission_error: load sharing, LSTE, Kubo's case, tip-relief sweep."""
 
 from __future__ import annotations
 
@@ -9,13 +9,12 @@ import numpy as np
 import pytest
 
 from nlgrd.errors import ModelError
-from nlgrd.gear_geometry import GearGeometry
-from nlgrd.lste_file import MeshExcitation
-from nlgrd.tooth_stiffness import pair_stiffness, pitch_point_stiffness
-from nlgrd.transmission_error import (
-    GearErrors,
+from nlgrd.gear.geometry import GearGeometry
+from nlgrd.gear.lste_file import MeshExcitation
+from nlgrd.gear.modifications import GearErrors, ProfileModification
+from nlgrd.gear.tooth_stiffness import pair_stiffness, pitch_point_stiffness
+from nlgrd.gear.transmission_error import (
     LSTEResult,
-    ProfileModification,
     loaded_static_transmission_error,
     share_load,
     single_pair_deflection,
@@ -122,7 +121,7 @@ def test_single_and_double_contact_zones():
 def test_unmodified_pair_is_linear_springs_in_parallel():
     """Without reliefs or errors every pair is loaded: δ = W / Σ k_j and k(t) = Σ k_j.
 
-    Independent: the pair stiffnesses from nlgrd.tooth_stiffness at the slot
+    Independent: the pair stiffnesses from nlgrd.gear.tooth_stiffness at the slot
     positions; loads proportional to the stiffnesses. Tolerance 1e-12 (rounding).
     """
     g = kubo()

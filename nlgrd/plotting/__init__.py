@@ -5,8 +5,8 @@ Submodules: :mod:`.rotor` (modes, Campbell, frequency response, static deflectio
 :mod:`.gear` (transmission error, mesh stiffness, load sharing),
 :mod:`.nonlinear` (sweeps, continuation curves, time histories),
 :mod:`.common` (the conventions all figures share: colours per sweep direction,
-stability, non-converged and off-scale points; saving a figure with its caption),
-:mod:`.index_page` (the report index, ``reports/index.html``).
+stability, non-converged and off-scale points; saving a figure with its caption).
+The report index, ``reports/index.html``, is written by :mod:`nlgrd.studies.index_page`.
 
 ``headless``, ``record_caption`` and ``save_figure`` of :mod:`.common` are available
 here; they are imported on first use, so importing this package does not load pyplot.

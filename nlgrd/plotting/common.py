@@ -251,7 +251,7 @@ def record_caption(path: str | os.PathLike, caption: str) -> None:
     """Record ``caption`` for the figure file ``path`` in ``figures.json`` beside it.
 
     The file maps figure names to one-sentence descriptions (what the figure compares);
-    the report index (:mod:`nlgrd.reports`) shows them.
+    the report index (:mod:`nlgrd.studies.reports`) shows them.
     """
     path = Path(path)
     index = path.parent / FIGURES_FILE

@@ -11,7 +11,6 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from nlgrd.nonlinear_results import NO_STABLE
 from nlgrd.plotting.common import (
     DIRECTION_MARKERS,
     UNKNOWN,
@@ -35,6 +34,11 @@ _LABELS = {
 }
 #: Column of the largest Floquet multiplier in sweep tables (finite where stability is known).
 FLOQUET = "floquet_max [-]"
+
+
+#: The "response" column's value at a point with a periodic response (any other value,
+#: nlgrd.nonlinear.metrics.NO_STABLE in the written tables, marks a point without one).
+PERIODIC = "periodic"
 
 
 def _stability(frame: pd.DataFrame) -> np.ndarray:
@@ -117,7 +121,8 @@ def plot_sweep_frame(
         )
         mark_not_converged(ax, xv[~conv], colour, name, not_converged)
         if "response" in part:  # converged, but the orbit is unstable and no stable one was found
-            lost = conv & (part["response"].astype(str).to_numpy() == NO_STABLE)
+            resp = part["response"].astype(str).to_numpy()
+            lost = conv & (resp != PERIODIC) & (resp != "<NA>") & (resp != "nan")
             mark_not_converged(ax, xv[lost], colour, name, "no stable periodic response", marker="1")
     if ylim is not None:
         ax.set_ylim(*[lim if lim is not None else cur for lim, cur in zip(ylim, ax.get_ylim(), strict=True)])
@@ -127,7 +132,7 @@ def plot_sweep_frame(
 
 
 def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
-    """The columns :func:`plot_sweep_frame` reads, from a :class:`~nlgrd.sweep.SweepResult`.
+    """The columns :func:`plot_sweep_frame` reads, from a :class:`~nlgrd.nonlinear.sweep.SweepResult`.
 
     ``quantity`` (a metric name) becomes column "value" in the units of the axis label;
     frequencies are mesh frequencies [Hz].
@@ -144,7 +149,7 @@ def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
             FLOQUET: np.full(n, np.nan) if fm is None else np.asarray(fm, dtype=float),
             "value": np.asarray(result.metrics[quantity], dtype=float) * scale,
             "response": np.where(
-                getattr(result, "no_stable", np.zeros(n, dtype=bool)), NO_STABLE, "periodic"
+                getattr(result, "no_stable", np.zeros(n, dtype=bool)), "no stable response", PERIODIC
             ),
         }
     )
@@ -158,7 +163,7 @@ def plot_sweep(
     series: int | tuple | dict | None = None,
     ylim: tuple[float | None, float | None] | None = None,
 ):
-    """Sweep curve(s) of a :class:`~nlgrd.sweep.SweepResult` against mesh frequency [Hz].
+    """Sweep curve(s) of a :class:`~nlgrd.nonlinear.sweep.SweepResult` against mesh frequency [Hz].
 
     Up ▲ and down ▼ in different colours; stable filled/solid, unstable open/dashed,
     unknown stability half-filled and stated in the legend; non-converged points as
@@ -202,7 +207,7 @@ def plot_continuation(
 
 
 def plot_time_history(history, quantity: str = "delta", ax=None, label: str | None = None):
-    """One period of a :class:`~nlgrd.nonlinear_results.TimeHistory`.
+    """One period of a :class:`~nlgrd.nonlinear.metrics.TimeHistory`.
 
     ``quantity``: "delta" (DTE δ and LSTE e, µm), "deflection" (δ - e, µm) or "force" (W, N).
     """

@@ -6,7 +6,6 @@ import numpy as np
 from matplotlib.lines import Line2D
 
 from nlgrd.plotting.common import STABLE, UNSTABLE, get_ax
-from nlgrd.system import DOFS_PER_NODE
 
 _ax = get_ax
 
@@ -22,12 +21,17 @@ def plot_mode_shape(result, mode: int = 0, ax=None):
     phi = result.shapes[:, mode]
     families = [("lateral", (1, 2), ("uy", "uz")), ("torsional", (3,), ("θx",)), ("axial", (0,), ("ux",))]
     styles = ["-o", "--", ":", "-."]
+    node_dofs = [
+        np.array([system.dofs.node_dofs(s, n) for n in range(shaft.n_nodes)])
+        for s, shaft in enumerate(system.shafts)
+    ]
+    every = np.vstack(node_dofs)  # (all nodes, 6)
     for kind, locs, names in families:
         if result.fractions[kind][mode] < 0.05:
             continue
-        peak = max(np.max(np.abs(phi[d::DOFS_PER_NODE])) for d in locs) or 1.0
+        peak = max(np.max(np.abs(phi[every[:, d]])) for d in locs) or 1.0
         for s, shaft in enumerate(system.shafts):
-            dofs = np.array([system.dofs.node_dofs(s, n) for n in range(shaft.n_nodes)])
+            dofs = node_dofs[s]
             for d, name in zip(locs, names, strict=True):
                 amp = np.abs(phi[dofs[:, d]]) / peak
                 ax.plot(shaft.node_positions, amp, styles[s % 4], ms=3, label=f"shaft {s} |{name}|")
@@ -180,8 +184,8 @@ def plot_static(result, ax=None):
     ax = _ax(ax)
     system = result.model.system
     for s, shaft in enumerate(system.shafts):
-        first = DOFS_PER_NODE * system.dofs.first_node[s]
-        q = result.q[first : first + DOFS_PER_NODE * shaft.n_nodes].reshape(-1, DOFS_PER_NODE)
+        dofs = np.array([system.dofs.node_dofs(s, n) for n in range(shaft.n_nodes)])
+        q = result.q[dofs]
         ax.plot(shaft.node_positions, q[:, 1], "-o", ms=3, label=f"shaft {s} uy")
         ax.plot(shaft.node_positions, q[:, 2], "--", label=f"shaft {s} uz")
     ax.set_xlabel("axial position [m]")

@@ -1,0 +1,198 @@
+"""Option checks and output files of the ``nlgrd`` command line (:mod:`nlgrd.cli`).
+
+- The option checks run before any computation: ranges (``START:STOP:COUNT``), counts,
+  orders, quantities, and that the output paths can be written. Each raises one
+  :class:`~nlgrd.errors.ModelError` naming the option, e.g. ``--rpm``.
+- :class:`Outputs` writes the output files atomically and together: each goes to a
+  temporary file in its own folder, which then replaces the output (``os.replace``);
+  an exception or Ctrl-C removes the temporary files, so the previous outputs stay.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import tempfile
+from pathlib import Path
+
+from nlgrd.errors import ModelError
+
+#: Largest COUNT of a range. A sweep point costs milliseconds to a second: 1e5 points
+#: are hours of computing; a larger COUNT is a typing slip.
+MAX_POINTS = 100_000
+
+_RANGE = f"START:STOP:COUNT (COUNT from 2 to {MAX_POINTS}) or one number"
+_SPAN = "START:STOP or START:STOP:COUNT (START != STOP)"
+
+
+# ---------------------------------------------------------------------------- options
+
+
+def _split(text: str, name: str, forms: tuple[int, ...], expected: str) -> tuple[list[float], int | None]:
+    """Numbers of ``START[:STOP[:COUNT]]`` with as many parts as ``forms`` allows."""
+    parts = text.split(":")
+    if len(parts) not in forms:
+        raise ModelError(name, f"expected {expected}, got {text!r}")
+    try:
+        values = [float(p) for p in parts[:2]]
+    except ValueError:
+        raise ModelError(name, f"expected {expected}, got {text!r}") from None
+    if not all(math.isfinite(v) for v in values):
+        raise ModelError(name, f"speeds and frequencies must be finite, got {text!r}")
+    count = None
+    if len(parts) == 3:
+        try:
+            count = int(parts[2])
+        except ValueError:
+            raise ModelError(name, f"COUNT must be an integer, got {parts[2]!r} in {text!r}") from None
+        if not 2 <= count <= MAX_POINTS:
+            raise ModelError(name, f"COUNT must be from 2 to {MAX_POINTS}, got {count}")
+    return values, count
+
+
+def parse_range(text: str, name: str = "--rpm"):
+    """Parse ``START:STOP:COUNT`` (or a single value) into an array; all finite."""
+    import numpy as np
+
+    values, count = _split(text, name, (1, 3), _RANGE)
+    return np.array(values) if count is None else np.linspace(values[0], values[1], count)
+
+
+def parse_span(text: str, name: str) -> tuple[float, float, int | None]:
+    """Parse ``START:STOP`` or ``START:STOP:COUNT`` (a continuation's range) into (start, stop, count)."""
+    values, count = _split(text, name, (2, 3), _SPAN)
+    if values[0] == values[1]:
+        raise ModelError(name, f"a continuation needs {_SPAN}, got {text!r}")
+    return values[0], values[1], count
+
+
+def check_at_least(name: str, value: int, low: int) -> None:
+    """Raise unless the integer option ``name`` is at least ``low``."""
+    if value < low:
+        raise ModelError(name, f"must be at least {low}, got {value}")
+
+
+def parse_speed(text: str) -> float:
+    """The one speed of ``--rpm`` (a range is an error)."""
+    values = parse_range(text, "--rpm")
+    if len(values) != 1:
+        raise ModelError("--rpm", f"give one speed for modal analysis, got the range {text!r}")
+    return float(values[0])
+
+
+def parse_orders(text: str) -> dict[str, float]:
+    """``--orders`` (comma-separated positive numbers) as ``{"25x": 25.0, ...}``."""
+    try:
+        values = [float(o) for o in text.split(",")]
+    except ValueError:
+        raise ModelError("--orders", f"expected comma-separated numbers, got {text!r}") from None
+    if not all(math.isfinite(v) and v > 0 for v in values):
+        raise ModelError("--orders", f"orders must be positive finite numbers, got {text!r}")
+    return {f"{v:g}x": v for v in values}
+
+
+def check_quantity(name: str) -> str:
+    """``--quantity``: one of :data:`nlgrd.nonlinear.metrics.METRIC_NAMES`."""
+    from nlgrd.nonlinear.metrics import METRIC_NAMES
+
+    if name not in METRIC_NAMES:
+        raise ModelError("--quantity", f"unknown quantity {name!r}; use one of {', '.join(METRIC_NAMES)}")
+    return name
+
+
+def _writable_folder(option: str, folder: Path) -> None:
+    """Raise unless files can be made in ``folder`` or in the folder it would be made in."""
+    probe = folder
+    with contextlib.suppress(OSError):
+        while not probe.exists() and probe.parent != probe:
+            probe = probe.parent
+    if not probe.is_dir():
+        raise ModelError(option, f"cannot write in {folder}: {probe} is not a folder")
+    try:
+        with tempfile.TemporaryFile(dir=probe):
+            pass
+    except OSError as exc:
+        raise ModelError(option, f"cannot write in {probe}: {exc.strerror or exc}") from None
+
+
+def output_folder(option: str, text: str) -> Path:
+    """An output folder: existing or to be made (nothing is made now)."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise ModelError(option, f"{text} is a file, not a folder")
+    _writable_folder(option, path)
+    return path
+
+
+def output_file(option: str, text: str, example: str) -> Path:
+    """An output file (not a folder) in a folder where files can be made."""
+    path = Path(text)
+    if path.is_dir() or text.endswith(("/", os.sep)):
+        raise ModelError(option, f"{text} is a folder; give a file name, e.g. {path / example}")
+    _writable_folder(option, path.parent)
+    return path
+
+
+# ---------------------------------------------------------------------------- outputs
+
+
+class Outputs:
+    """Output files written atomically and together.
+
+    Each file is written to a temporary file in its own folder; :meth:`commit` renames
+    them into place (``os.replace``). An exception or Ctrl-C before or during the
+    commit removes the temporary files: the previous outputs stay as they were.
+    """
+
+    def __init__(self):
+        self._staged: list[tuple[str, Path]] = []
+
+    def __enter__(self) -> Outputs:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        for tmp, _ in self._staged:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
+        self._staged.clear()
+
+    def _add(self, path: Path, write) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+        os.close(fd)
+        self._staged.append((tmp, path))
+        write(tmp)
+
+    def csv(self, frame, path: Path) -> None:
+        self._add(path, lambda tmp: frame.to_csv(tmp, index=False))
+
+    def figure(self, fig, path: Path) -> None:
+        import matplotlib.pyplot as plt
+
+        try:
+            self._add(path, lambda tmp: fig.savefig(tmp, dpi=100, format="png"))
+        finally:
+            plt.close(fig)
+
+    def commit(self) -> None:
+        umask = os.umask(0)
+        os.umask(umask)
+        for tmp, path in self._staged:
+            try:
+                mode = path.stat().st_mode & 0o777
+            except FileNotFoundError:
+                mode = 0o666 & ~umask
+            os.chmod(tmp, mode)
+            os.replace(tmp, path)
+        self._staged.clear()
+
+
+def pyplot():
+    """``matplotlib.pyplot`` on the file-only Agg backend."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt

@@ -1,0 +1,315 @@
+"""Plausibility checks of a whole model, after its parts have been built.
+
+The model classes check their own fields (a negative diameter, a node out of range).
+What only the whole model shows, or what is legal but physically absurd, is checked
+here, by :func:`check_model` (run by :func:`nlgrd.io.model_file.model_from_dict`) and
+:func:`check_lste_files` (run by :func:`nlgrd.io.model_file.load_model`, which knows where
+the files are). Each check raises one :class:`~nlgrd.errors.ModelError` naming the key
+path, e.g. ``gear_pairs[0].torque``.
+
+Checks
+------
+- Shaft names are unique (a shaft may be referred to by name).
+- No zero bearing stiffness leaves the rig unsupported, decided from the structure,
+  not from eigenvalues: shafts joined by couplings with lateral or tilt stiffness form
+  a group; a group is held in y (z) by its supports, bearings with kyy (kzz) > 0 and
+  couplings to the ground with lateral stiffness. It floats when it has none; a group
+  of one shaft without a tilt coupling to the ground pivots when they all sit at one
+  node (a bearing carries no moment). Floating or pivoting is an error when a bearing
+  of the group has zero stiffness in that direction, or when the group carries a
+  loaded gear (its mesh force could not be balanced; a force through the pivot node
+  is). Gear meshes do not count as supports: they act along the line of action only
+  and lose contact in the backlash. A model without bearings (a free-free rotor) is
+  legal.
+- A damping ratio is at most 1 (critical damping); a loss factor at most 2 (η = 2ζ).
+- The static mesh deflection W_0 / k_h is less than the tooth depth.
+- An LSTE file is readable and its peak-to-peak value is below the tooth depth and
+  below 100 times the backlash.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from nlgrd.errors import ModelError
+from nlgrd.rotor.system import RotorSystem
+
+__all__ = ["check_model", "check_lste_files", "tooth_depth"]
+
+#: An LSTE fluctuation this many times the total backlash is refused. Real LSTEs are a
+#: few um against backlashes of tens to hundreds of um; a factor 100 (two orders of
+#: magnitude) leaves room for near-zero-backlash studies and still catches a file in
+#: um read as metres (a factor 1e6).
+LSTE_BACKLASH_FACTOR = 100.0
+
+
+def check_model(system: RotorSystem) -> None:
+    """Raise :class:`ModelError` for a model that is legal field by field but absurd as a whole."""
+    _check_shaft_names(system)
+    _check_support(system)
+    _check_damping(system)
+    for i, g in enumerate(system.gear_pairs):
+        if _is_gear_mesh(g):
+            _check_static_deflection(g, f"gear_pairs[{i}]")
+
+
+def check_lste_files(system: RotorSystem) -> None:
+    """Raise :class:`ModelError` for an unreadable or implausible ``lste_file`` of a gear pair.
+
+    Relative paths are taken from the current directory: :func:`nlgrd.io.model_file.load_model`
+    makes them relative to the model file first.
+    """
+    from nlgrd.gear.lste_file import read_excitation
+
+    for i, g in enumerate(system.gear_pairs):
+        path = getattr(g, "lste_file", None)
+        if not path or not _is_gear_mesh(g):
+            continue
+        key = f"gear_pairs[{i}].lste_file"
+        try:
+            ex = read_excitation(path, teeth_pinion=g.geometry.teeth_pinion)
+        except ModelError as exc:
+            detail = f"{exc.key}: {exc.message}" if exc.key else exc.message
+            raise ModelError(key, f"cannot use {path}: {detail}") from None
+        except OSError as exc:
+            raise ModelError(key, f"cannot read {path}: {exc.strerror or exc}") from None
+        except (ValueError, LookupError, TypeError) as exc:
+            raise ModelError(key, f"cannot read {path}: {type(exc).__name__}: {exc}") from None
+        pp = ex.peak_to_peak
+        depth = tooth_depth(g.geometry)
+        backlash = g.geometry.backlash
+        if pp > depth:
+            raise ModelError(
+                key,
+                f"the LSTE in {path} fluctuates by {pp:.4g} m peak to peak, more than the tooth depth "
+                f"{depth:.4g} m (and the backlash {backlash:.4g} m): check the unit (ste_m or ste_um)",
+            )
+        if backlash > 0 and pp > LSTE_BACKLASH_FACTOR * backlash:
+            raise ModelError(
+                key,
+                f"the LSTE in {path} fluctuates by {pp * 1e6:.4g} um peak to peak, {pp / backlash:.0f} "
+                f"times the backlash ({backlash * 1e6:.4g} um; at most {LSTE_BACKLASH_FACTOR:g} times "
+                "is accepted): check the unit (ste_m or ste_um)",
+            )
+
+
+def tooth_depth(geometry) -> float:
+    """Whole depth of the teeth, (h_a* + h_f*) m [m]: 2.25 m for standard teeth."""
+    return (geometry.addendum_coefficient + geometry.dedendum_coefficient) * geometry.module
+
+
+# ------------------------------------------------------------------------------------
+
+
+def _is_gear_mesh(g) -> bool:
+    from nlgrd.gear.mesh import GearMesh
+
+    return isinstance(g, GearMesh)
+
+
+def _check_shaft_names(system: RotorSystem) -> None:
+    seen: dict[str, int] = {}
+    for i, s in enumerate(system.shafts):
+        if not s.name:
+            continue
+        if s.name in seen:
+            raise ModelError(
+                f"shafts[{i}].name",
+                f"{s.name!r} is also the name of shafts[{seen[s.name]}]; shaft names must be unique",
+            )
+        seen[s.name] = i
+
+
+def _check_damping(system: RotorSystem) -> None:
+    for i, g in enumerate(system.gear_pairs):
+        zeta = getattr(g, "damping_ratio", None)
+        # 1 is critical damping; a mesh has 0.01 to 0.1
+        if isinstance(zeta, (int, float)) and zeta > 1:
+            raise ModelError(
+                f"gear_pairs[{i}].damping_ratio",
+                f"{zeta!r} is above 1 (critical damping); gear meshes have about 0.01 to 0.1",
+            )
+    for name, mat in _materials(system).items():
+        # at resonance a loss factor eta acts as a damping ratio eta / 2: above 2 is beyond critical
+        if mat.loss_factor > 2:
+            raise ModelError(
+                f"materials.{name}.loss_factor",
+                f"{mat.loss_factor!r} is above 2 (a damping ratio eta / 2 above 1); steels have about 1e-4",
+            )
+
+
+def _materials(system: RotorSystem) -> dict:
+    out = {}
+    for s in system.shafts:
+        for e in s.elements:
+            out.setdefault(e.material.name, e.material)
+    return out
+
+
+def _check_static_deflection(g, where: str) -> None:
+    """W_0 / k_h must stay below the tooth depth: the teeth cannot deflect by more than their height."""
+    load = g.static_load
+    if not load > 0:
+        return
+    try:
+        k_h = g.stiffness()
+    except (ModelError, ValueError, ArithmeticError, np.linalg.LinAlgError):
+        return  # the stiffness itself is refused later, with its own message
+    if not (math.isfinite(k_h) and k_h > 0):
+        return
+    deflection = load / k_h
+    depth = tooth_depth(g.geometry)
+    if deflection > depth:
+        source = "mesh_stiffness" if g.mesh_stiffness is not None else "computed from the geometry"
+        raise ModelError(
+            f"{where}.torque",
+            f"{g.torque:.6g} N m gives a mesh load W_0 = {load:.4g} N and a static mesh deflection "
+            f"W_0 / k_h = {deflection:.4g} m (k_h = {k_h:.4g} N/m, {source}), more than the tooth depth "
+            f"{depth:.4g} m: check the unit (N m, on the pinion)",
+        )
+
+
+# ------------------------------------------------------------------------------------ support
+
+
+@dataclasses.dataclass
+class _Support:
+    """Lateral supports of one direction in a group of shafts."""
+
+    nodes: set = dataclasses.field(default_factory=set)  # (shaft, node) with stiffness to ground
+    zero: list = dataclasses.field(default_factory=list)  # bearing indices with zero stiffness here
+
+
+def _positive(value) -> bool:
+    """A direct coefficient counts as support when it is positive at some tabulated speed."""
+    return bool(np.max(np.asarray(value, dtype=float)) > 0)
+
+
+def _groups(system: RotorSystem) -> list[list[int]]:
+    """Shafts joined by couplings with lateral or tilt stiffness (union-find)."""
+    parent = list(range(len(system.shafts)))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for c in system.couplings:
+        if not c.grounded and (c.k_lateral > 0 or c.k_tilt > 0):
+            parent[find(c.shaft_a)] = find(c.shaft_b)
+    out: dict[int, list[int]] = {}
+    for i in range(len(system.shafts)):
+        out.setdefault(find(i), []).append(i)
+    return list(out.values())
+
+
+def _loaded_mesh_nodes(system: RotorSystem) -> list[tuple[int, int, str]]:
+    """(shaft, node, words) of the pinions and gears of gear pairs that carry a static load."""
+    out = []
+    for i, g in enumerate(system.gear_pairs):
+        torque = getattr(g, "torque", 0)
+        if isinstance(torque, (int, float)) and torque > 0:
+            out.append((g.pinion_shaft, g.pinion_node, f"the pinion of gear_pairs[{i}]"))
+            out.append((g.gear_shaft, g.gear_node, f"the gear of gear_pairs[{i}]"))
+    return out
+
+
+def _check_support(system: RotorSystem) -> None:
+    """A shaft group left free laterally is an error when a zero-stiffness bearing or a mesh load is involved.
+
+    A model without bearings is a free-free rotor and a shaft on one bearing may be
+    meant to pivot: both are legal. The same shape is an error when a declared bearing
+    has no stiffness in that direction (a zero typed by mistake), or when the free
+    shaft carries a loaded gear, whose static mesh force then cannot be balanced.
+    """
+    meshes = _loaded_mesh_nodes(system)
+    for group in _groups(system):
+        members = set(group)
+        tilt = any(c.grounded and c.k_tilt > 0 and c.shaft_a in members for c in system.couplings)
+        sup = {d: _Support() for d in "yz"}
+        for c in system.couplings:
+            if c.grounded and c.k_lateral > 0 and c.shaft_a in members:
+                for d in "yz":
+                    sup[d].nodes.add((c.shaft_a, c.node_a))
+        for j, b in enumerate(system.bearings):
+            if b.shaft not in members:
+                continue
+            for d in "yz":
+                if _positive(getattr(b, f"k{d}{d}")):
+                    sup[d].nodes.add((b.shaft, b.node))
+                else:
+                    sup[d].zero.append(j)
+        where = _describe(system, group)
+        loaded = [m for m in meshes if m[0] in members]
+        floating = [d for d in "yz" if not sup[d].nodes]
+        if floating:
+            if sup[floating[0]].zero:
+                raise _unsupported(system, sup, floating, where)
+            if loaded:
+                raise _mesh_unsupported(loaded[0], floating, where, "floats")
+            continue
+        if len(group) > 1 or tilt:
+            continue
+        pivots = {d: {n for _, n in sup[d].nodes} for d in "yz"}
+        dirs = [d for d in "yz" if len(pivots[d]) < 2]
+        zero = [d for d in dirs if sup[d].zero]
+        if zero:
+            raise _pivoting(system, sup[zero[0]], zero[0], dirs, where)
+        # a mesh force through the pivot node is balanced
+        off = [(m, d) for d in dirs for m in loaded if m[1] not in pivots[d]]
+        if off:
+            m, d = off[0]
+            raise _mesh_unsupported(m, [d], where, f"pivots about node {min(pivots[d])}")
+
+
+def _mesh_unsupported(mesh: tuple[int, int, str], dirs: list[str], where: str, how: str) -> ModelError:
+    shaft, node, words = mesh
+    return ModelError(
+        f"shafts[{shaft}]",
+        f"{where} carries {words} (node {node}) but {how} in {' and '.join(dirs)}: no bearing or coupling "
+        "to the ground holds it, so the static mesh load cannot be balanced; add [[bearings]] entries",
+    )
+
+
+def _describe(system: RotorSystem, group: list[int]) -> str:
+    def label(i: int) -> str:
+        name = system.shafts[i].name
+        return f"{i} ({name!r})" if name else f"{i}"
+
+    if len(group) == 1:
+        return f"shaft {label(group[0])}"
+    return f"shafts {', '.join(label(i) for i in group)} (joined by couplings)"
+
+
+def _zero_key(system: RotorSystem, j: int, d: str) -> tuple[str, str]:
+    """Key and words for bearing j without stiffness in direction d (both: the bearing itself)."""
+    b = system.bearings[j]
+    if not _positive(b.kyy) and not _positive(b.kzz):
+        return f"bearings[{j}]", "kyy and kzz are zero"
+    return f"bearings[{j}].k{d}{d}", f"k{d}{d} is zero"
+
+
+def _unsupported(system, sup, floating, where) -> ModelError:
+    dirs = " and ".join(floating)
+    zero = sup[floating[0]].zero
+    key, words = _zero_key(system, zero[0], floating[0])
+    others = f" (so are those of {', '.join(f'bearings[{k}]' for k in zero[1:])})" if len(zero) > 1 else ""
+    return ModelError(
+        key,
+        f"{words}{others}, and nothing else supports {where} in {dirs}: the rig floats "
+        "laterally; give the bearings radial stiffness",
+    )
+
+
+def _pivoting(system, sup: _Support, d: str, dirs: list[str], where: str) -> ModelError:
+    node = min(n for _, n in sup.nodes)
+    key, words = _zero_key(system, sup.zero[0], d)
+    return ModelError(
+        key,
+        f"{words}, which leaves {where} held in {' and '.join(dirs)} at node {node} only: the shaft "
+        "pivots about it (a bearing carries no moment); give the bearing radial stiffness",
+    )

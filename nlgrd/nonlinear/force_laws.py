@@ -1,0 +1,234 @@
+"""Local nonlinearities for the harmonic-balance solver.
+
+They follow the small protocol of :class:`LocalNonlinearity`: the gear mesh is
+:class:`BacklashMesh`; any other scalar force law (a bearing clearance, a cubic spring)
+can be plugged in with :class:`AFTNonlinearity` without touching the solver.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from nlgrd.cache import BoundedCache
+from nlgrd.errors import ModelError, check_finite, check_positive
+from nlgrd.nonlinear.describing_functions import (
+    ContactIntervals,
+    contact_intervals,
+    deadzone,
+    fourier_aft,
+    fourier_exact,
+)
+from nlgrd.nonlinear.harmonics import (
+    analyse,
+    evaluate,
+    n_harmonics,
+    resize_harmonics,
+    sample,
+    toeplitz_jacobian,
+)
+
+
+@runtime_checkable
+class LocalNonlinearity(Protocol):
+    """What the harmonic-balance solver asks of a local nonlinearity.
+
+    It acts on the nonlinear coordinates ``coords`` (indices into the solver's
+    n_nl-vector y of nonlinear coordinates, e.g. y_0 = δ, the mesh relative
+    displacement) and adds the force vector g(y(θ), θ) to their equations.
+    """
+
+    coords: tuple[int, ...]
+
+    def harmonics(self, y: NDArray, jacobian: bool = False) -> NDArray | tuple[NDArray, NDArray]:
+        """Force harmonics (m, 2H+1) for y harmonics (m, 2H+1); Jacobian (m(2H+1))²."""
+        ...
+
+    def offset(self, H: int) -> NDArray:
+        """Real harmonics (m, 2H+1) of the excitation offset inside the force law (e.g. LSTE)."""
+        ...
+
+    def tangent_segments(self, y: NDArray) -> tuple[NDArray, NDArray]:
+        """Breaks θ (n+1,) covering one period and piecewise-constant tangent (n, m, m) [N/m]."""
+        ...
+
+    def force_time(self, y: NDArray, theta: NDArray) -> NDArray:
+        """Force samples (m, N) for coordinate samples y (m, N) at angles θ (N,)."""
+        ...
+
+
+@dataclass(frozen=True)
+class BacklashMesh:
+    """Spur-gear mesh with backlash along the line of action (Maliha et al. 2004, Eq. 9-10).
+
+    W(t) = k_h f(δ - e) + c_m (δ' - e'), f the backlash function of :func:`deadzone`.
+    Only the elastic part k_h f is the nonlinearity; the damping c_m must also be part
+    of the linear receptance (κ_k contains i kω c_m) and the LSTE damping forcing
+    i kω c_m E_k part of the equivalent forcing f_k. ``damping`` here is only used to
+    report W(t).
+
+    Parameters
+    ----------
+    stiffness : float
+        Average mesh stiffness k_h [N/m].
+    half_backlash : float
+        b [m]; the total backlash is 2b.
+    lste : array_like
+        Real harmonics [e_0, a_1, b_1, ...] of the loaded static transmission error e(θ)
+        in the mesh angle θ = ω t [m]; may have more harmonics than the solver's H.
+    damping : float
+        Mesh damping c_m [N s/m] (output only, see above).
+    static_load : float, optional
+        W_0 [N] for the dynamic-to-static load ratio; default: the mean mesh force.
+    coord : int
+        Index of δ among the nonlinear coordinates.
+    method : {"exact", "aft"}
+        How the force harmonics are computed.
+    n_samples : int, optional
+        AFT samples (default :func:`default_aft_samples`).
+    """
+
+    stiffness: float
+    half_backlash: float
+    lste: NDArray = field(default_factory=lambda: np.zeros(1))
+    damping: float = 0.0
+    static_load: float | None = None
+    coord: int = 0
+    method: str = "exact"
+    n_samples: int | None = None
+
+    def __post_init__(self):
+        check_positive("stiffness", self.stiffness)
+        check_positive("half_backlash", self.half_backlash, allow_zero=True)
+        check_positive("damping", self.damping, allow_zero=True)
+        lste = np.atleast_1d(np.asarray(self.lste, dtype=float))
+        check_finite("lste", lste)
+        if lste.ndim != 1 or lste.size % 2 != 1:
+            raise ModelError("lste", f"real harmonics [e0, a1, b1, ...] of odd length, got {lste.shape}")
+        object.__setattr__(self, "lste", lste)
+        if self.method not in ("exact", "aft"):
+            raise ModelError("method", f"'exact' or 'aft', got {self.method!r}")
+
+    @property
+    def coords(self) -> tuple[int, ...]:
+        """Nonlinear coordinates this element acts on."""
+        return (self.coord,)
+
+    def offset(self, H: int) -> NDArray:
+        """LSTE harmonics truncated/padded to H, shape (1, 2H+1) [m]."""
+        return resize_harmonics(self.lste, H)[None, :]
+
+    def relative(self, delta: NDArray) -> NDArray:
+        """Real harmonics of x = δ - e with all LSTE harmonics kept."""
+        delta = np.asarray(delta, dtype=float).reshape(-1)
+        H = max(n_harmonics(delta), n_harmonics(self.lste))
+        return resize_harmonics(delta, H) - resize_harmonics(self.lste, H)
+
+    def harmonics(self, y: NDArray, jacobian: bool = False):
+        """Harmonics of k_h f(δ - e), shape (1, 2H+1), and optionally dG/dδ."""
+        y = np.asarray(y, dtype=float).reshape(1, -1)
+        H = n_harmonics(y)
+        x = self.relative(y[0])
+        if self.method == "exact":  # intervals through the cache: metrics and Floquet reuse them
+            iv = self._intervals(x)
+            out = fourier_exact(x, self.half_backlash, H, self.stiffness, jacobian, intervals=iv)
+        else:
+            out = fourier_aft(x, self.half_backlash, H, self.stiffness, self.n_samples, jacobian)
+        if jacobian:
+            return out[0][None, :], out[1]
+        return out[None, :]
+
+    def intervals(self, delta: NDArray) -> ContactIntervals:
+        """Contact intervals of x = δ - e over one period (the last few are cached)."""
+        return self._intervals(self.relative(delta))
+
+    @cached_property
+    def cache(self) -> BoundedCache:
+        """The last contact intervals and LSTE samples of this mesh (16 entries)."""
+        return BoundedCache(16)
+
+    def _intervals(self, x: NDArray) -> ContactIntervals:
+        key = ("intervals", x.tobytes())
+        return self.cache.get(key, lambda: contact_intervals(x, self.half_backlash))
+
+    def tangent_segments(self, y: NDArray) -> tuple[NDArray, NDArray]:
+        """Exact contact intervals as breaks and tangent k_h or 0 per interval."""
+        iv = self.intervals(np.asarray(y, dtype=float).reshape(-1))
+        breaks = np.append(iv.start, iv.end[-1])
+        kt = self.stiffness * np.abs(iv.state).astype(float)
+        return breaks, kt[:, None, None]
+
+    def force_time(self, y: NDArray, theta: NDArray) -> NDArray:
+        """Elastic mesh force k_h f(δ - e) at angles θ for δ samples y (1, N)."""
+        e = evaluate(self.lste, theta)
+        return self.stiffness * deadzone(np.asarray(y).reshape(1, -1) - e, self.half_backlash)
+
+
+@dataclass(frozen=True)
+class AFTNonlinearity:
+    """Any scalar local force law g = force(y - offset(θ)) by AFT: plug-in example.
+
+    Use it for a bearing clearance (``force = lambda u: k * deadzone(u, c)``), a cubic
+    spring, etc., acting on nonlinear coordinate ``coord``.
+
+    Parameters
+    ----------
+    force, tangent : callable
+        Vectorised g(u) [N] and dg/du [N/m].
+    coord : int
+        Index of the coordinate among the nonlinear coordinates.
+    offset_harmonics : array_like
+        Real harmonics of a known excitation subtracted inside the law [m].
+    n_samples : int
+        AFT samples per period.
+    """
+
+    force: object
+    tangent: object
+    coord: int = 0
+    offset_harmonics: NDArray = field(default_factory=lambda: np.zeros(1))
+    n_samples: int = 256
+
+    @property
+    def coords(self) -> tuple[int, ...]:
+        """Nonlinear coordinates this element acts on."""
+        return (self.coord,)
+
+    def offset(self, H: int) -> NDArray:
+        """Offset harmonics (1, 2H+1)."""
+        return resize_harmonics(np.asarray(self.offset_harmonics, dtype=float), H)[None, :]
+
+    def _samples(self, y: NDArray) -> tuple[NDArray, int]:
+        y = np.asarray(y, dtype=float).reshape(-1)
+        H = n_harmonics(y)
+        off = np.asarray(self.offset_harmonics, dtype=float)
+        D = max(H, n_harmonics(off))
+        u = resize_harmonics(y, D) - resize_harmonics(off, D)
+        return sample(u, self.n_samples), H
+
+    def harmonics(self, y: NDArray, jacobian: bool = False):
+        """AFT harmonics (1, 2H+1) of the force and optionally their Jacobian."""
+        us, H = self._samples(y)
+        G = analyse(np.asarray(self.force(us), dtype=float), H)[None, :]
+        if not jacobian:
+            return G
+        N = self.n_samples
+        spec = np.fft.fft(np.asarray(self.tangent(us), dtype=float)) / N
+        n = np.arange(-2 * H, 2 * H + 1)
+        return G, toeplitz_jacobian(spec[np.mod(n, N)], 2 * H, H, 1.0)
+
+    def tangent_segments(self, y: NDArray) -> tuple[NDArray, NDArray]:
+        """Tangent sampled at the AFT points, piecewise constant on the sample cells."""
+        us, _ = self._samples(y)
+        N = self.n_samples
+        breaks = (np.arange(N + 1) - 0.5) * 2 * np.pi / N
+        return breaks, np.asarray(self.tangent(us), dtype=float)[:, None, None]
+
+    def force_time(self, y: NDArray, theta: NDArray) -> NDArray:
+        """Force at angles θ for coordinate samples y (1, N)."""
+        off = evaluate(np.asarray(self.offset_harmonics, dtype=float), theta)
+        return np.asarray(self.force(np.asarray(y).reshape(1, -1) - off), dtype=float)

@@ -1,0 +1,181 @@
+"""Where a frequency sweep lands when the branch it follows ends (a fold) or turns unstable.
+
+A slow physical sweep leaves a branch that folds or loses stability and settles on
+another attractor at the same frequency. :func:`restart` searches by Newton from a few
+starts, :func:`follow_branch` checks by arc-length continuation that a long Newton search
+stayed on the branch, and :func:`nearest_landing` picks, of the stable candidates, the
+one nearest the departed orbit. Candidates may include the solutions of the other sweep
+directions at the same frequency (a ``pool``): an up sweep cannot find the down sweep's
+branch by Newton from its own orbit where the curve is strongly nonsmooth.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from nlgrd.nonlinear.arclength import jump_to_branch
+from nlgrd.nonlinear.floquet import floquet_multipliers
+from nlgrd.nonlinear.harmonic_balance import HarmonicSolution
+from nlgrd.nonlinear.results import STABLE_RTOL
+from nlgrd.nonlinear.solvers import solve
+
+#: Newton iterations from the previous point beyond which a sweep checks by arc-length
+#: continuation that the solution is on the branch followed (a warm start on a grid that
+#: resolves the curve converges in a few; a long search can land on a coexisting orbit).
+WANDER_ITER = 20
+
+
+def distance(sol: HarmonicSolution, z_prev: NDArray) -> float:
+    """Euclidean distance of a solution's harmonics from ``z_prev``."""
+    return float(np.linalg.norm(sol.harmonics.reshape(-1) - np.asarray(z_prev).reshape(-1)))
+
+
+def is_stable(model, sol: HarmonicSolution, w: float) -> bool:
+    """Floquet-stable (True also when the model has no linear state space to check)."""
+    ss = model.linear_state_space(w)
+    if ss is None:
+        return True
+    mu = floquet_multipliers(ss, model.nonlinearities, sol.harmonics, w)
+    return bool(np.max(np.abs(mu)) < 1 + STABLE_RTOL)
+
+
+def restart(model, problem, z_prev, w, H, method, tol, max_iter):
+    """Land on another branch after a fold without arc-length continuation.
+
+    Newton is started from the full-contact linear response and from the previous
+    solution with its alternating part scaled by 1/4, 1/2, 2 and 4. Of the converged
+    solutions that are stable (checked whenever the model has a linear state space),
+    the one nearest the previous solution is returned (None if there is none): after a
+    fold a slow sweep falls to the nearest coexisting stable branch, in the usual case
+    of an S-shaped curve the one the unstable branch leads to.
+    """
+    z_prev = np.asarray(z_prev, dtype=float)
+    nh = 2 * H + 1
+    guesses = [None]
+    for scale in (0.25, 0.5, 2.0, 4.0):
+        g = z_prev.reshape(-1, nh).copy()
+        g[:, 1:] *= scale
+        guesses.append(g.reshape(z_prev.shape))
+    best, best_d = None, np.inf
+    for guess in guesses:
+        cand = solve(problem, guess, method=method, tol=tol, max_iter=max_iter, fallback=False)
+        if not cand.converged or not is_stable(model, cand, w):
+            continue
+        d = distance(cand, z_prev)
+        if d < best_d:
+            best, best_d = cand, d
+    return best
+
+
+def pool_candidates(model, problem, pool, w, direction, tol, max_iter) -> list[HarmonicSolution]:
+    """Stable solutions at ``w`` of the other sweep directions (``pool``: {w: [(direction,
+    harmonics)]}), re-solved by Newton on ``problem`` (they are solutions: one iteration)."""
+    out = []
+    for d, z in (pool or {}).get(float(w), ()):
+        if d == direction:
+            continue
+        cand = solve(problem, z, method="newton", tol=tol, max_iter=max_iter, fallback=False)
+        if cand.converged and is_stable(model, cand, w):
+            out.append(cand)
+    return out
+
+
+#: Two solutions closer than this (relative to the larger norm) are the same orbit.
+SAME_ORBIT_RTOL = 1e-6
+
+
+def same_orbit(a, b) -> bool:
+    """Harmonics ``a`` and ``b`` within SAME_ORBIT_RTOL of the larger norm of the two."""
+    a, b = np.ravel(a), np.ravel(b)
+    scale = max(float(np.linalg.norm(a)), float(np.linalg.norm(b)))
+    return bool(np.linalg.norm(a - b) <= SAME_ORBIT_RTOL * scale)
+
+
+def nearer(cand, best, z_prev) -> bool:
+    """``cand`` is another orbit than ``best`` and nearer ``z_prev`` (arrays of harmonics)."""
+    if same_orbit(cand, best):
+        return False
+    c, b, p = (np.ravel(x) for x in (cand, best, z_prev))
+    return float(np.linalg.norm(c - p)) < float(np.linalg.norm(b - p))
+
+
+def nearest_landing(landing, z_prev, others=()):
+    """After a fold: of the arc-length ``landing`` and the stable candidates ``others``
+    (the other sweep directions' solutions at this frequency, Newton's own), the one
+    nearest the departed orbit ``z_prev``.
+
+    Arc length alone takes the far stable branch of an S. Where the curve folds twice
+    more, as onto the back-side impact orbit of Kubo's single-DOF model near 10 500 rpm,
+    a slow sweep falls to a nearer attractor (time integration:
+    tests/test_sweep_landing.py)."""
+    best = landing
+    for cand in others:
+        if cand is not None and nearer(cand.harmonics, best.harmonics, z_prev):
+            best = cand
+    return best
+
+
+def follow_branch(model, problem, sol, z_prev, w_prev, w, H, method, tol, max_iter, stability, others=()):
+    """The solution at ``w`` on the branch through (z_prev, w_prev), when Newton from z_prev
+    needed more than WANDER_ITER iterations and may have wandered onto another orbit.
+
+    Arc-length continuation from the previous point (:func:`nlgrd.nonlinear.arclength.jump_to_branch`)
+    follows the branch to ``w``; if it folds on the way the point is a jump, landed by
+    :func:`nearest_landing` with Newton's own solution and ``others`` as candidates.
+    Newton's solution is kept when continuation does not reach ``w``. Returns (solution,
+    switched).
+    """
+    zj, steps, folds = jump_to_branch(model, H, z_prev, w_prev, w, tol=tol, require_stable=stability)
+    if zj is None:
+        return sol, False
+    fol = solve(problem, zj, method="newton", tol=tol, max_iter=max_iter, fallback=False)
+    if not fol.converged:
+        return sol, False
+    note = "newton after arc-length continuation (Newton from the previous point left the branch)"
+    fol = HarmonicSolution(
+        fol.omega,
+        fol.harmonics,
+        True,
+        fol.residual,
+        sol.iterations + steps + fol.iterations,
+        note,
+        fol.iterate,
+        fol.message,
+    )
+    if folds:
+        fol = nearest_landing(fol, z_prev, others=(sol, *others))
+    if same_orbit(fol.harmonics, sol.harmonics):
+        return sol, folds > 0
+    return fol, folds > 0
+
+
+def approach(model, problem, order, i, H, method, tol, max_iter, stability, lookahead=5):
+    """A start for a sweep's first point ``order[i]`` when Newton from the full-contact
+    linear response fails there: solve at the next frequencies of the sweep (up to
+    ``lookahead``) and follow the curve back by arc-length continuation
+    (:func:`nlgrd.nonlinear.arclength.jump_to_branch`). Returns a solution or None."""
+    w = float(order[i])
+    for wk in order[i + 1 : i + 1 + lookahead]:
+        start = solve(model.at(float(wk), H), None, method=method, tol=tol, max_iter=max_iter, fallback=True)
+        if not start.converged:
+            continue
+        zj, steps, _ = jump_to_branch(
+            model, H, start.harmonics, float(wk), w, tol=tol, require_stable=stability
+        )
+        if zj is None:
+            continue
+        sol = solve(problem, zj, method="newton", tol=tol, max_iter=max_iter, fallback=False)
+        if sol.converged:
+            note = f"newton after arc-length continuation from {float(wk):.6g} rad/s"
+            return HarmonicSolution(
+                sol.omega,
+                sol.harmonics,
+                True,
+                sol.residual,
+                start.iterations + steps + sol.iterations,
+                note,
+                sol.iterate,
+                sol.message,
+            )
+    return None

@@ -1,0 +1,205 @@
+"""Per-point outputs of a nonlinear mesh response: DTE statistics, mesh force, contact loss.
+
+Definitions (model.md §4)
+-------------------------
+- DTE is the dynamic transmission error δ(t), the relative displacement of the two
+  gears along the line of action [m] (not δ - e). Its mean, the RMS of its
+  alternating part sqrt(Σ_k (a_k² + b_k²)/2), its peak-to-peak and the harmonic
+  amplitudes |δ_k| are reported.
+- Mesh force W(t) = k_h f(δ - e) + c_m (δ' - e') including the damping part [N];
+  DSLR = max W / W_0 with W_0 the static load (the mean mesh force when not given).
+- Contact loss: the fraction of the period with |δ - e| <= b (no elastic mesh force);
+  back-side contact: δ - e < -b anywhere.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from nlgrd.nonlinear.describing_functions import deadzone
+from nlgrd.nonlinear.force_laws import BacklashMesh
+from nlgrd.nonlinear.harmonics import differentiate, n_harmonics, real_to_complex, resize_harmonics, sample
+
+#: Names of the scalar metrics, in the order of :meth:`MeshMetrics.as_tuple`.
+#: What the CSV's ``response`` column says where a sweep found no stable periodic orbit.
+NO_STABLE = "no stable mesh-periodic response"
+
+METRIC_NAMES = (
+    "dte_mean",
+    "dte_rms",
+    "dte_p2p",
+    "force_max",
+    "force_min",
+    "dslr",
+    "contact_loss_fraction",
+    "back_contact",
+)
+
+
+@dataclass(frozen=True)
+class MeshMetrics:
+    """Scalar outputs of one periodic mesh response (SI units).
+
+    Attributes
+    ----------
+    dte_mean, dte_rms, dte_p2p : float
+        Mean, RMS of the alternating part and peak-to-peak of δ [m].
+    dte_amplitudes : ndarray
+        |δ_k|, k = 0..H [m] (k = 0: |mean|).
+    force_max, force_min : float
+        Extremes of W(t) over the period [N].
+    dslr : float
+        max W / W_0 [-].
+    contact_loss_fraction : float
+        Fraction of the period with |δ - e| <= b [-].
+    back_contact : bool
+        δ - e < -b somewhere.
+    """
+
+    dte_mean: float
+    dte_rms: float
+    dte_p2p: float
+    dte_amplitudes: NDArray
+    force_max: float
+    force_min: float
+    dslr: float
+    contact_loss_fraction: float
+    back_contact: bool
+
+    def as_tuple(self) -> tuple:
+        """Values in the order of :data:`METRIC_NAMES`."""
+        return tuple(getattr(self, n) for n in METRIC_NAMES)
+
+    @classmethod
+    def nan(cls, H: int) -> MeshMetrics:
+        """All-NaN metrics for a failed point."""
+        nan = float("nan")
+        return cls(nan, nan, nan, np.full(H + 1, nan), nan, nan, nan, nan, False)
+
+
+@dataclass(frozen=True)
+class TimeHistory:
+    """One period of a periodic mesh response sampled in time (SI units).
+
+    Attributes
+    ----------
+    t : ndarray
+        Time from the start of the period [s].
+    delta, delta_dot : ndarray
+        δ [m] and δ' [m/s].
+    lste, lste_dot : ndarray
+        e [m] and e' [m/s].
+    force : ndarray
+        W = k_h f(δ - e) + c_m (δ' - e') [N].
+    """
+
+    t: NDArray
+    delta: NDArray
+    delta_dot: NDArray
+    lste: NDArray
+    lste_dot: NDArray
+    force: NDArray
+
+    @property
+    def mesh_deflection(self) -> NDArray:
+        """x = δ - e [m]."""
+        return self.delta - self.lste
+
+    def plot(self, ax=None, quantity: str = "delta"):
+        """Plot one quantity over the period (see :func:`nlgrd.plotting.nonlinear.plot_time_history`)."""
+        from nlgrd.plotting.nonlinear import plot_time_history
+
+        return plot_time_history(self, quantity=quantity, ax=ax)
+
+
+def _lste_samples(mesh: BacklashMesh, n_samples: int) -> tuple[NDArray, NDArray]:
+    """e(θ) and de/dθ on n_samples points (the same at every point of a sweep: kept in
+    the mesh's cache)."""
+
+    def make():
+        out = (sample(mesh.lste, n_samples), sample(differentiate(mesh.lste), n_samples))
+        for a in out:
+            a.setflags(write=False)
+        return out
+
+    return mesh.cache.get(("lste samples", int(n_samples)), make)
+
+
+def time_history(harmonics, omega: float, mesh: BacklashMesh, n_samples: int = 1024) -> TimeHistory:
+    """Reconstruct one period of δ, e and W from the harmonics of δ (1-D, real convention)."""
+    z = np.asarray(harmonics, dtype=float).reshape(-1)
+    theta = 2 * np.pi * np.arange(n_samples) / n_samples
+    delta = sample(z, n_samples)
+    ddot = omega * sample(differentiate(z), n_samples)
+    e, de = _lste_samples(mesh, n_samples)
+    e, edot = e.copy(), omega * de
+    force = mesh.stiffness * deadzone(delta - e, mesh.half_backlash) + mesh.damping * (ddot - edot)
+    return TimeHistory(theta / omega, delta, ddot, e, edot, force)
+
+
+def _static_load(mesh: BacklashMesh, force: NDArray) -> float:
+    return float(mesh.static_load) if mesh.static_load else float(np.mean(force))
+
+
+def metrics_from_harmonics(harmonics, omega: float, mesh: BacklashMesh, n_samples: int = 2048) -> MeshMetrics:
+    """Metrics of a harmonic-balance solution: moments and contact loss exact, extremes sampled.
+
+    Mean, RMS and harmonic amplitudes come from the harmonics; the contact-loss
+    fraction and back-side flag from the exact contact intervals; peak-to-peak and
+    force extremes from ``n_samples`` samples per period (relative error of the extremes
+    about (π k_max / n_samples)² / 2, below 1e-4 for k_max <= 9 at the default).
+    """
+    z = np.asarray(harmonics, dtype=float).reshape(-1)
+    H = n_harmonics(z)
+    if not np.all(np.isfinite(z)):
+        return MeshMetrics.nan(H)
+    amp = np.abs(real_to_complex(z))
+    rms = float(np.sqrt(np.sum(amp[1:] ** 2) / 2))
+    th = time_history(z, omega, mesh, n_samples)
+    iv = mesh.intervals(z)
+    W0 = _static_load(mesh, th.force)
+    return MeshMetrics(
+        dte_mean=float(z[0]),
+        dte_rms=rms,
+        dte_p2p=float(np.ptp(th.delta)),
+        dte_amplitudes=amp,
+        force_max=float(np.max(th.force)),
+        force_min=float(np.min(th.force)),
+        dslr=float(np.max(th.force) / W0),
+        contact_loss_fraction=1.0 - iv.contact_fraction,
+        back_contact=iv.back_contact,
+    )
+
+
+def metrics_from_history(history: TimeHistory, mesh: BacklashMesh, H: int = 15) -> MeshMetrics:
+    """Metrics from equally spaced samples over one period (time integration)."""
+    d = history.delta
+    n = d.size
+    spec = np.fft.rfft(d) / n
+    amp = 2 * np.abs(spec[: H + 1])
+    amp[0] = abs(spec[0].real)
+    rms = float(np.sqrt(np.mean((d - np.mean(d)) ** 2)))
+    x = history.mesh_deflection
+    W0 = _static_load(mesh, history.force)
+    return MeshMetrics(
+        dte_mean=float(np.mean(d)),
+        dte_rms=rms,
+        dte_p2p=float(np.ptp(d)),
+        dte_amplitudes=amp,
+        force_max=float(np.max(history.force)),
+        force_min=float(np.min(history.force)),
+        dslr=float(np.max(history.force) / W0),
+        contact_loss_fraction=float(np.mean(np.abs(x) <= mesh.half_backlash)),
+        back_contact=bool(np.any(x < -mesh.half_backlash)),
+    )
+
+
+def harmonic_amplitudes(harmonics, H: int | None = None) -> NDArray:
+    """|δ_k|, k = 0..H, of real harmonics."""
+    z = np.asarray(harmonics, dtype=float).reshape(-1)
+    if H is not None:
+        z = resize_harmonics(z, H)
+    return np.abs(real_to_complex(z))

@@ -1,0 +1,545 @@
+"""Receptance reduction of a geared rotor onto its mesh coordinates.
+
+For harmonic k of the mesh frequency ω, with Z_k the linear dynamic stiffness at kω
+(mesh stiffness left out, mesh damping kept) and W the projection vectors of the
+meshes (one column per mesh), the nonlinear problem reduces to
+
+    κ_k Y_k + G_k = F_k,   κ_k = (Wᵀ Z_k⁻¹ W)⁻¹,   F_k = i kω c_m E_k  (k >= 1)
+
+on the mesh coordinates Y = Wᵀ q only (Maliha, Doğruer & Özgüven 2004, Eq. 26-37, in
+the compact form of model.md §3); every other coordinate follows linearly as
+Q_k = Z_k⁻¹ W (F_k - G_k).
+
+Mean (k = 0): with K_r = Z_0 + W diag(k_h) Wᵀ (the linear system with the meshes at
+their average stiffness), κ_0 = (Wᵀ K_r⁻¹ W)⁻¹ - diag(k_h) and F_0 = (Wᵀ K_r⁻¹ W)⁻¹ Wᵀ
+K_r⁻¹ F_static. When a free torsional rigid-body mode moves the mesh (a drive train
+held only by the mesh), Wᵀ K_r⁻¹ W = 1/k_h and κ_0 = 0: the mean mesh force equals the
+static load. Rigid-body modes that do not move any mesh (a closed four-square loop)
+are removed by a bordered solve with the constraint Rᵀ M q = 0, so the mean
+deflection is the one M-orthogonal to them; a static load with a component on such a
+mode is an error.
+
+Two ways to get h_k = Wᵀ Z_k⁻¹ W:
+
+- ``"direct"``: a sparse LU factorisation of Z_k per harmonic and frequency (exact),
+  restricted to the connected components of Z's sparsity graph that hold a mesh or an
+  output DOF (axial bars, say, never couple to a spur mesh);
+- ``"modal"``: Galerkin projection on a basis of the lowest undamped modes of the
+  linear system (meshes at k_h) up to a cut-off frequency, enriched with the static
+  and dynamic attachment vectors K_r⁻¹ W and Z(iω_j)⁻¹ W (modal summation with
+  residual correction, in projected form so gyroscopic, non-proportional,
+  circulatory and hysteretic terms stay coupled). Rigid-body modes that move no mesh
+  are left out of the basis (they are decoupled from W exactly).
+
+Along a sweep the speed follows the mesh frequency (Ω = s ω), so without tabulated
+bearings the reduced Z_k(ω) = A_0 + ω A_1 + ω² A_2 is a quadratic matrix polynomial in ω
+(A_0 = K + hysteretic part, whose whirl signs are constant for ω > 0; A_1 = s K_c + i k
+C; A_2 = -k² M + i k s G). One eigendecomposition of its companion linearisation per
+harmonic then gives the pole-residue form h_k(ω) = Σ_j R_j / (ω - λ_j) and dh_k/dω =
+-Σ_j R_j / (ω - λ_j)² (Tisseur & Meerbergen 2001, SIAM Rev. 43:235, §3.4): per point
+a few vector products, independent of the model size. Tabulated bearings keep the
+dense per-frequency solve.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
+from scipy.sparse.csgraph import connected_components
+
+from nlgrd.errors import ModelError
+from nlgrd.rotor.assembly import LinearModel, assemble, mesh_matrix
+from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
+from nlgrd.rotor.system import RotorSystem
+
+#: Above this many DOFs ``method="auto"`` uses the modal basis.
+DIRECT_LIMIT = 3000
+#: Mode counts at which the bases stop doubling (the last doubling may pass them).
+MODE_CAP = 400
+STABILITY_MODE_CAP = 300
+#: Pole-residue receptances are checked against a direct solve of the reduced Z_k at one
+#: frequency per harmonic; above this relative difference the harmonic falls back to it.
+POLE_CHECK_RTOL = 1e-8
+
+
+class ModeCapWarning(UserWarning):
+    """A modal basis reached its cap before its cut-off frequency."""
+
+
+def _lowest_modes(K, M, cutoff: float, start: int, cap: int, what: str) -> tuple[NDArray, NDArray]:
+    """Lowest eigenpairs of K φ = λ M φ up to λ = cutoff² (at least), doubling the count.
+
+    Shift-invert about -1 (rigid-body modes are fine); fixed start vector (reruns are
+    byte-identical). Warns when the cap stops it short of the cut-off."""
+    n = K.shape[0]
+    v0 = np.full(n, 1.0 / np.sqrt(n))
+    k = min(n - 2, start)
+    while True:
+        lam, vec = spla.eigsh(K, k=k, M=M, sigma=-1.0, v0=v0)
+        if np.max(lam) >= cutoff**2 or k >= n - 2:
+            return lam, vec
+        if k >= cap:
+            warnings.warn(
+                f"{what}: {k} modes reach {np.sqrt(max(np.max(lam), 0)) / (2 * np.pi):.4g} Hz, short of the "
+                f"cut-off {cutoff / (2 * np.pi):.4g} Hz (cap {cap}); higher modes enter only through "
+                "the attachment vectors",
+                ModeCapWarning,
+                stacklevel=3,
+            )
+            return lam, vec
+        k = min(n - 2, 2 * k)
+
+
+@dataclass(frozen=True)
+class MeanTerms:
+    """Mean (k = 0) reduction at one speed: κ_0, F_0 and what recovery needs."""
+
+    kappa: NDArray  # (n_nl, n_nl)
+    force: NDArray  # (n_nl,)
+    x_static: NDArray  # K_r⁻¹ F_static (n,)
+    x_mesh: NDArray  # K_r⁻¹ W (n, n_nl)
+
+
+class MeshReceptance:
+    """Receptances of a geared :class:`RotorSystem` seen from its mesh coordinates.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        Model with at least one gear pair; the first pair's pinion sets the speed:
+        the reference speed is Ω = ω / (N_p |s_p|) for mesh frequency ω, s_p the
+        pinion shaft's speed ratio.
+    method : {"auto", "direct", "modal"}
+        How h_k is computed (see module docstring).
+    max_frequency : float, optional
+        Highest excitation frequency the modal basis must serve [rad/s] (H times the
+        highest mesh frequency); required for ``"modal"``.
+    cutoff_factor : float
+        Modal basis: keep modes up to ``cutoff_factor * max_frequency``.
+    """
+
+    def __init__(
+        self,
+        system: RotorSystem,
+        method: str = "auto",
+        max_frequency: float | None = None,
+        cutoff_factor: float = 3.0,
+    ):
+        if not system.gear_pairs:
+            raise ModelError("gear_pairs", "the model has no gear pair: nothing to reduce onto")
+        self.system = system
+        self.model: LinearModel = assemble(system, mesh_stiffness=False, mesh_damping=True)
+        self.W = np.column_stack([m.w for m in self.model.meshes])
+        self.k_h = np.array([m.stiffness for m in self.model.meshes])
+        self.c_m = np.array([m.damping for m in self.model.meshes])
+        self.static_force = sum(g.static_torques(system) for g in system.gear_pairs)
+        g0 = system.gear_pairs[0]
+        s_p = abs(system.shafts[g0.pinion_shaft].speed_ratio)
+        self.speed_per_mesh_frequency = 1.0 / (g0.geometry.teeth_pinion * s_p)
+        if method == "auto":
+            method = "direct" if self.model.n_dofs <= DIRECT_LIMIT else "modal"
+        if method not in ("direct", "modal"):
+            raise ModelError("method", f"must be 'auto', 'direct' or 'modal', got {method!r}")
+        self.method = method
+        self._speed_dependent = bool(
+            self.model.tabulated_bearings or self.model.hysteretic_parts or self.model.Kc.nnz
+        )
+        self._rigid = self._rigid_body_split()
+        self._mean_cache: dict[float, MeanTerms] = {}
+        self._solve_cache: dict[float, list] = {}
+        self._poles: dict[int, tuple[NDArray, NDArray, NDArray, NDArray] | None] = {}
+        #: relative difference of the pole-residue h_k from a direct solve, per harmonic k
+        self.pole_check: dict[int, float] = {}
+        self.max_frequency = None if max_frequency is None else float(max_frequency)
+        self.output_dofs = np.zeros(0, dtype=int)
+        self._restriction = None
+        self._stability_basis: dict[float, NDArray] = {}
+        if method == "modal":
+            if max_frequency is None:
+                raise ModelError("max_frequency", "the modal method needs the highest excitation frequency")
+            self._build_basis(float(max_frequency), cutoff_factor)
+
+    # speeds
+    def speed(self, omega: float) -> float:
+        """Reference speed Ω [rad/s] at mesh frequency ``omega`` [rad/s]."""
+        return float(omega) * self.speed_per_mesh_frequency
+
+    @property
+    def n_coords(self) -> int:
+        """Number of mesh coordinates."""
+        return self.W.shape[1]
+
+    # mean problem
+    def _rigid_body_split(self) -> NDArray:
+        """Rigid-body modes of the linear system with the meshes in (none move a mesh)."""
+        R = rigid_body_modes(self.model.K + self._mesh_stiffness(), self.model.M)
+        check_balanced(R, self.static_force, "torque", "the static torques")
+        return R
+
+    def _mesh_stiffness(self) -> sp.csc_matrix:
+        return mesh_matrix(self.W, self.k_h)
+
+    def _bordered_solve(self, Kr: sp.csc_matrix, rhs: NDArray) -> NDArray:
+        R = self._rigid
+        n = Kr.shape[0]
+        if R.shape[1] == 0:
+            return spla.splu(Kr.tocsc()).solve(rhs)
+        MR = sp.csc_matrix(self.model.M @ R)
+        A = sp.bmat([[Kr, MR], [MR.T, None]], format="csc")
+        pad = np.zeros((R.shape[1],) + rhs.shape[1:])
+        return spla.splu(A).solve(np.concatenate([rhs, pad]))[:n]
+
+    def mean_terms(self, speed: float = 0.0) -> MeanTerms:
+        """κ_0, F_0 and the static solution pieces at reference speed ``speed`` [rad/s]."""
+        key = float(speed) if self._speed_dependent else 0.0
+        if key not in self._mean_cache:
+            Z0 = self.model.dynamic_stiffness(0.0, key)
+            Kr = (Z0 + self._mesh_stiffness()).tocsc()
+            if np.iscomplexobj(Kr.data) and np.all(Kr.data.imag == 0):
+                Kr = sp.csc_matrix(
+                    (np.ascontiguousarray(Kr.data.real), Kr.indices, Kr.indptr), shape=Kr.shape
+                )
+            x = self._bordered_solve(Kr, np.column_stack([self.W, self.static_force]))
+            if np.iscomplexobj(x):
+                x = x.real
+            hr = self.W.T @ x[:, : self.n_coords]
+            hr_inv = np.linalg.inv(hr)
+            self._mean_cache[key] = MeanTerms(
+                kappa=hr_inv - np.diag(self.k_h),
+                force=hr_inv @ (self.W.T @ x[:, -1]),
+                x_static=x[:, -1],
+                x_mesh=x[:, : self.n_coords],
+            )
+        return self._mean_cache[key]
+
+    # harmonics k >= 1
+    def _build_basis(self, max_frequency: float, cutoff_factor: float) -> None:
+        m = self.model
+        Kr = (m.K + self._mesh_stiffness()).tocsc()
+        cutoff = cutoff_factor * max_frequency
+        # lowest modes of the linear system with meshes, shift-invert about -1 (rigid modes ok)
+        lam, vec = _lowest_modes(Kr, m.M, cutoff, start=40, cap=MODE_CAP, what="receptance basis")
+        keep = lam <= cutoff**2
+        vectors = [vec[:, keep]]
+        lu = spla.splu((Kr + m.M).tocsc())
+        vectors.append(lu.solve(self.W))
+        for frac in (0.25, 0.5, 1.0):
+            w = frac * max_frequency
+            z = spla.splu(m.dynamic_stiffness(w, self.speed(w))).solve(self.W.astype(complex))
+            vectors += [z.real, z.imag]
+        B = np.column_stack(vectors)
+        B = B[:, np.linalg.norm(B, axis=0) > 0]  # e.g. Im Z⁻¹W of an undamped model
+        R = self._rigid
+        deflate = R.shape[1] > 0 and self._rigid_decoupled()
+        if deflate:
+            MR = m.M @ R
+
+            def off_rigid(X):  # the part of X M-orthogonal to R
+                return X - R @ np.linalg.solve(R.T @ MR, MR.T @ X)
+
+            n0 = np.linalg.norm(B, axis=0)
+            B = off_rigid(B)
+            B = B[:, np.linalg.norm(B, axis=0) > 1e-8 * n0]  # drop the rigid modes themselves
+        V, s, _ = np.linalg.svd(B / np.linalg.norm(B, axis=0), full_matrices=False)
+        V = V[:, s > 1e-10 * s[0]]
+        if deflate:  # once more, against what the SVD's rounding brought back
+            V = np.linalg.qr(off_rigid(V))[0]
+        self.basis = V
+        self.n_modes = int(np.sum(keep))
+        P = lambda A: V.T @ (A @ V)  # noqa: E731
+        self._red = {"M": P(m.M), "K": P(m.K), "C": P(m.C + m.Ci), "G": P(m.G), "Kc": P(m.Kc)}
+        self._red_hyst = [(h.speed_ratio, P(h.Kb), P(h.Kx)) for h in m.hysteretic_parts]
+        self._red_bear = [(b, r, V[dofs]) for b, r, dofs in m.tabulated_bearings]
+        self._W_red = V.T @ self.W
+        self._poles.clear()
+
+    def _rigid_decoupled(self) -> bool:
+        """True when the rigid-body modes R (which move no mesh) are free of damping,
+        gyroscopic, circulatory and hysteretic coupling: then Z_k⁻¹ W is M-orthogonal to
+        R and R can leave the basis."""
+        m, R = self.model, self._rigid
+        if m.tabulated_bearings:
+            return False
+        mats = [m.C + m.Ci, m.G, m.Kc] + [A for h in m.hysteretic_parts for A in (h.Kb, h.Kx)]
+        for A in mats:
+            if A.nnz and np.linalg.norm(A @ R) > 1e-9 * spla.norm(A) * np.linalg.norm(R):
+                return False
+        return True
+
+    def _reduced_Z(self, w: float, speed: float) -> NDArray:
+        r = self._red
+        Z = r["K"] + speed * r["Kc"] - w * w * r["M"] + 1j * w * (r["C"] + speed * r["G"])
+        for ratio, Kb, Kx in self._red_hyst:
+            spin = ratio * speed
+            s1, s2 = np.sign(w - spin), np.sign(-w - spin)
+            Z = Z + 1j * (s1 - s2) / 2 * Kb - (s1 + s2) / 2 * Kx
+        for b, ratio, Vb in self._red_bear:
+            Z = Z + Vb.T @ (b.K(ratio * speed) + 1j * w * b.C(ratio * speed)) @ Vb
+        return Z
+
+    def set_output_dofs(self, dofs) -> None:
+        """DOFs whose responses are kept for every frequency solved (for :meth:`recover`)."""
+        self.output_dofs = np.asarray(dofs, dtype=int)
+        self._solve_cache.clear()
+        self._poles.clear()
+        self._restriction = None
+
+    def _restricted(self) -> tuple:
+        """The part of Z the direct solves need: the connected components of its sparsity
+        graph that hold a mesh or an output DOF (axial DOFs, say, are decoupled from the
+        mesh; leaving them out is exact). Returns (kept DOFs, selection of the pattern's
+        non-zeros, a CSC matrix on the restricted pattern whose data each solve replaces,
+        row and column of each non-zero, W's rows, output rows)."""
+        if self._restriction is None:
+            pat = self.model._pattern
+            n = self.model.n_dofs
+            g = sp.csc_matrix((np.ones(len(pat["indices"])), pat["indices"], pat["indptr"]), shape=(n, n))
+            _, label = connected_components(g, directed=False)
+            need = np.concatenate([np.flatnonzero(np.any(self.W != 0, axis=1)), self.output_dofs])
+            keep = np.flatnonzero(np.isin(label, label[need]))
+            new = np.full(n, -1)
+            new[keep] = np.arange(len(keep))
+            col = np.repeat(np.arange(n), np.diff(pat["indptr"]))
+            sel = np.flatnonzero((new[pat["indices"]] >= 0) & (new[col] >= 0))
+            nk = len(keep)
+            indptr = np.concatenate([[0], np.cumsum(np.bincount(new[col[sel]], minlength=nk))])
+            rows, cols = new[pat["indices"][sel]], new[col[sel]]
+            Z = sp.csc_matrix((np.zeros(len(sel), dtype=complex), rows, indptr), shape=(nk, nk))
+            Wk = np.ascontiguousarray(self.W[keep], dtype=complex)
+            self._restriction = (keep, sel, Z, rows, cols, Wk, new[self.output_dofs])
+        return self._restriction
+
+    def _dZ(self, k: int, omega: float, speed: float, reduced: bool):
+        """dZ_k/dω along a sweep (Ω = ω / N_p): tabulated bearings and hysteresis held fixed.
+
+        Reduced: a dense matrix; full: its non-zeros on ``LinearModel._pattern``."""
+        sp_w = self.speed_per_mesh_frequency
+        w = k * omega
+        if reduced:
+            r = self._red
+            return (
+                sp_w * r["Kc"]
+                - 2 * k * w * r["M"]
+                + 1j * k * (r["C"] + speed * r["G"])
+                + 1j * w * sp_w * r["G"]
+            )
+        m = self.model
+        pat = m._pattern
+        data = (
+            sp_w * pat["Kc"]
+            - 2 * k * w * pat["M"]
+            + 1j * k * (pat["C"] + pat["Ci"] + speed * pat["G"])
+            + 1j * w * sp_w * pat["G"]
+        )
+        return data  # non-zeros on the model's pattern (CSC order)
+
+    def _pole_residues(self, k: int) -> tuple[NDArray, NDArray, NDArray, NDArray] | None:
+        """Poles λ_j and residue factors of harmonic k in the modal basis (see module docstring).
+
+        Returns (λ (2m,), Wᵀ X (n_nl, 2m), X at the output DOFs (n_out, 2m), X⁻¹ b (2m, n_nl)),
+        X the eigenvectors of the companion matrix [[0, I], [-A_2⁻¹A_0, -A_2⁻¹A_1]] and
+        b = [0; A_2⁻¹ Wᵣ], so that Z_k(ω)⁻¹ Wᵣ = X_top diag(1 / (ω - λ)) X⁻¹ b. None when
+        the a-posteriori check against a direct solve fails (relative difference in
+        :attr:`pole_check` above :data:`POLE_CHECK_RTOL`): the caller then solves directly.
+        """
+        if k in self._poles:
+            return self._poles[k]
+        r = self._red
+        s = self.speed_per_mesh_frequency
+        A0 = r["K"].astype(complex)
+        for ratio, Kb, Kx in self._red_hyst:
+            s1, s2 = np.sign(k - ratio * s), np.sign(-k - ratio * s)
+            A0 = A0 + 1j * (s1 - s2) / 2 * Kb - (s1 + s2) / 2 * Kx
+        A1 = s * r["Kc"] + 1j * k * r["C"]
+        A2 = -(k**2) * r["M"] + 1j * k * s * r["G"]
+        # scaled frequency ω = γ μ balances the companion matrix (Fan, Lin & Van Dooren 2004,
+        # SIAM J. Matrix Anal. Appl. 26:252): the eigenvectors are ~1e3x better conditioned here
+        g = np.sqrt(np.linalg.norm(A0) / np.linalg.norm(A2))
+        A1, A2 = g * A1, g * g * A2
+        m = A0.shape[0]
+        lu = sla.lu_factor(A2)
+        comp = np.zeros((2 * m, 2 * m), dtype=complex)
+        comp[:m, m:] = np.eye(m)
+        comp[m:, :m] = -sla.lu_solve(lu, A0)
+        comp[m:, m:] = -sla.lu_solve(lu, A1)
+        mu, X = sla.eig(comp, overwrite_a=True, check_finite=False)
+        b = np.zeros((2 * m, self.n_coords), dtype=complex)
+        b[m:] = sla.lu_solve(lu, self._W_red.astype(complex))
+        Y = g * sla.solve(X, b)  # 1 / (μ - μ_j) = γ / (ω - γ μ_j)
+        out = (g * mu, self._W_red.T @ X[:m], self.basis[self.output_dofs] @ X[:m], Y)
+        # a posteriori: against a direct solve at one frequency (kω at 0.618 of the basis range)
+        wc = 0.6180339887 * self.max_frequency / k
+        h_pr = out[1] @ (out[3] / (wc - out[0])[:, None])
+        Zc = self._reduced_Z(k * wc, self.speed(wc))
+        h_d = self._W_red.T @ sla.solve(Zc, self._W_red.astype(complex))
+        err = np.linalg.norm(h_pr - h_d) / np.linalg.norm(h_d)
+        self.pole_check[k] = float(err)
+        if not err <= POLE_CHECK_RTOL:
+            out = None  # this harmonic is solved directly on the reduced basis
+        self._poles[k] = out
+        return out
+
+    def _solve(self, omega: float, H: int, derivative: bool = False) -> list:
+        """[h_k, U_k at the output DOFs, dh_k/dω or None] for k = 1..H, cached per frequency.
+
+        One entry per frequency serves every H (harmonic k's solve does not depend on H):
+        a request for more harmonics than stored computes only the missing ones.
+        dh_k/dω (continuation, jumps) is computed only when ``derivative`` is asked for.
+        """
+        key = float(omega)
+        hit = self._solve_cache.get(key)
+        if hit is not None and (hit[2] is not None or not derivative):
+            if hit[0].shape[0] >= H:
+                return [hit[0][:H], hit[1][:H], None if hit[2] is None else hit[2][:H]]
+            start, (h0, U0, dh0) = hit[0].shape[0] + 1, hit
+        else:
+            start, h0, U0, dh0 = 1, None, None, None
+        speed = self.speed(omega)
+        nc = self.n_coords
+        h = np.empty((H, nc, nc), dtype=complex)
+        dh = np.empty((H, nc, nc), dtype=complex) if derivative or dh0 is not None else None
+        U = np.empty((H, len(self.output_dofs), nc), dtype=complex)
+        if start > 1:
+            h[: start - 1], U[: start - 1] = h0, U0
+            if dh is not None:
+                dh[: start - 1] = dh0
+        derivative = dh is not None
+        poles = self.method == "modal" and not self._red_bear and omega > 0
+        for k in range(start, H + 1):
+            w = k * omega
+            pr = self._pole_residues(k) if poles else None
+            if pr is not None:
+                lam, cw, co, Y = pr
+                g = 1.0 / (omega - lam)
+                Yg = Y * g[:, None]
+                h[k - 1] = cw @ Yg
+                U[k - 1] = co @ Yg
+                if derivative:
+                    dh[k - 1] = -cw @ (Yg * g[:, None])
+            elif self.method == "direct":
+                keep, sel, Z, rows, cols, Wk, out = self._restricted()
+                Z.data = self.model.dynamic_stiffness_data(w, speed)[sel]
+                lu = spla.splu(Z, permc_spec="MMD_AT_PLUS_A")
+                u = lu.solve(Wk)
+                h[k - 1] = Wk.T.real @ u
+                U[k - 1] = u[out]
+                if derivative:  # dh = -vᵀ dZ u, summed over the non-zeros of dZ
+                    v = lu.solve(Wk, trans="T")
+                    d = self._dZ(k, omega, speed, False)[sel]
+                    dh[k - 1] = -np.einsum("ri,r,rj->ij", v[rows], d, u[cols])
+            else:
+                Z = self._reduced_Z(w, speed)
+                Wr = self._W_red.astype(complex)
+                lu = sla.lu_factor(Z)
+                y = sla.lu_solve(lu, Wr)
+                h[k - 1] = self._W_red.T @ y
+                U[k - 1] = self.basis[self.output_dofs] @ y
+                if derivative:
+                    x = sla.lu_solve(lu, Wr, trans=1)
+                    dh[k - 1] = -x.T @ (self._dZ(k, omega, speed, True) @ y)
+        if len(self._solve_cache) > 20000:
+            self._solve_cache.clear()
+        out = [h, U, dh]
+        self._solve_cache[key] = out
+        return out
+
+    def receptance(self, omega: float, H: int) -> NDArray:
+        """h_k = Wᵀ Z_k⁻¹ W for k = 1..H: shape (H, n_nl, n_nl) [m/N]."""
+        return self._solve(omega, H)[0]
+
+    def kappa(self, omega: float, H: int) -> NDArray:
+        """κ_k, k = 0..H, shape (H+1, n_nl, n_nl) [N/m]."""
+        out = np.empty((H + 1, self.n_coords, self.n_coords), dtype=complex)
+        out[0] = self.mean_terms(self.speed(omega)).kappa
+        if H:
+            out[1:] = np.linalg.inv(self.receptance(omega, H))
+        return out
+
+    def kappa_derivative(self, omega: float, H: int) -> NDArray:
+        """dκ_k/dω = -κ_k (dh_k/dω) κ_k along a sweep (κ_0 taken speed-independent)."""
+        out = np.zeros((H + 1, self.n_coords, self.n_coords), dtype=complex)
+        if H:
+            h, _, dh = self._solve(omega, H, derivative=True)
+            kap = np.linalg.inv(h)
+            out[1:] = -kap @ dh @ kap
+        return out
+
+    def force_derivative(self, omega: float, H: int, lste: NDArray) -> NDArray:
+        """dF_k/dω = i k c_m E_k (k >= 1), 0 for the mean."""
+        out = np.zeros((H + 1, self.n_coords), dtype=complex)
+        k = np.arange(1, H + 1)[:, None]
+        out[1:] = 1j * k * self.c_m[None, :] * lste[1:]
+        return out
+
+    def force(self, omega: float, H: int, lste: NDArray) -> NDArray:
+        """F_k, k = 0..H, shape (H+1, n_nl) [N], for LSTE harmonics ``lste`` (H+1, n_nl) complex."""
+        F = np.empty((H + 1, self.n_coords), dtype=complex)
+        F[0] = self.mean_terms(self.speed(omega)).force
+        k = np.arange(1, H + 1)[:, None]
+        F[1:] = 1j * k * omega * self.c_m[None, :] * lste[1:]
+        return F
+
+    def recover(
+        self, omega: float, Y: NDArray, G: NDArray, F: NDArray, dofs: NDArray | None = None
+    ) -> NDArray:
+        """Complex harmonics Q_k (k = 0..H) of ``dofs`` (default: the output DOFs) from the mesh solution.
+
+        Y, G, F: (H+1, n_nl) complex harmonics of the mesh coordinates, of the nonlinear
+        forces and of the reduced forcing. Q_0 = K_r⁻¹ (F_static - W (G_0 - k_h Y_0)),
+        Q_k = Z_k⁻¹ W (F_k - G_k).
+        """
+        if dofs is not None and not np.array_equal(np.asarray(dofs), self.output_dofs):
+            self.set_output_dofs(dofs)
+        dofs = self.output_dofs
+        H = Y.shape[0] - 1
+        mt = self.mean_terms(self.speed(omega))
+        Q = np.empty((H + 1, len(dofs)), dtype=complex)
+        Q[0] = mt.x_static[dofs] - mt.x_mesh[dofs] @ (G[0] - self.k_h * Y[0]).real
+        if H:
+            U = self._solve(omega, H)[1]
+            Q[1:] = np.einsum("kdj,kj->kd", U, F[1:] - G[1:])
+        return Q
+
+    def state_space(self, omega: float, max_frequency: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """Dense (M, D, K, W) of the linear part projected on a modal basis, for stability.
+
+        Basis: the rigid-body and lowest modes of the linear system (meshes at k_h) up to
+        3 x ``max_frequency`` [rad/s] plus the static attachment vectors K_r⁻¹ W; D holds
+        C, internal damping, Ω G, bearing damping and c_m w wᵀ at the speed of mesh
+        frequency ``omega``; K leaves out k_h. Hysteretic damping has no time-domain form
+        and is left out.
+        """
+        key = float(max_frequency)
+        V = self._stability_basis.get(key)
+        if V is None:
+            m = self.model
+            Kr = (m.K + self._mesh_stiffness()).tocsc()
+            cutoff = 3.0 * key
+            lam, vec = _lowest_modes(
+                Kr, m.M, cutoff, start=30, cap=STABILITY_MODE_CAP, what="stability basis"
+            )
+            att = spla.splu((Kr + m.M).tocsc()).solve(self.W)
+            V, _ = np.linalg.qr(np.column_stack([vec[:, lam <= cutoff**2], att]))
+            if len(self._stability_basis) >= 8:
+                self._stability_basis.pop(next(iter(self._stability_basis)))
+            self._stability_basis[key] = V
+        speed = self.speed(omega)
+        P = lambda A: V.T @ (A @ V)  # noqa: E731
+        return P(self.model.M), P(self.model.damping(speed)), P(self.model.stiffness(speed)), V.T @ self.W
+
+
+def dense_reference(system: RotorSystem, omega: float, H: int) -> NDArray:
+    """h_k by dense solves of the full model (tests only)."""
+    mr = MeshReceptance(system, method="direct")
+    speed = mr.speed(omega)
+    out = []
+    for k in range(1, H + 1):
+        Z = mr.model.dynamic_stiffness(k * omega, speed).toarray()
+        out.append(mr.W.T @ sla.solve(Z, mr.W))
+    return np.array(out)

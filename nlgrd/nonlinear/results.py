@@ -1,0 +1,445 @@
+"""Results of harmonic-balance sweeps, continuation curves and time-domain sweeps.
+
+One family: :class:`SweepResult` holds one row per point of a sweep, of a continuation
+curve (``direction`` "curve") or of a time-integration sweep, with the same columns and
+flags; :class:`ContinuationResult` adds the arc length and the turning points to a
+curve. The per-point output metrics are in :mod:`nlgrd.nonlinear.metrics`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from nlgrd.errors import ModelError
+from nlgrd.nonlinear.metrics import METRIC_NAMES, NO_STABLE, MeshMetrics
+
+#: A point is stable when max |μ| < 1 + STABLE_RTOL.
+STABLE_RTOL = 1e-6
+
+_UNITS = {
+    "dte_mean": ("dte_mean [um]", 1e6),
+    "dte_rms": ("dte_rms [um]", 1e6),
+    "dte_p2p": ("dte_p2p [um]", 1e6),
+    "force_max": ("force_max [N]", 1.0),
+    "force_min": ("force_min [N]", 1.0),
+    "dslr": ("dslr [-]", 1.0),
+    "contact_loss_fraction": ("contact_loss_fraction [-]", 1.0),
+    "back_contact": ("back_contact", None),
+}
+
+
+#: Significant digits of the written Floquet multiplier modulus, and the band around 1
+#: written as exactly 1 (a neutral mode: an undamped mode or the drift of a free one).
+FLOQUET_DIGITS = 10
+NEUTRAL_BAND = 1e-9
+
+
+def floquet_output(values: NDArray, signed: bool = False) -> NDArray:
+    """max |μ| as written: 10 significant digits, neutral multipliers as exactly 1.
+
+    ``signed``: a multiplier's real or imaginary part, written to the same quantum 1e-9
+    absolute (a part much smaller than |μ| carries |μ|'s rounding, not its own).
+
+    The monodromy's eigenvalues carry rounding noise of ~1e-13 that also depends on the
+    alignment of the arrays in memory (it changes between runs of the same command); a
+    neutral multiplier would otherwise be written as 1 ± noise. Rounded to 10 digits
+    (quantum 1e-9, far above the noise, far below the stability margin 1e-6) the column
+    is the same from run to run and machine to machine.
+    """
+    v = np.asarray(values, dtype=float).copy()
+    if signed:
+        return np.round(v, FLOQUET_DIGITS - 1) + 0.0  # + 0.0: no "-0.0"
+    ok = np.isfinite(v) & (v > 0)
+    v[ok & (np.abs(v - 1.0) <= NEUTRAL_BAND)] = 1.0
+    e = np.floor(np.log10(v[ok]))
+    v[ok] = np.round(v[ok] / 10**e, FLOQUET_DIGITS - 1) * 10**e
+    return v
+
+
+def instability_kind(mu: NDArray, stable: NDArray) -> NDArray:
+    """Per point: "" (stable), or the dominant multiplier's kind where unstable: "real > 1"
+    (a fold: saddle-node), "real < -1" (period doubling), "complex" (a torus, Neimark-
+    Sacker); a pair counts as complex when |Im μ| > 1e-6 |μ| (rounding leaves ~1e-15)."""
+    mu = np.asarray(mu, dtype=complex)
+    out = np.full(mu.shape, "", dtype=object)
+    with np.errstate(invalid="ignore"):
+        cplx = np.abs(mu.imag) > 1e-6 * np.abs(mu)
+        unstable = ~np.asarray(stable, dtype=bool) & np.isfinite(mu.real)
+        out[unstable & cplx] = "complex"
+        out[unstable & ~cplx & (mu.real > 0)] = "real > 1"
+        out[unstable & ~cplx & (mu.real < 0)] = "real < -1"
+    return out
+
+
+def _significant(values: NDArray, digits: int) -> NDArray:
+    """``values`` rounded to ``digits`` significant digits (an estimate's noise not written)."""
+    v = np.asarray(values, dtype=float).copy()
+    ok = np.isfinite(v) & (v != 0)
+    e = np.floor(np.log10(np.abs(v[ok])))
+    v[ok] = np.round(v[ok] / 10**e, digits - 1) * 10**e
+    return v
+
+
+def check_quantity(quantity: str) -> None:
+    """Raise ModelError("quantity") unless ``quantity`` is one of :data:`METRIC_NAMES`."""
+    if quantity not in METRIC_NAMES:
+        raise ModelError("quantity", f"must be one of {', '.join(METRIC_NAMES)}, got {quantity!r}")
+
+
+@dataclass(frozen=True)
+class Jump:
+    """A jump of a swept branch between two consecutive points.
+
+    ``omega_from`` is the last point on the branch left, ``omega_to`` the first on the
+    new one [rad/s]; the fold lies between them. ``omega`` is their midpoint.
+    """
+
+    direction: str
+    omega_from: float
+    omega_to: float
+    value_from: float
+    value_to: float
+
+    @property
+    def omega(self) -> float:
+        """Midpoint estimate of the jump frequency [rad/s]."""
+        return 0.5 * (self.omega_from + self.omega_to)
+
+
+def find_jumps(
+    omega: NDArray, value: NDArray, direction: str, rel_tol: float = 0.15, ratio: float = 4.0
+) -> list[Jump]:
+    """Jumps in one sweep direction: steps much larger than their neighbours.
+
+    A step i -> i+1 (in sweep order) is a jump when |Δv| exceeds ``rel_tol`` times the
+    range of v over the sweep and ``ratio`` times both neighbouring steps.
+    """
+    v = np.asarray(value, dtype=float)
+    ok = np.isfinite(v)
+    w, v = np.asarray(omega, dtype=float)[ok], v[ok]
+    if v.size < 2:
+        return []
+    dv = np.abs(np.diff(v))
+    rng = np.ptp(v) + 1e-300
+    out = []
+    for i, step in enumerate(dv):
+        left = dv[i - 1] if i > 0 else 0.0
+        right = dv[i + 1] if i + 1 < dv.size else 0.0
+        if step > rel_tol * rng and step > ratio * left and step > ratio * right:
+            out.append(Jump(direction, float(w[i]), float(w[i + 1]), float(v[i]), float(v[i + 1])))
+    return out
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """A frequency sweep: one row per point, in sweep order (up points first, then down).
+
+    Attributes
+    ----------
+    omega : ndarray
+        Mesh frequency [rad/s].
+    direction : ndarray of str
+        "up" or "down" (or "curve" for a continuation).
+    harmonics : ndarray (n_points, n_nl, 2H+1)
+        Real harmonics of the nonlinear coordinates [m]; NaN where not converged.
+    converged : ndarray of bool
+    residual : ndarray
+        Relative residual (HB) or final period-to-period difference (time domain) [-].
+    iterations : ndarray of int
+        Solver iterations (HB) or simulated periods (time domain).
+    stable : ndarray of bool
+        Floquet stability (|μ| < 1 + 1e-6); False where unknown (see ``floquet_max``).
+    floquet_max : ndarray
+        Largest Floquet multiplier modulus [-]; NaN where not computed.
+    metrics : dict of str -> ndarray
+        The :data:`~nlgrd.nonlinear.metrics.METRIC_NAMES` per point (SI).
+    amplitudes : ndarray (n_points, H+1)
+        DTE harmonic amplitudes |δ_k| [m].
+    source : str
+        "harmonic balance (H=5, exact)", "time integration", ...
+    branch_switch : ndarray of bool
+        The point was reached only after the previous branch folded (Newton failed
+        from the previous solution and the arc-length jump found the new branch).
+    harmonic_error : ndarray, optional
+        Estimated relative error of the outputs from the truncation to H harmonics
+        (:func:`nlgrd.nonlinear.harmonic_convergence.check_harmonics`); NaN where not estimated.
+    H_check : int, optional
+        The H the estimate was made against.
+    no_stable : ndarray of bool
+        No stable mesh-periodic response was found at the point: the harmonics are those of
+        the unstable orbit the sweep reached (kept for the analysis of what grows from
+        it), the metrics are NaN, never drawn as the response.
+    dominant_multiplier : ndarray of complex
+        The Floquet multiplier of largest modulus (NaN where not computed): real > 1 (a
+        fold), real < -1 (period doubling) or a complex pair (a torus) at an instability.
+    """
+
+    omega: NDArray
+    direction: NDArray
+    harmonics: NDArray
+    converged: NDArray
+    residual: NDArray
+    iterations: NDArray
+    stable: NDArray
+    floquet_max: NDArray
+    metrics: dict
+    amplitudes: NDArray
+    source: str = ""
+    branch_switch: NDArray | None = None
+    harmonic_error: NDArray | None = None
+    H_check: int | None = None
+    no_stable: NDArray | None = None
+    dominant_multiplier: NDArray | None = None
+
+    def __post_init__(self):
+        if self.branch_switch is None:
+            object.__setattr__(self, "branch_switch", np.zeros(self.omega.size, dtype=bool))
+        if self.no_stable is None:
+            object.__setattr__(self, "no_stable", np.zeros(self.omega.size, dtype=bool))
+        if self.dominant_multiplier is None:
+            object.__setattr__(self, "dominant_multiplier", np.full(self.omega.size, np.nan + 0j))
+        if self.harmonic_error is None:
+            object.__setattr__(self, "harmonic_error", np.full(self.omega.size, np.nan))
+
+    @property
+    def H(self) -> int:
+        """Number of harmonics of the solutions."""
+        return (self.harmonics.shape[-1] - 1) // 2
+
+    def __len__(self) -> int:
+        return self.omega.size
+
+    @property
+    def stability_known(self) -> NDArray:
+        """Where Floquet multipliers were computed."""
+        return np.isfinite(self.floquet_max)
+
+    def __getattr__(self, name: str):
+        metrics = self.__dict__.get("metrics", {})
+        if name in metrics:
+            return metrics[name]
+        raise AttributeError(name)
+
+    def select(self, direction: str) -> SweepResult:
+        """The points of one sweep direction."""
+        keep = self.direction == direction
+        return SweepResult(
+            self.omega[keep],
+            self.direction[keep],
+            self.harmonics[keep],
+            self.converged[keep],
+            self.residual[keep],
+            self.iterations[keep],
+            self.stable[keep],
+            self.floquet_max[keep],
+            {k: v[keep] for k, v in self.metrics.items()},
+            self.amplitudes[keep],
+            self.source,
+            self.branch_switch[keep],
+            self.harmonic_error[keep],
+            self.H_check,
+            self.no_stable[keep],
+            self.dominant_multiplier[keep],
+        )
+
+    def failures(self) -> NDArray:
+        """Frequencies [rad/s] of the points that did not converge."""
+        return self.omega[~self.converged]
+
+    def jumps(
+        self,
+        quantities: str | Sequence[str] = ("dte_rms", "contact_loss_fraction", "force_max"),
+        rel_tol: float = 0.1,
+        ratio: float = 3.0,
+    ) -> list[Jump]:
+        """Jumps of each sweep direction, in sweep order.
+
+        A step is a jump when any of ``quantities`` jumps by the test of
+        :func:`find_jumps` (a jump onto or off a contact-loss branch shows most clearly in
+        the contact-loss fraction), when the solver had to leave the folded branch
+        (``branch_switch``), or where the sweep enters or leaves a range with no stable
+        mesh-periodic response (``no_stable``; its values are NaN). The reported values
+        are those of the first quantity.
+        """
+        qs = (quantities,) if isinstance(quantities, str) else tuple(quantities)
+        out = []
+        for d in dict.fromkeys(self.direction.tolist()):
+            part = self.select(d)
+            steps: set[int] = set(np.nonzero(part.branch_switch[1:])[0].tolist())
+            steps |= set(np.nonzero(np.diff(part.no_stable.astype(int)) != 0)[0].tolist())
+            for q in qs:
+                for j in find_jumps(part.omega, part.metrics[q], d, rel_tol, ratio):
+                    steps.add(int(np.nonzero(part.omega == j.omega_from)[0][0]))
+            v = part.metrics[qs[0]]
+            for i in sorted(steps):
+                if i + 1 < part.omega.size:
+                    out.append(
+                        Jump(d, float(part.omega[i]), float(part.omega[i + 1]), float(v[i]), float(v[i + 1]))
+                    )
+        return out
+
+    def to_frame(self) -> pd.DataFrame:
+        """Tidy table, one row per point, units in the column names.
+
+        Says only what is known: a point that did not converge has NA in every numeric
+        and flag column (``stable`` and ``back_contact`` included); ``stable`` is NA where
+        stability was not computed, never False.
+        """
+        ok = np.asarray(self.converged, dtype=bool)
+
+        def num(v):
+            return np.where(ok, np.asarray(v, dtype=float), np.nan)
+
+        def flag(v, known):
+            out = pd.array(np.asarray(v, dtype=bool), dtype="boolean")
+            out[~(ok & known)] = pd.NA
+            return out
+
+        iterations = pd.array(np.asarray(self.iterations), dtype="Int64")
+        iterations[~ok] = pd.NA
+        data = {
+            "mesh_frequency [Hz]": self.omega / (2 * np.pi),
+            "direction": self.direction,
+            "converged": ok,
+            "residual [-]": num(self.residual),
+            "iterations": iterations,
+            "stable": flag(self.stable, self.stability_known),
+            "floquet_max [-]": floquet_output(num(self.floquet_max)),
+            "H": pd.array(np.where(ok, self.H, 0), dtype="Int64"),
+            "harmonic_error [-]": _significant(num(self.harmonic_error), 3),
+            "response": pd.array(
+                np.where(self.no_stable, NO_STABLE, "periodic").astype(object), dtype="string"
+            ),
+            "instability": pd.array(instability_kind(self.dominant_multiplier, self.stable), dtype="string"),
+            "dominant_multiplier_re [-]": floquet_output(num(self.dominant_multiplier.real), signed=True),
+            "dominant_multiplier_im [-]": floquet_output(num(self.dominant_multiplier.imag), signed=True),
+        }
+        data["H"][~ok] = pd.NA
+        data["response"][~ok] = pd.NA
+        data["instability"][~ok | ~self.stability_known] = pd.NA
+        ok = ok & ~self.no_stable  # the metrics: of the response only
+        for name in METRIC_NAMES:
+            col, scale = _UNITS[name]
+            v = self.metrics[name]
+            data[col] = flag(v, ok) if scale is None else num(v) * scale
+        for k in range(self.amplitudes.shape[1]):
+            data[f"dte_amp_{k} [um]"] = num(self.amplitudes[:, k]) * 1e6
+        return pd.DataFrame(data)
+
+    def plot(self, quantity: str = "dte_rms", ax=None):
+        """Plot ``quantity`` against mesh frequency (:func:`nlgrd.plotting.nonlinear.plot_sweep`)."""
+        from nlgrd.plotting.nonlinear import plot_sweep
+
+        check_quantity(quantity)
+
+        return plot_sweep(self, quantity=quantity, ax=ax)
+
+
+def assemble_result(
+    omegas: Sequence[float],
+    directions: Sequence[str],
+    harmonics: Sequence[NDArray],
+    converged: Sequence[bool],
+    residual: Sequence[float],
+    iterations: Sequence[int],
+    multipliers_max: Sequence[float],
+    metrics: Sequence[MeshMetrics],
+    source: str,
+    branch_switch: Sequence[bool] | None = None,
+    no_stable: Sequence[bool] | None = None,
+    dominant: Sequence[complex] | None = None,
+) -> SweepResult:
+    """Pack per-point lists into a :class:`SweepResult`."""
+    fm = np.asarray(multipliers_max, dtype=float)
+    conv = np.asarray(converged, dtype=bool)
+    with np.errstate(invalid="ignore"):
+        stable = conv & np.isfinite(fm) & (fm < 1 + STABLE_RTOL)
+    H = max((m.dte_amplitudes.size for m in metrics), default=1) - 1
+    amps = np.array([np.resize(m.dte_amplitudes, H + 1) for m in metrics]).reshape(len(metrics), H + 1)
+    mdict = {name: np.array([m.as_tuple()[i] for m in metrics]) for i, name in enumerate(METRIC_NAMES)}
+    mdict["back_contact"] = mdict["back_contact"].astype(bool)
+    return SweepResult(
+        np.asarray(omegas, dtype=float),
+        np.asarray(directions, dtype=str),
+        np.asarray(harmonics, dtype=float),
+        conv,
+        np.asarray(residual, dtype=float),
+        np.asarray(iterations, dtype=int),
+        stable,
+        fm,
+        mdict,
+        amps,
+        source,
+        None if branch_switch is None else np.asarray(branch_switch, dtype=bool),
+        None,
+        None,
+        None if no_stable is None else np.asarray(no_stable, dtype=bool),
+        None if dominant is None else np.asarray(dominant, dtype=complex),
+    )
+
+
+@dataclass(frozen=True)
+class ContinuationResult:
+    """A solution curve in (ω, z) with stability per point.
+
+    Attributes
+    ----------
+    curve : SweepResult
+        Per-point data in curve order (``direction`` = "curve"); ``stable`` and
+        ``floquet_max`` from the Floquet multipliers.
+    arclength : ndarray
+        Scaled arc length s at each point [-].
+    turning_indices : ndarray of int
+        Indices i where dω/ds changes sign between points i and i+1.
+    turning_omegas : ndarray
+        Frequencies of the turning points [rad/s] (parabolic interpolation of ω(s)).
+    complete : bool
+        The curve left the frequency range past ``omega_end`` (False: the step size
+        collapsed, ``max_steps`` was reached, or the curve turned back and left the
+        range at ``omega_start``).
+    """
+
+    curve: SweepResult
+    arclength: NDArray
+    turning_indices: NDArray
+    turning_omegas: NDArray
+    complete: bool
+
+    @property
+    def omega(self) -> NDArray:
+        """Frequencies along the curve [rad/s]."""
+        return self.curve.omega
+
+    @property
+    def stable(self) -> NDArray:
+        """Stability per point."""
+        return self.curve.stable
+
+    def turning_points(self) -> NDArray:
+        """Frequencies of the turning points [rad/s]."""
+        return self.turning_omegas
+
+    def to_frame(self):
+        """Tidy table (see :meth:`SweepResult.to_frame`) with the arc length."""
+        df = self.curve.to_frame()
+        df.insert(1, "arclength [-]", self.arclength)
+        return df
+
+    def plot(self, quantity: str = "dte_rms", ax=None):
+        """Curve with stable parts solid and unstable parts dashed."""
+        from nlgrd.plotting.nonlinear import plot_continuation
+
+        return plot_continuation(self, quantity=quantity, ax=ax)
+
+
+def dominant_multiplier(mu: NDArray) -> tuple[float, complex]:
+    """max |μ| and the multiplier that has it (the one with Im >= 0 of a pair)."""
+    mu = np.asarray(mu, dtype=complex)
+    top = float(np.max(np.abs(mu)))
+    cand = mu[np.abs(mu) >= top * (1 - 1e-12)]
+    return top, complex(cand[np.argmax(cand.imag)])

@@ -1,0 +1,310 @@
+"""Frequency sweeps up and down by natural continuation (each point starts from the last).
+
+Up and down sweeps land on different branches where the response is multivalued;
+the difference between them shows the jumps (model.md §3). Non-converged points are
+kept, flagged and listed (:meth:`SweepResult.failures`), with NaN outputs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import partial
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from nlgrd.errors import ModelError
+from nlgrd.nonlinear import landing
+from nlgrd.nonlinear.arclength import jump_to_branch
+from nlgrd.nonlinear.floquet import floquet_multipliers
+from nlgrd.nonlinear.force_laws import BacklashMesh
+from nlgrd.nonlinear.harmonic_balance import HarmonicSolution, ReducedModel
+from nlgrd.nonlinear.landing import WANDER_ITER
+from nlgrd.nonlinear.metrics import MeshMetrics, metrics_from_harmonics
+from nlgrd.nonlinear.results import (
+    STABLE_RTOL,
+    SweepResult,
+    assemble_result,
+    dominant_multiplier,
+    instability_kind,
+)
+from nlgrd.nonlinear.solvers import solve
+
+#: How a sweep lands on the other branch after a fold (see :func:`sweep`).
+JUMP_STRATEGIES = ("arclength", "restart", "auto", "none")
+
+
+def sweep_orders(omegas: NDArray, directions: str | Sequence[str]) -> list[tuple[str, NDArray]]:
+    if isinstance(directions, str):
+        directions = ("up", "down") if directions == "both" else (directions,)
+    out = []
+    for d in directions:
+        if d not in ("up", "down"):
+            raise ModelError("directions", f"must be 'up', 'down' or 'both', got {d!r}")
+        out.append((d, np.sort(omegas) if d == "up" else np.sort(omegas)[::-1]))
+    return out
+
+
+def sweep(
+    model: ReducedModel,
+    omegas: ArrayLike,
+    H: int = 5,
+    directions: str | Sequence[str] = "both",
+    *,
+    method: str = "newton",
+    tol: float = 1e-10,
+    max_iter: int = 50,
+    fallback: bool = True,
+    stability: bool = True,
+    mesh: BacklashMesh | None = None,
+    n_samples: int = 2048,
+    z0: ArrayLike | None = None,
+    jump: str = "arclength",
+    chain: bool = True,
+    leave_unstable: bool = True,
+) -> SweepResult:
+    """Harmonic-balance sweeps up and/or down in frequency by natural continuation.
+
+    Each point starts from the last converged solution of the same sweep (the first
+    from the full-contact linear response, or ``z0``), so up and down sweeps follow
+    their branch until it folds and then jump.
+
+    Parameters
+    ----------
+    model : ReducedModel
+    omegas : array_like
+        Mesh frequencies [rad/s] (sorted internally per direction).
+    H : int
+        Number of harmonics.
+    directions : "up", "down", "both" or a sequence of them
+    method, tol, max_iter, fallback :
+        Passed to :func:`nlgrd.nonlinear.solvers.solve`.
+    stability : bool
+        Floquet multipliers per point (needs ``model.state_space``).
+    mesh : BacklashMesh, optional
+        The mesh for the output metrics (default: the model's first BacklashMesh).
+    n_samples : int
+        Samples per period for the force extremes.
+    chain : bool
+        With several directions, start each sweep from the last solution of the one
+        before (as a rig is swept up and then back down), instead of afresh.
+    jump : {"arclength", "none"}
+        When Newton fails from the previous point (its branch folded between the two
+        frequencies), "arclength" follows the curve through the fold by pseudo-arc-length
+        continuation to its first stable crossing of the new frequency
+        (:func:`nlgrd.nonlinear.arclength.jump_to_branch`): the branch a slow sweep jumps to on an
+        S-shaped response curve. "restart" instead restarts Newton from the full-contact
+        linear response and keeps the result if it converges (and is stable, when
+        stability is computed): much cheaper, but it may pick another coexisting stable
+        branch than a slow sweep would. "auto" takes, of the arc-length landing (or
+        "restart"'s when arc length fails) and the other sweep directions' stable
+        solutions at that frequency, the one nearest the orbit that folded (a second pass
+        when another direction's is nearer): where the curve folds more than once, the far
+        branch of arc length can be an orbit a slow sweep does not reach. "none"
+        leaves the point flagged as not converged.
+    leave_unstable : bool
+        With stability: at a point where the branch followed is unstable (by a fold or
+        not), do what a slow physical sweep does. A real multiplier > 1 (the orbit
+        departs along one direction, as past a fold): leave for a stable mesh-periodic
+        solution at that frequency (Newton from the full-contact response and from the
+        unstable orbit with its alternating part scaled by 1/4 .. 4, and with
+        ``jump="auto"`` the other directions' stable solutions there; the nearest one,
+        :func:`nlgrd.nonlinear.landing.restart`), listed as a jump. A complex pair or a real
+        multiplier < -1 (a torus or a period-2 orbit grows around the orbit; time
+        integration stays near it where the multiplier has just crossed,
+        tests/test_geared_time_domain.py; see docs/verification.md, "Leaving an unstable
+        orbit", for stronger instabilities), or no stable solution found: flag the point
+        ``no_stable`` with NaN metrics and its dominant multiplier, and go on from the
+        unstable orbit. False: stay on the branch and flag its points unstable.
+
+    Returns
+    -------
+    SweepResult
+    """
+    if jump not in JUMP_STRATEGIES:
+        raise ModelError("jump", f"must be one of {', '.join(map(repr, JUMP_STRATEGIES))}, got {jump!r}")
+    mesh = mesh or model.mesh
+    omegas = np.asarray(omegas, dtype=float)
+    kw = dict(
+        method=method,
+        tol=tol,
+        max_iter=max_iter,
+        fallback=fallback,
+        stability=stability,
+        mesh=mesh,
+        n_samples=n_samples,
+        z0=z0,
+        jump=jump,
+        chain=chain,
+        leave_unstable=leave_unstable,
+    )
+    result, landings = _sweep_pass(model, omegas, H, directions, **kw)
+    if jump != "auto" or len({d for d, _ in sweep_orders(omegas, directions)}) < 2:
+        return result
+    # a second pass where another direction's stable solution is a nearer landing
+    pool = _pool(result, stability)
+    nearer_landing = any(
+        landing.nearer(z, z_land, z_prev)
+        for direction, w, z_prev, z_land in landings
+        for d, z in pool.get(w, ())
+        if d != direction
+    )
+    # or a point of fold kind whose restarts found nothing stable, where another direction did
+    fold = instability_kind(result.dominant_multiplier, result.stable) == "real > 1"
+    missed = any(
+        d != result.direction[i]
+        for i in np.nonzero(result.no_stable & fold)[0]
+        for d, _ in pool.get(float(result.omega[i]), ())
+    )
+    if nearer_landing or missed:
+        return _sweep_pass(model, omegas, H, directions, pool=pool, **kw)[0]
+    return result
+
+
+def _pool(result: SweepResult, stability: bool) -> dict[float, list]:
+    """{frequency: [(direction, harmonics)]} of a sweep's stable response points."""
+    ok = result.converged & ~result.no_stable
+    if stability:
+        ok &= result.stable.astype(bool)
+    pool: dict[float, list] = {}
+    for i in np.nonzero(ok)[0]:
+        pool.setdefault(float(result.omega[i]), []).append((str(result.direction[i]), result.harmonics[i]))
+    return pool
+
+
+def _sweep_pass(
+    model,
+    omegas,
+    H,
+    directions,
+    *,
+    method,
+    tol,
+    max_iter,
+    fallback,
+    stability,
+    mesh,
+    n_samples,
+    z0,
+    jump,
+    chain,
+    leave_unstable,
+    pool=None,
+):
+    """One pass of :func:`sweep`; returns (result, landings after folds: (direction, w,
+    previous harmonics, landing harmonics)). ``pool``: other directions' solutions, also
+    candidates for a landing."""
+    landings = []
+    rows: dict[str, list] = {k: [] for k in ("w", "d", "z", "c", "r", "i", "f", "m", "j", "n", "u")}
+    z_end = None
+    for direction, order in sweep_orders(omegas, directions):
+        z, last_w = (z0 if z_end is None or not chain else z_end), None
+        for k, w in enumerate(order):
+            problem = model.at(float(w), H)
+            try_jump = jump in ("arclength", "auto") and z is not None and last_w is not None
+            sol: HarmonicSolution = solve(
+                problem,
+                z,
+                method=method,
+                tol=tol,
+                max_iter=max_iter,
+                fallback=fallback and not try_jump,
+                stall=try_jump,
+            )
+            switched, z_prev = False, z
+            auto = jump == "auto"
+
+            others = partial(landing.pool_candidates, model, problem, pool, w, direction, tol, max_iter)
+            if auto and sol.converged and try_jump and sol.iterations > WANDER_ITER:
+                sol, switched = landing.follow_branch(
+                    model, problem, sol, z, last_w, float(w), H, method, tol, max_iter, stability, others()
+                )
+            if not sol.converged and z is None and jump != "none":
+                sol = landing.approach(model, problem, order, k, H, method, tol, max_iter, stability) or sol
+            if not sol.converged and jump == "restart" and z is not None:
+                cand = landing.restart(model, problem, z, w, H, method, tol, max_iter)
+                if cand is not None:
+                    sol, switched = cand, True
+                    try_jump = False
+            if not sol.converged and try_jump:
+                zj, steps, folds = jump_to_branch(
+                    model, H, z, last_w, float(w), tol=tol, require_stable=stability
+                )
+                if zj is not None:
+                    switched = folds > 0
+                    sol = solve(problem, zj, method="newton", tol=tol, max_iter=max_iter, fallback=False)
+                    sol = HarmonicSolution(
+                        sol.omega,
+                        sol.harmonics,
+                        sol.converged,
+                        sol.residual,
+                        sol.iterations + steps,
+                        "newton after arc-length jump",
+                        sol.iterate,
+                        sol.message,
+                    )
+                    if switched and auto:
+                        sol = landing.nearest_landing(sol, z, others())
+                elif auto and (cand := landing.restart(model, problem, z, w, H, method, tol, max_iter)):
+                    sol, switched = cand, True
+                    sol = landing.nearest_landing(sol, z, others())
+                else:  # Newton from the previous point without giving up early, then hybr
+                    sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback)
+            fmax, dom, lost = np.nan, complex(np.nan, np.nan), False
+            if sol.converged:
+                z, last_w = sol.harmonics, float(w)
+                z_end = z
+                ss = model.linear_state_space(w) if stability else None
+                if ss is not None:
+                    fmax, dom = dominant_multiplier(
+                        floquet_multipliers(ss, model.nonlinearities, sol.harmonics, w)
+                    )
+                    if leave_unstable and fmax >= 1 + STABLE_RTOL:
+                        fold = abs(dom.imag) <= 1e-6 * abs(dom) and dom.real > 0
+                        cand = (
+                            landing.restart(model, problem, z, w, H, method, tol, max_iter) if fold else None
+                        )
+                        if fold and auto:
+                            for c in others():
+                                if cand is None or landing.distance(c, z) < landing.distance(cand, z):
+                                    cand = c
+                        if cand is None:
+                            lost = True
+                        else:
+                            sol, switched = cand, True
+                            z = z_end = sol.harmonics
+                            fmax, dom = dominant_multiplier(
+                                floquet_multipliers(ss, model.nonlinearities, z, w)
+                            )
+            coord = mesh.coord if mesh is not None else 0
+            met = (
+                metrics_from_harmonics(sol.harmonics[coord], w, mesh, n_samples)
+                if mesh is not None and not lost
+                else MeshMetrics.nan(H)
+            )
+            for k, v in zip(
+                "wdzcrifm",
+                (w, direction, sol.harmonics, sol.converged, sol.residual, sol.iterations, fmax, met),
+                strict=False,
+            ):
+                rows[k].append(v)
+            rows["j"].append(switched)
+            if switched and sol.converged and z_prev is not None:
+                landings.append((direction, float(w), z_prev, sol.harmonics))
+            rows["n"].append(lost)
+            rows["u"].append(dom)
+    result = assemble_result(
+        rows["w"],
+        rows["d"],
+        rows["z"],
+        rows["c"],
+        rows["r"],
+        rows["i"],
+        rows["f"],
+        rows["m"],
+        f"harmonic balance (H={H}, {method})",
+        rows["j"],
+        rows["n"],
+        rows["u"],
+    )
+    return result, landings

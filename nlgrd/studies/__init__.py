@@ -1,0 +1,1 @@
+"""Case studies: experimental data of the literature and the report job."""

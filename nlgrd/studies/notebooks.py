@@ -1,0 +1,191 @@
+"""The notebooks of ``notebooks/`` as reports: their parameters (checked before a run),
+execution by papermill with a per-cell timeout and the kernel's log kept, the executed
+notebook made deterministic (no timestamps or absolute paths) and exported to HTML.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from nlgrd.errors import ModelError
+from nlgrd.studies.index_page import write_text
+
+ROOT = Path(__file__).resolve().parents[2]
+NOTEBOOKS = ROOT / "notebooks"
+#: Jupyter kernel the notebooks run in.
+KERNEL = "python3"
+#: Longest time one notebook cell may run [s] (papermill ``execution_timeout``).
+CELL_TIMEOUT = 1800
+
+
+def notebook_parameters(notebook: str | os.PathLike) -> dict[str, Any]:
+    """The parameters a notebook declares in its cell tagged ``parameters`` (name -> info).
+
+    From :func:`papermill.inspect_notebook`; raises :class:`ModelError` when the notebook
+    has no such cell.
+    """
+    import papermill as pm
+
+    declared = pm.inspect_notebook(str(notebook))
+    if not declared:
+        raise ModelError("parameters", "the notebook has no cell tagged 'parameters'", str(notebook))
+    return declared
+
+
+def check_parameters(notebook: str | os.PathLike, parameters: Mapping[str, Any]) -> None:
+    """Raise :class:`ModelError` if any name in ``parameters`` is not a notebook parameter.
+
+    papermill itself only warns and then runs the notebook with its defaults, so a misspelt
+    parameter would silently be ignored.
+    """
+    declared = notebook_parameters(notebook)
+    unknown = sorted(set(parameters) - set(declared))
+    if unknown:
+        raise ModelError(
+            f"parameters.{unknown[0]}",
+            f"not a parameter of the notebook (misspelt?); it declares {', '.join(sorted(declared))}",
+            str(notebook),
+        )
+
+
+def relative_path(path: Path, start: Path) -> str:
+    """``path`` relative to ``start`` when both lie in the repository, else absolute."""
+    path, start = path.resolve(), start.resolve()
+    if path.is_relative_to(ROOT) and start.is_relative_to(ROOT):
+        return os.path.relpath(path, start)
+    return str(path)
+
+
+def run_notebook(
+    notebook: str | os.PathLike,
+    out_dir: str | os.PathLike,
+    parameters: Mapping[str, Any] | None = None,
+    *,
+    kernel_name: str = KERNEL,
+    timeout: float = CELL_TIMEOUT,
+    stream=None,
+    kernel_log: str | os.PathLike | None = None,
+) -> Path:
+    """Execute ``notebook`` with papermill; returns the executed notebook in ``out_dir``.
+
+    The parameter names are checked first (:func:`check_parameters`); ``out_dir`` is
+    created and passed as the notebook's ``out_dir`` parameter, where it writes its
+    figures and CSV files. The notebook runs in its own directory, so its default paths
+    (``../data/...``) hold. Each cell may run ``timeout`` seconds. ``stream`` (e.g.
+    ``sys.stdout``) receives the notebook's printed output as it runs: its progress.
+    With ``kernel_log``, the kernel process writes its own standard error (start-up
+    warnings, shutdown noise after an interrupt) to that file instead of ours. Raises
+    :class:`ModelError` for a parameter the notebook does not declare, and
+    ``papermill.PapermillExecutionError`` when a cell raised (the notebook executed up to
+    that cell is in ``out_dir``).
+    """
+    import papermill as pm
+
+    notebook = Path(notebook).resolve()
+    out = Path(out_dir)
+    params = dict(parameters or {})
+    params.setdefault("out_dir", relative_path(out, notebook.parent))
+    check_parameters(notebook, params)
+    out.mkdir(parents=True, exist_ok=True)
+    target = out / notebook.name
+    extra = {"kernel_manager_class": _logged_kernel_manager(Path(kernel_log))} if kernel_log else {}
+    pm.execute_notebook(
+        str(notebook),
+        str(target),
+        parameters=params,
+        kernel_name=kernel_name,
+        cwd=str(notebook.parent),
+        progress_bar=False,
+        stdout_file=stream,
+        stderr_file=None,
+        execution_timeout=timeout,
+        **extra,
+    )
+    return target
+
+
+def _logged_kernel_manager(log: Path):
+    """A jupyter kernel manager whose kernel process writes its standard error to ``log``."""
+    from jupyter_client.manager import AsyncKernelManager
+
+    class LoggedKernelManager(AsyncKernelManager):
+        async def _async_launch_kernel(self, kernel_cmd, **kw):  # the documented override point
+            with open(log, "ab") as fh:
+                kw.setdefault("stderr", fh)
+                await super()._async_launch_kernel(kernel_cmd, **kw)
+
+    return LoggedKernelManager
+
+
+_VOLATILE = ("start_time", "end_time", "duration", "input_path", "output_path")
+
+
+def make_deterministic(executed: str | os.PathLike, out_dir: str | None = None) -> None:
+    """Strip run-dependent metadata from an executed notebook, in place (atomically).
+
+    Removes papermill's timestamps, durations and absolute paths and nbclient's
+    per-cell execution times, and gives the injected-parameters cell a fixed id. With
+    ``out_dir``, the injected ``out_dir`` parameter is rewritten to it: the directory the
+    staged outputs are published to, so that the report reruns in place.
+    """
+    import nbformat
+
+    path = Path(executed)
+    nb = nbformat.read(path, as_version=4)
+    meta = nb.metadata.get("papermill", {})
+    for key in _VOLATILE:
+        meta.pop(key, None)
+    staged = meta.get("parameters", {}).get("out_dir")
+    if out_dir is not None and staged is not None:
+        meta["parameters"]["out_dir"] = out_dir
+    for cell in nb.cells:
+        cell.metadata.pop("execution", None)
+        for key in _VOLATILE:
+            cell.metadata.get("papermill", {}).pop(key, None)
+        if "injected-parameters" in cell.metadata.get("tags", []):
+            cell["id"] = "injected-parameters"
+            if out_dir is not None and staged is not None:
+                cell.source = cell.source.replace(repr(staged), repr(out_dir)).replace(
+                    f'"{staged}"', f'"{out_dir}"'
+                )
+    write_text(path, nbformat.writes(nb) + "\n")
+
+
+def export_html(executed: str | os.PathLike) -> Path:
+    """HTML of an executed notebook (nbconvert), next to it; returns its path."""
+    import nbformat
+    from nbconvert import HTMLExporter
+
+    path = Path(executed)
+    body, _ = HTMLExporter().from_notebook_node(nbformat.read(path, as_version=4))
+    target = path.with_suffix(".html")
+    write_text(target, body)
+    return target
+
+
+def parameter_rows(notebook: Path, executed: Path) -> list[list]:
+    """[name, value as run, the notebook's comment] for each declared parameter."""
+    import nbformat
+
+    injected = nbformat.read(executed, as_version=4).metadata.get("papermill", {}).get("parameters", {})
+    rows = []
+    for name, info in notebook_parameters(notebook).items():
+        value = repr(injected[name]) if name in injected else str(info.get("default"))
+        rows.append([name, value, str(info.get("help") or "")])
+    return rows
+
+
+def notebook_names(selected: tuple[str, ...] | None = None) -> list[str]:
+    """Names (stems) of the notebooks to run: all of ``notebooks/`` or the ``selected`` ones."""
+    names = sorted(p.stem for p in NOTEBOOKS.glob("*.ipynb"))
+    if selected is None:
+        return names
+    unknown = sorted(set(selected) - set(names))
+    if unknown:
+        raise ModelError(
+            "--notebook", f"no notebook {unknown[0]!r} in notebooks/ (there are {', '.join(names)})"
+        )
+    return [n for n in names if n in selected]

@@ -1,0 +1,488 @@
+"""The main job: build every report into ``reports/`` (``python -m nlgrd.studies.reports``).
+
+Parts: the modes and Campbell diagram of each model in ``data/models/``; the LSTE and
+tip-relief figures of the gears; every notebook of ``notebooks/`` executed by papermill
+into ``reports/<name>/`` (the notebook, its HTML, its PNG figures and CSV curves); and
+``reports/index.html`` (every figure, what it compares, the settings, the version).
+
+Complete or clearly not: a run builds into ``.reports.staging-<pid>`` beside
+``reports/`` and replaces it only when every part succeeded, by two renames with SIGINT
+and SIGTERM held until both are done, carrying over the files git tracks there. An
+interrupted or failed run leaves the previous complete set (or nothing) and says so in
+one line; staging folders of killed runs are removed at the next start. CSV files and
+the index are byte-identical on a rerun (no times; the index names the git commit);
+papermill's timestamps and absolute paths are removed from the executed notebooks.
+
+Options: ``--fast`` (the notebooks' quick mode, fewer Campbell speeds), ``--only PART``
+and ``--notebook NAME`` (rebuild some, keep the rest), ``-p NAME VALUE`` (a notebook
+parameter, checked against every notebook run before anything is built), ``--out DIR``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+import traceback
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from nlgrd.cli import main as cli_main
+from nlgrd.errors import ModelError
+from nlgrd.studies.index_page import SETTINGS_FILE, read_json, record_settings, write_json
+from nlgrd.studies.notebooks import (
+    NOTEBOOKS,
+    check_parameters,
+    export_html,
+    make_deterministic,
+    notebook_names,
+    parameter_rows,
+    relative_path,
+    run_notebook,
+)
+
+__all__ = ["build_reports", "main"]
+
+ROOT = Path(__file__).resolve().parents[2]
+#: Where ``make reports`` publishes.
+REPORTS = ROOT / "reports"
+#: Campbell speed range [rpm] START:STOP:COUNT, full and fast mode.
+CAMPBELL_RPM = {False: "0:15000:61", True: "0:15000:16"}
+PARTS = ("models", "gears", "notebooks")
+#: Exit status of an interrupted run (128 + SIGINT).
+INTERRUPTED = 130
+
+
+class ReportError(RuntimeError):
+    """A part of the report build failed."""
+
+
+# --------------------------------------------------------------------------------------
+# Parts
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Build:
+    """One run: where it publishes (``out``), where it builds (``stage``), in which mode."""
+
+    out: Path
+    stage: Path
+    fast: bool = False
+    notebooks: tuple[str, ...] | None = None
+    stream: Any = None
+    parameters: Mapping[str, Any] | None = None  # passed to every notebook (``-p NAME VALUE``)
+
+    @property
+    def mode(self) -> str:
+        return "fast" if self.fast else "full"
+
+
+def _captions(folder: Path, captions: Mapping[str, str]) -> None:
+    from nlgrd.plotting import record_caption
+
+    for name, text in captions.items():
+        record_caption(folder / name, text)
+
+
+def _cli(argv: list[str]) -> None:
+    """Run an ``nlgrd`` command; its Ctrl-C (status 130, stderr dropped) interrupts the build."""
+    buffer = io.StringIO()
+    with contextlib.redirect_stderr(buffer):
+        status = cli_main(argv)
+    if status == INTERRUPTED:
+        raise KeyboardInterrupt(f"nlgrd {argv[0]}")
+    sys.stderr.write(buffer.getvalue())
+    if status:
+        raise ReportError(f"nlgrd {argv[0]} {Path(argv[1]).name} exited with status {status}")
+
+
+def build_model_reports(build: Build) -> None:
+    """Modes and Campbell diagram of each model in data/models/."""
+    models = sorted((ROOT / "data" / "models").glob("*.toml"))
+    target = build.stage / "models"
+    rpm = CAMPBELL_RPM[build.fast]
+    captions = {}
+    for i, model in enumerate(models, 1):
+        print(f"[{i}/{len(models)}] {model.name}: modes and Campbell diagram", flush=True)
+        _cli(["modes", str(model), "--out", str(target)])
+        _cli(["campbell", str(model), "--rpm", rpm, "--orders", "1", "--out", str(target)])
+        captions[f"{model.stem}_modes.png"] = (
+            f"The first six modes of {model.name} at standstill: amplitude along each shaft of each "
+            "DOF family (lateral, torsional, axial) holding at least 5 % of the mode's kinetic "
+            "energy, with frequency, damping ratio (stability), kind and whirl in each title."
+        )
+        captions[f"{model.stem}_campbell.png"] = (
+            f"Damped natural frequencies of {model.name} against speed, coloured by whirl "
+            "(forward, backward, planar, no lateral motion), against the 1x order line, with the "
+            "critical speeds where they cross."
+        )
+    _captions(target, captions)
+    start, stop, count = rpm.split(":")
+    record_settings(target, {"mode": build.mode}, key="run")
+    record_settings(
+        target,
+        {
+            "models": ", ".join(m.name for m in models) + " (data/models/)",
+            "modes": "damped complex modes with gyroscopics at 0 rpm; 12 listed, 6 shapes drawn",
+            "Campbell diagram": f"{start}-{stop} rpm, {count} speeds, 10 modes, excitation order 1x",
+            "damping": "as in each model file (bearings, couplings, internal damping)",
+        },
+    )
+
+
+def build_gear_reports(build: Build) -> None:
+    """LSTE of the geared example and the tip-relief sweep of Kubo's gears."""
+    import numpy as np
+
+    from nlgrd.gear.geometry import GearGeometry
+    from nlgrd.gear.transmission_error import single_pair_deflection, tip_relief_sweep
+    from nlgrd.plotting import headless, save_figure
+
+    headless()
+    target = build.stage / "gears"
+    target.mkdir(parents=True, exist_ok=True)
+    captions, geared = {}, []
+    for model in sorted((ROOT / "data" / "models").glob("*.toml")):
+        if "[[gear_pairs]]" in model.read_text():
+            print(f"{model.name}: loaded static transmission error", flush=True)
+            _cli(["lste", str(model), "--out", str(target)])
+            geared.append(model.name)
+            captions[f"{model.stem}_lste.png"] = (
+                f"The gear pair of {model.name} at its static load over two mesh cycles: loaded static "
+                "transmission error against the unloaded one, mesh stiffness k(t) against its mean, "
+                "and the load of each tooth pair along the path of contact."
+            )
+    print("Kubo's gears: tip-relief sweep", flush=True)
+    teeth, module, face, load, n = 25, 4e-3, 15e-3, 2295.0, 41
+    geo = GearGeometry(teeth, teeth, module, face)
+    deflection = single_pair_deflection(geo, load)
+    sweep = tip_relief_sweep(geo, load, np.linspace(0, 2 * deflection, n))
+    ax = sweep.plot(design_deflection=deflection)
+    save_figure(
+        ax.figure,
+        target / "kubo_tip_relief_sweep.png",
+        "Peak-to-peak loaded static transmission error of Kubo's gears against the amount of "
+        "linear tip relief, with its minimum and the single-pair deflection W / k_pair.",
+        dpi=100,
+    )
+    ax.figure.clf()
+    sweep.to_frame().to_csv(target / "kubo_tip_relief_sweep.csv", index=False)
+    _captions(target, captions)
+    record_settings(target, {"mode": build.mode}, key="run")
+    record_settings(
+        target,
+        {
+            "LSTE": f"gear pair 0 of {', '.join(geared) or 'no model'} (data/models/) at its static load",
+            "tip-relief sweep": (
+                f"Kubo's gears: {teeth}/{teeth} teeth, module {module * 1e3:g} mm, face width "
+                f"{face * 1e3:g} mm, W = {load:g} N; {n} amounts from 0 to 2 x the single-pair "
+                f"deflection ({deflection * 1e6:.2f} µm)"
+            ),
+        },
+    )
+
+
+def build_notebook_reports(build: Build) -> list[Path]:
+    """Run the notebooks into ``stage/<name>/``; returns the directories.
+
+    The notebooks' printed progress goes to ``build.stream`` (default: standard output).
+    """
+    stream = build.stream or sys.stdout
+    names = notebook_names(build.notebooks)
+    done = []
+    for i, name in enumerate(names, 1):
+        nb = NOTEBOOKS / f"{name}.ipynb"
+        target = build.stage / name
+        print(
+            f"[{i}/{len(names)}] notebooks/{nb.name} -> {build.out.name}/{name}/ ({build.mode})", flush=True
+        )
+        t0 = time.perf_counter()
+        log = build.stage / f".{name}.kernel.log"
+        params = {"fast": build.fast, **(build.parameters or {})}
+        executed = run_notebook(nb, target, params, stream=stream, kernel_log=log)
+        log.unlink(missing_ok=True)
+        make_deterministic(executed, out_dir=relative_path(build.out / name, NOTEBOOKS))
+        export_html(executed)
+        record_settings(target, {"mode": build.mode}, key="run")
+        data = read_json(target / SETTINGS_FILE)
+        data["parameters"] = parameter_rows(nb, executed)
+        write_json(target / SETTINGS_FILE, data)
+        files = sorted(p.name for p in target.iterdir())
+        print(
+            f"    {len(files)} files ({sum(f.endswith('.png') for f in files)} PNG, "
+            f"{sum(f.endswith('.csv') for f in files)} CSV) in {time.perf_counter() - t0:.0f} s",
+            flush=True,
+        )
+        done.append(target)
+    return done
+
+
+BUILDERS = {"models": build_model_reports, "gears": build_gear_reports, "notebooks": build_notebook_reports}
+
+
+# --------------------------------------------------------------------------------------
+# Staging and publishing
+# --------------------------------------------------------------------------------------
+
+
+def staging_dir(out: Path, kind: str = "staging", pid: int | None = None) -> Path:
+    """``.<out name>.<kind>-<pid>`` beside ``out`` (same file system, so renames are atomic)."""
+    return out.parent / f".{out.name}.{kind}-{os.getpid() if pid is None else pid}"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's process
+        pass
+    return True
+
+
+def clean_stale(out: Path) -> list[Path]:
+    """Remove staging and old folders of runs that are no longer running; returns them.
+
+    A run killed between its two renames leaves no ``out`` and its previous set in
+    ``.<name>.old-<pid>``: that folder is renamed back to ``out``.
+    """
+    removed = []
+    for kind in ("old", "staging"):
+        for path in sorted(out.parent.glob(f".{out.name}.{kind}-*")):
+            pid = path.name.rpartition("-")[2]
+            if pid.isdigit() and int(pid) != os.getpid() and _alive(int(pid)):
+                continue
+            if kind == "old" and not out.exists():
+                os.rename(path, out)
+                print(f"restored the previous complete set of {out.name}/ from {path.name}", flush=True)
+                continue
+            shutil.rmtree(path, ignore_errors=True)
+            removed.append(path)
+    return removed
+
+
+def tracked_files(out: Path) -> list[str]:
+    """Paths (relative to ``out``) of the files git tracks there; README.md without git."""
+    try:
+        res = subprocess.run(
+            ["git", "ls-files", "-z", "--", "."], cwd=out, capture_output=True, text=True, check=True
+        )
+        return sorted(p for p in res.stdout.split("\0") if p)
+    except (OSError, subprocess.CalledProcessError):
+        return ["README.md"] if (out / "README.md").is_file() else []
+
+
+def _link_tree(src: Path, dst: Path) -> None:
+    """Copy ``src`` to ``dst`` by hard links (files are never rewritten in place), else copies."""
+
+    def link(a, b):
+        try:
+            os.link(a, b)
+        except OSError:
+            shutil.copy2(a, b)
+
+    if src.is_dir():
+        shutil.copytree(src, dst, copy_function=link)
+    else:
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        link(src, dst)
+
+
+@contextlib.contextmanager
+def _signals_held(reraise: bool = True):
+    """SIGINT and SIGTERM wait until the block is left, then interrupt (``reraise``) or not.
+
+    Their handlers only note them meanwhile (a signal mask would hold them in this thread
+    only: another thread, e.g. zmq's, would take them and interrupt the main thread).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending: list[int] = []
+    old = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(sig) not in (signal.SIG_IGN, None):
+            old[sig] = signal.signal(sig, lambda signum, frame: pending.append(signum))
+    try:
+        yield
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+        if pending and reraise:
+            raise KeyboardInterrupt(signal.Signals(pending[0]).name)
+
+
+def carry_over(build: Build, parts: tuple[str, ...]) -> None:
+    """Copy into the stage what this run keeps from the published set.
+
+    Always the files git tracks there (``reports/README.md``); for a partial run
+    (``--only``, ``--notebook``) also the folders of the parts it does not rebuild.
+    """
+    out, stage = build.out, build.stage
+    if not out.is_dir():
+        return
+    for rel in tracked_files(out):
+        if (out / rel).is_file() and not (stage / rel).exists():
+            _link_tree(out / rel, stage / rel)
+    if set(parts) == set(PARTS) and build.notebooks is None:
+        return
+    rebuilt = {"models", "gears"} & set(parts)
+    if "notebooks" in parts:
+        rebuilt |= set(notebook_names(build.notebooks))
+    for entry in sorted(out.iterdir()):
+        if entry.is_dir() and not entry.name.startswith(".") and entry.name not in rebuilt:
+            if not (stage / entry.name).exists():
+                _link_tree(entry, stage / entry.name)
+
+
+def _raise_interrupt(signum, frame):
+    raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
+def _summary(err: BaseException) -> str:
+    """One line on an error: a notebook cell's exception, else the first line of the message."""
+    cause = err.__cause__ or err
+    if hasattr(cause, "ename"):  # papermill.PapermillExecutionError
+        text = f"{cause.ename}: {cause.evalue} (cell {cause.exec_count})"
+    else:
+        text = next((line for line in str(cause).splitlines() if line.strip()), type(cause).__name__)
+    part = str(err).partition(":")[0] if isinstance(err, ReportError) else ""
+    return f"{part}: {text}" if part else text
+
+
+def _say(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+def build_reports(
+    out: Path = REPORTS,
+    parts: tuple[str, ...] = PARTS,
+    fast: bool = False,
+    notebooks: tuple[str, ...] | None = None,
+    stream=None,
+    parameters: Mapping[str, Any] | None = None,
+) -> int:
+    """Build ``parts`` into a stage and publish it to ``out``; returns the exit status.
+
+    0 when published; 1 when a part failed and 130 when interrupted (SIGINT or SIGTERM),
+    both leaving ``out`` as it was, with one line on standard error saying what it holds.
+    Publishing renames ``out`` to ``.<name>.old-<pid>`` and the stage to ``out`` with the
+    signals held, so an interrupt lands before both renames or after both.
+    """
+    out = Path(out).resolve()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    clean_stale(out)
+    build = Build(out, staging_dir(out), fast, notebooks, stream, parameters)
+    name = out.name + "/"
+    previous = (
+        f"{name} keeps the previous complete set"
+        if (out / "index.html").is_file()
+        else f"{name} has no complete set (nothing was published)"
+    )
+    published = False
+    main_thread = threading.current_thread() is threading.main_thread()
+    old_term = signal.signal(signal.SIGTERM, _raise_interrupt) if main_thread else None
+    t0 = time.perf_counter()
+    try:
+        build.stage.mkdir()
+        for part in PARTS:
+            if part in parts:
+                try:
+                    BUILDERS[part](build)
+                except (Exception, SystemExit) as err:
+                    raise ReportError(f"{part}: {err}") from err
+        carry_over(build, parts)
+        from nlgrd.studies.index_page import write_index
+
+        write_index(build.stage, fast=fast, parts=parts, root=ROOT)
+        old = staging_dir(out, "old")
+        with _signals_held():  # the swap: two renames, not interruptible between them
+            if out.exists():
+                os.rename(out, old)
+            os.rename(build.stage, out)
+            published = True
+        shutil.rmtree(old, ignore_errors=True)
+        print(f"reports written to {out} in {time.perf_counter() - t0:.1f} s", flush=True)
+        return 0
+    except KeyboardInterrupt:
+        with _signals_held(reraise=False):  # a second Ctrl-C does not cut the clean-up short
+            shutil.rmtree(build.stage, ignore_errors=True)
+            if published:
+                _say(f"interrupted after publishing: {name} holds this run's complete set")
+            else:
+                _say(f"interrupted: {previous}; this run's partial output was removed")
+        return INTERRUPTED
+    except Exception as err:
+        traceback.print_exc()
+        _say(
+            f"failed: {_summary(err)}; {previous}; this run's output is in {build.stage} "
+            "(removed at the next run)"
+        )
+        return 1
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, old_term)
+
+
+def _literal(text: str) -> Any:
+    """A ``-p`` value: a Python literal (number, bool, None, list ...) or else the text."""
+    import ast
+
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return text
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Build all reports; returns the exit status."""
+    parser = argparse.ArgumentParser(
+        prog="python -m nlgrd.studies.reports", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument("--fast", action="store_true", help="run the notebooks in their quick mode")
+    parser.add_argument("--only", choices=PARTS, action="append", help="build only these parts")
+    parser.add_argument("--notebook", action="append", help="run only this notebook (name without .ipynb)")
+    parser.add_argument("--out", default=str(REPORTS), help="folder to publish to (default: reports/)")
+    parser.add_argument(
+        "-p",
+        "--parameter",
+        nargs=2,
+        action="append",
+        metavar=("NAME", "VALUE"),
+        help="a notebook parameter for every notebook run (VALUE read as a Python literal, else text)",
+    )
+    args = parser.parse_args(argv)
+    parts = tuple(args.only or PARTS)
+    try:
+        selected = tuple(args.notebook) if args.notebook else None
+        names = notebook_names(selected)  # fail early on a misspelt name
+        params = {name: _literal(value) for name, value in args.parameter or ()}
+        if params and "notebooks" in parts:
+            for name in names:  # fail early on a misspelt parameter
+                check_parameters(NOTEBOOKS / f"{name}.ipynb", params)
+        return build_reports(Path(args.out), parts, args.fast, selected, parameters=params)
+    except KeyboardInterrupt:  # before the build started: nothing was touched
+        _say(f"interrupted before the build started: {Path(args.out).name}/ is unchanged")
+        return INTERRUPTED
+    except ModelError as err:
+        _say(f"python -m nlgrd.studies.reports: error: {err}")
+        return 2
+
+
+if __name__ == "__main__":
+    status = main()
+    if status == INTERRUPTED:  # its line is the last word: no shutdown noise of the abandoned kernel client
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.dup2(os.open(os.devnull, os.O_WRONLY), 2)
+    sys.exit(status)
