@@ -318,7 +318,7 @@ def timed_sweep(system, model, omegas, H, directions="both", stability=False) ->
     with Probe() as probe:
         t0 = time.perf_counter()
         res = geared_sweep(
-            system, mesh_frequencies=omegas, H=H, directions=directions, model=model, stability=stability
+            system, omegas=omegas, H=H, directions=directions, model=model, stability=stability
         )
         total = time.perf_counter() - t0
     m = res.mesh

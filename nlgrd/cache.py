@@ -12,6 +12,17 @@ class BoundedCache:
     """At most ``maxsize`` entries, the oldest dropped first (first in, first out).
 
     Keys are tuples of hashables; :meth:`get` computes a missing entry with ``make``.
+    A pickled cache keeps only its ``maxsize``: it is unpickled empty.
+
+    Parameters
+    ----------
+    maxsize : int
+        The largest number of entries kept.
+
+    Attributes
+    ----------
+    maxsize : int
+        The largest number of entries kept.
     """
 
     def __init__(self, maxsize: int = 16):

@@ -24,20 +24,18 @@ The option checks, the range parsing and the atomic output writer are in
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 import traceback
 import warnings
 from pathlib import Path
 
+from nlgrd.cli_sweep import cmd_sweep
 from nlgrd.errors import ModelError
 from nlgrd.io.command_line import (
     MAX_POINTS,
     Outputs,
     check_at_least,
-    check_quantity,
-    output_file,
     output_folder,
     parse_orders,
     parse_range,
@@ -84,7 +82,23 @@ def _stem(model: str) -> str:
 
 
 def cmd_modes(args) -> int:
-    """Modal analysis: table on screen, CSV and mode-shape PNG."""
+    """Modal analysis: table on screen, CSV and mode-shape PNG.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of ``nlgrd modes`` (:func:`build_parser`).
+
+    Returns
+    -------
+    int
+        The exit status: 0 when done.
+
+    Raises
+    ------
+    ModelError
+        For a bad option or model (:func:`main` prints it and exits with status 2).
+    """
     import numpy as np
 
     from nlgrd.io.model_file import load_model
@@ -121,7 +135,23 @@ def cmd_modes(args) -> int:
 
 
 def cmd_campbell(args) -> int:
-    """Campbell diagram: CSV of frequencies, CSV of critical speeds, PNG."""
+    """Campbell diagram: CSV of frequencies, CSV of critical speeds, PNG.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of ``nlgrd campbell`` (:func:`build_parser`).
+
+    Returns
+    -------
+    int
+        The exit status: 0 when done.
+
+    Raises
+    ------
+    ModelError
+        For a bad option or model (:func:`main` prints it and exits with status 2).
+    """
     import numpy as np
 
     from nlgrd.io.model_file import load_model
@@ -154,7 +184,23 @@ def cmd_campbell(args) -> int:
 
 
 def cmd_lste(args) -> int:
-    """Loaded static transmission error of a gear pair: CSV and PNG; the k_h of the dynamics."""
+    """Loaded static transmission error of a gear pair: CSV and PNG; the k_h of the dynamics.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of ``nlgrd lste`` (:func:`build_parser`).
+
+    Returns
+    -------
+    int
+        The exit status: 0 when done.
+
+    Raises
+    ------
+    ModelError
+        For a bad option or model (:func:`main` prints it and exits with status 2).
+    """
     from nlgrd.io.model_file import load_model
 
     folder = output_folder("--out", args.out)
@@ -238,213 +284,15 @@ def _lste_from_file(mesh, out: Outputs, csv: Path, png: Path, plt) -> tuple[str,
     return summary, computed
 
 
-class _Progress:
-    """A one-line progress bar on stderr (a final line only when stderr is not a terminal)."""
-
-    def __init__(self, label: str):
-        self.label = label
-
-    def __call__(self, i: int, n: int) -> None:
-        if sys.stderr.isatty():
-            bar = "#" * int(30 * i / n)
-            print(
-                f"\r{self.label} [{bar:<30}] {i}/{n}", end="" if i < n else "\n", file=sys.stderr, flush=True
-            )
-        elif i == n or i % max(1, n // 10) == 0:
-            print(f"{self.label}: {i}/{n}", file=sys.stderr, flush=True)
-
-
-def _harmonics_line(res) -> str:
-    """'H = 13 (estimated error 0.12 % against H = 17)' or 'H = 5' when H was given."""
-    if res.H_check is None:
-        return f"H = {res.H}"
-    e = [float(x) for x in res.harmonic_error if math.isfinite(x)]
-    worst = f"{100 * max(e):.2g} %" if e else "n/a"
-    return f"H = {res.H} (chosen; largest estimated error {worst} against H = {res.H_check})"
-
-
-class _Unit:
-    """Mesh frequencies [rad/s] to and from the unit the range was given in (rpm or Hz)."""
-
-    def __init__(self, rpm: bool, mesh_per_pinion: float):
-        self.name = "rpm" if rpm else "Hz"
-        # mesh frequency [rad/s] per pinion speed [rad/s]: N_p |s_p|
-        self.scale = mesh_per_pinion * math.pi / 30 if rpm else 2 * math.pi
-
-    def omega(self, value):
-        return value * self.scale
-
-    def __call__(self, omega, digits: int = 1) -> str:
-        return f"{omega / self.scale:.{digits}f}"
-
-
-def cmd_sweep(args) -> int:
-    """Nonlinear harmonic-balance sweep (or continuation) of the geared model: CSV, PNG, summary."""
-    import numpy as np
-
-    from nlgrd.io.model_file import load_model
-    from nlgrd.nonlinear.geared import build_geared_model
-    from nlgrd.nonlinear.harmonic_convergence import LADDER
-
-    if (args.rpm is None) == (args.hz is None):
-        raise ModelError(
-            "--rpm", "give the range as --rpm START:STOP:COUNT (pinion speed) or --hz (mesh frequency)"
-        )
-    option, text = ("--rpm", args.rpm) if args.rpm is not None else ("--hz", args.hz)
-    if args.harmonics is not None and not 1 <= args.harmonics <= 50:
-        raise ModelError("--harmonics", f"must be between 1 and 50, got {args.harmonics}")
-    quantity = check_quantity(args.quantity)
-    if args.continuation:
-        start, stop, count = parse_span(text, option)
-        values = np.array([start, stop])
-    else:
-        values, count = parse_range(text, option), None
-    if np.any(values <= 0):
-        raise ModelError(option, f"speeds and frequencies must be positive, got {text!r}")
-    out = output_file("--out", args.out, "sweep.csv")
-    png = output_file("--plot", args.plot, "sweep.png") if args.plot else out.with_suffix(".png")
-    if png.resolve() == out.resolve():
-        raise ModelError("--plot", f"the plot would overwrite the CSV {out}; give --out a .csv name")
-    system = load_model(args.model)
-    if len(system.gear_pairs) != 1:
-        raise ModelError(
-            "gear_pairs", f"the sweep needs exactly one gear pair, got {len(system.gear_pairs)}", args.model
-        )
-    gp = system.gear_pairs[0]
-    unit = _Unit(
-        args.rpm is not None, gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
-    )
-    omegas = unit.omega(values)
-    model = build_geared_model(system, float(omegas.max()), H=args.harmonics or LADDER[-1])
-    pyplot()
-    if args.continuation:
-        return _continuation(args, system, model, unit, omegas, count, quantity, out, png)
-    from nlgrd.nonlinear.geared import geared_sweep
-
-    res = geared_sweep(
-        system,
-        mesh_frequencies=omegas,
-        H=args.harmonics,
-        directions=args.direction,
-        model=model,
-        stability=not args.no_stability,
-        progress=_Progress("sweep"),
-    )
-    with Outputs() as files:
-        files.csv(res.to_frame(), out)
-        ax = res.plot(quantity=quantity)
-        ax.figure.tight_layout()
-        files.figure(ax.figure, png)
-        files.commit()
-    bad = np.atleast_1d(res.mesh.omega[~res.mesh.converged])
-    print(
-        f"sweep: {len(res.mesh)} points ({args.direction}), {_harmonics_line(res.mesh)}, "
-        f"{len(bad)} not converged"
-    )
-    if len(bad):
-        print(
-            f"not converged (NaN in the CSV, flagged converged = False) at {unit.name}: "
-            + ", ".join(unit(w) for w in bad)
-        )
-    lost = np.atleast_1d(res.mesh.omega[res.mesh.no_stable])
-    if len(lost):
-        print(
-            f"no stable mesh-periodic response (response column; NaN outputs) at {unit.name}: "
-            + ", ".join(unit(w) for w in lost)
-        )
-    for j in res.jumps():
-        print(f"jump ({j.direction}): {unit(j.omega_from)} -> {unit(j.omega_to)} {unit.name}")
-    print(f"wrote {out} and {png}")
-    return 0
-
-
-def _continuation(args, system, model, unit, omegas, count, quantity, out, png) -> int:
-    """``--continuation``: trace the curve up from START, down from STOP, or both; check the coverage.
-
-    COUNT, when given, sets the largest step so that successive points lie at most about
-    (STOP - START) / (COUNT - 1) apart in frequency (never coarser than the default).
-    """
-    import inspect
-
-    import pandas as pd
-
-    from nlgrd.nonlinear.continuation import continuation
-    from nlgrd.nonlinear.geared import geared_continuation
-    from nlgrd.plotting.nonlinear import plot_continuation
-
-    lo, hi = float(omegas.min()), float(omegas.max())
-    tol = 1e-9 * (hi - lo)  # the continuation's own range tolerance
-    defaults = {k: p.default for k, p in inspect.signature(continuation).parameters.items()}
-    names = ["up", "down"] if args.direction == "both" else [args.direction]
-    traces, frames = {}, []
-    for name in names:
-        begin, end = (lo, hi) if name == "up" else (hi, lo)
-        kwargs = {}
-        if count is not None:
-            # the tracer scales ω by its start value: a scaled step ds moves ω by at most ds * begin
-            ds_max = min(defaults["ds_max"], (hi - lo) / (count - 1) / begin)
-            kwargs = {
-                "ds": min(defaults["ds"], ds_max),
-                "ds_max": ds_max,
-                "max_steps": max(defaults["max_steps"], 10 * count),
-            }
-        res = geared_continuation(
-            system, begin, end, H=args.harmonics, model=model, stability=not args.no_stability, **kwargs
-        )
-        traces[name] = res
-        frame = res.to_frame()
-        frame.insert(1, "trace", name)
-        frame.insert(2, "pinion_speed [rpm]", model.pinion_rpm(res.omega))
-        frames.append(frame)
-        w = res.omega
-        reached = w.max() >= hi - tol if name == "up" else w.min() <= lo + tol
-        if reached:
-            how = f"reached {unit(end)} {unit.name}"
-        elif (w[-1] - begin) * (1 if end > begin else -1) < 0:  # left the range behind its start
-            how = f"turned back and left the range at {unit(w[-1])}, short of {unit(end)} {unit.name}"
-        else:
-            how = f"stopped at {unit(w[-1])} {unit.name} (the step size collapsed or the step limit was met)"
-        turns = ", ".join(unit(t) for t in res.turning_omegas)
-        print(
-            f"continuation {name} from {unit(begin)} {unit.name}: {len(w)} points spanning "
-            f"{unit(w.min())}-{unit(w.max())} {unit.name}, "
-            + (f"turning points at {turns} {unit.name}" if turns else "no turning point")
-            + f"; {how}; {_harmonics_line(res.curve)}"
-        )
-    with Outputs() as files:
-        files.csv(pd.concat(frames, ignore_index=True), out)
-        ax = None
-        for name, res in traces.items():
-            ax = plot_continuation(
-                res, quantity=quantity, ax=ax, color="k" if name == "up" else "C3", label=name
-            )
-        ax.figure.tight_layout()
-        files.figure(ax.figure, png)
-        files.commit()
-    print(f"wrote {out} and {png}")
-    top = min(hi, traces["up"].omega.max()) if "up" in traces else lo
-    bottom = max(lo, traces["down"].omega.min()) if "down" in traces else hi
-    requested = f"{unit(lo, 0)}-{unit(hi, 0)} {unit.name}"
-    if top >= bottom - tol:
-        print(f"continuation: covered the requested {requested}")
-        return 0
-    parts = [f"{unit(lo, 0)}-{unit(top, 0)}"] if "up" in traces else []
-    parts += [f"{unit(bottom, 0)}-{unit(hi, 0)}"] if "down" in traces else []
-    hint = "" if args.direction == "both" else "; try --direction both"
-    print(
-        f"nlgrd: error: continuation INCOMPLETE: covered {' and '.join(parts)} {unit.name} of the "
-        f"requested {requested}, nothing between {unit(top, 0)} and {unit(bottom, 0)} {unit.name} "
-        f"(the CSV and the plot hold the part computed){hint}",
-        file=sys.stderr,
-    )
-    return 1
-
-
-# ---------------------------------------------------------------------------- parser, main
-
-
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of ``nlgrd``."""
+    """The argument parser of ``nlgrd``.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The parser, one sub-command each for ``modes``, ``campbell``, ``lste`` and ``sweep``;
+        each sets ``func`` to its ``cmd_*`` function.
+    """
     p = argparse.ArgumentParser(
         prog="nlgrd",
         description="Nonlinear dynamics of geared rotor systems (finite-element shafts, "
@@ -557,7 +405,19 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the exit status (0 done, 1 failed, 2 bad input, 130 interrupted)."""
+    """Entry point; returns the exit status (0 done, 1 failed, 2 bad input, 130 interrupted).
+
+    Parameters
+    ----------
+    argv : list of str or None
+        The command-line arguments after the program name; None for ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit status: 0 done, 1 the computation failed or fell short, 2 bad input (or no
+        sub-command: the help is printed), 130 interrupted (Ctrl-C).
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):

@@ -41,14 +41,43 @@ class ModelError(ValueError):
 
 
 def check_finite(key: str, value: float | Iterable) -> None:
-    """Raise :class:`ModelError` if ``value`` (scalar or array) is not all finite."""
+    """Raise :class:`ModelError` if ``value`` (scalar or array) is not all finite.
+
+    Parameters
+    ----------
+    key : str
+        Dotted path of the field, named in the error.
+    value : float or array_like
+        The value (in its own unit), a scalar or anything ``numpy.asarray`` makes floats of.
+
+    Raises
+    ------
+    ModelError
+        When an element of ``value`` is NaN or infinite.
+    """
     arr = np.asarray(value, dtype=float)
     if not np.all(np.isfinite(arr)):
         raise ModelError(key, f"must be finite, got {value!r}")
 
 
 def check_positive(key: str, value: float, allow_zero: bool = False) -> None:
-    """Raise :class:`ModelError` unless ``value`` is a finite number > 0 (or >= 0)."""
+    """Raise :class:`ModelError` unless ``value`` is a finite number > 0 (or >= 0).
+
+    Parameters
+    ----------
+    key : str
+        Dotted path of the field, named in the error.
+    value : float
+        The value (in its own unit); an int or a numpy number, not a bool.
+    allow_zero : bool
+        Whether zero is accepted (``value >= 0``) instead of ``value > 0``.
+
+    Raises
+    ------
+    ModelError
+        When ``value`` is not a number, not finite, or not positive (negative when
+        ``allow_zero``).
+    """
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
         raise ModelError(key, f"must be a number, got {type(value).__name__} {value!r}")
     if not math.isfinite(value):
@@ -60,7 +89,20 @@ def check_positive(key: str, value: float, allow_zero: bool = False) -> None:
 
 
 def check_real(key: str, value: float) -> None:
-    """Raise :class:`ModelError` unless ``value`` is a finite real number."""
+    """Raise :class:`ModelError` unless ``value`` is a finite real number.
+
+    Parameters
+    ----------
+    key : str
+        Dotted path of the field, named in the error.
+    value : float
+        The value (in its own unit); an int or a numpy number, not a bool.
+
+    Raises
+    ------
+    ModelError
+        When ``value`` is not a number or not finite.
+    """
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
         raise ModelError(key, f"must be a number, got {type(value).__name__} {value!r}")
     if not math.isfinite(value):

@@ -58,7 +58,7 @@ def swept():
         f0 = float(round(gear_pair_mode(s)[0]))
         om = 2 * np.pi * np.linspace(0.7 * f0, 1.3 * f0, 110)
         model = build_geared_model(s, float(om.max()), H=5)
-        res = geared_sweep(s, mesh_frequencies=om, H=5, model=model, stability=False)
+        res = geared_sweep(s, omegas=om, H=5, model=model, stability=False)
     assert np.all(res.mesh.converged)
     return model, res
 

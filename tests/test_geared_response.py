@@ -41,7 +41,7 @@ def test_contact_never_lost_equals_linear_frequency_response(heavy):
     H = 5
     omegas = 2 * np.pi * np.linspace(1000, 8000, 15)
     model = build_geared_model(heavy, omegas.max(), H=H)
-    res = geared_sweep(heavy, mesh_frequencies=omegas, H=H, model=model, directions="up", stability=False)
+    res = geared_sweep(heavy, omegas=omegas, H=H, model=model, directions="up", stability=False)
     assert res.mesh.converged.all()
     assert np.all(res.mesh.metrics["contact_loss_fraction"] == 0)
     lin = assemble(heavy)  # mesh at k_h and c_m
@@ -64,7 +64,7 @@ def test_bearing_forces_match_full_model(heavy):
     H = 3
     om = 2 * np.pi * 3000.0
     model = build_geared_model(heavy, om, H=H)
-    res = geared_sweep(heavy, mesh_frequencies=[om], H=H, model=model, directions="up", stability=False)
+    res = geared_sweep(heavy, omegas=[om], H=H, model=model, directions="up", stability=False)
     lin = assemble(heavy)
     w = model.receptance.W[:, 0]
     E = real_to_complex(model.mesh.offset(H)[0])
@@ -87,7 +87,7 @@ def test_fe_with_stiff_shafts_close_to_single_dof():
 
     s = load_model(KUBO)
     omegas = 2 * np.pi * np.linspace(3000, 6000, 61)
-    fe = geared_sweep(s, mesh_frequencies=omegas, H=5, directions="down", stability=False)
+    fe = geared_sweep(s, omegas=omegas, H=5, directions="down", stability=False)
     sd = sweep(sdof_model(s).reduced_model(), omegas, H=5, directions="down", stability=False)
     f_fe = omegas[np.nanargmax(fe.mesh.metrics["dslr"])]
     f_sd = omegas[np.nanargmax(sd.metrics["dslr"])]
@@ -108,7 +108,7 @@ def test_continuation_unstable_branch_between_jumps():
     model = build_geared_model(s, hi, H=H)
     step = 2 * np.pi * 20
     grid = np.arange(lo, hi + step / 2, step)
-    sw = geared_sweep(s, mesh_frequencies=grid, H=H, model=model, stability=False)
+    sw = geared_sweep(s, omegas=grid, H=H, model=model, stability=False)
     jumps = sw.jumps()
     up = [j for j in jumps if j.direction == "up"]
     down = [j for j in jumps if j.direction == "down"]
@@ -160,7 +160,7 @@ def test_stability_basis_gives_the_verdicts_of_the_full_basis():
     f0 = gear_pair_mode(s)[0]
     om = 2 * np.pi * np.linspace(0.6 * f0, 1.3 * f0, 40)
     model = build_geared_model(s, om.max(), H=5)
-    res = geared_sweep(s, mesh_frequencies=om, H=5, model=model, stability=False)
+    res = geared_sweep(s, omegas=om, H=5, model=model, stability=False)
     assert np.all(res.mesh.converged)
     big_model = build_geared_model(s, om.max(), H=5)
     nl = model.reduced.nonlinearities
@@ -205,7 +205,7 @@ def test_sweep_leaves_unstable_branches():
     rpm = np.linspace(4000, 16000, 121)
     model = build_geared_model(kubo, 2 * np.pi * 16000 / 60 * 25 * 1.01, H=5)
     om = model.mesh_frequency(rpm)
-    stay = geared_sweep(kubo, mesh_frequencies=om, H=5, model=model)
+    stay = geared_sweep(kubo, omegas=om, H=5, model=model)
     from nlgrd.nonlinear.sweep import sweep
 
     kept = sweep(model.reduced, om, 5, leave_unstable=False, jump="auto")
@@ -243,8 +243,8 @@ def test_no_stable_response_confirmed_by_time_integration():
     kubo = load_model(KUBO)
     model = build_geared_model(kubo, 2 * np.pi * 16000 / 60 * 25 * 1.01, H=5)
     om = model.mesh_frequency(np.array([13600.0, 13900.0]))
-    hb = geared_sweep(kubo, mesh_frequencies=om, H=5, model=model, directions="up").mesh
+    hb = geared_sweep(kubo, omegas=om, H=5, model=model, directions="up").mesh
     assert hb.stable[0] and hb.no_stable[1]
-    td = time_sweep(model, om, "up")
+    td = time_sweep(model, om, "up").to_frame()
     assert bool(td["converged"].iloc[0]) and not bool(td["converged"].iloc[1])
     assert td["dte_rms [um]"].iloc[0] == pytest.approx(hb.dte_rms[0] * 1e6, rel=1e-3)

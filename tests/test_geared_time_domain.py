@@ -92,8 +92,8 @@ def check_case(case):
     assert system.n_dofs >= 100
     omegas = 2 * np.pi * freqs
     model = build_geared_model(system, float(omegas.max()), H=9)
-    hb = geared_sweep(system, mesh_frequencies=omegas, H=9, model=model, stability=True).to_frame()
-    td = time_sweep(model, omegas, steps_per_period=steps, tol=1e-5)
+    hb = geared_sweep(system, omegas=omegas, H=9, model=model, stability=True).to_frame()
+    td = time_sweep(model, omegas, steps_per_period=steps, tol=1e-5).to_frame()
     assert hb["converged"].all(), hb[~hb["converged"]]
     key = ["direction", "mesh_frequency [Hz]"]
     hb, td = hb.sort_values(key).reset_index(drop=True), td.sort_values(key).reset_index(drop=True)

@@ -68,7 +68,7 @@ def test_round_trip_recovers_coefficients(tmp_path, endpoint, unit):
     path = tmp_path / "ste.csv"
     values = signal_um(phase) * (1.0 if unit == "um" else 1e-6)
     write_lste_csv(path, phase, values * (1e-6 if unit == "um" else 1.0), unit=unit)
-    ex = read_lste_csv(path, n_harmonics=5)
+    ex = read_lste_csv(path, H=5)
     assert abs(ex.e0 * 1e6 - E0_UM) < 1e-12
     assert np.max(np.abs(ex.a * 1e6 - A_UM)) < 1e-12
     assert np.max(np.abs(ex.b * 1e6 - B_UM)) < 1e-12
@@ -87,7 +87,7 @@ def test_roll_angle_column_and_offset_phase(tmp_path):
     lines = ["# LSTE from a load distribution program", "roll_angle, ste_um"]
     lines += [f"{a!r}, {v!r}" for a, v in zip(angle.tolist(), signal_um(phase).tolist(), strict=True)]
     path.write_text("\n".join(lines) + "\n")
-    ex = read_lste_csv(path, n_harmonics=5, teeth_pinion=z1)
+    ex = read_lste_csv(path, H=5, teeth_pinion=z1)
     assert np.max(np.abs(ex.a * 1e6 - A_UM)) < 1e-10
     assert np.max(np.abs(ex.b * 1e6 - B_UM)) < 1e-10
     with pytest.raises(ModelError) as exc:

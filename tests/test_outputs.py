@@ -63,6 +63,31 @@ def test_sweep_without_stability_writes_stability_as_unknown():
     assert df["stable"].isna().all() and df["floquet_max [-]"].isna().all()
 
 
+def test_time_integration_is_the_same_result_family_with_its_residual_named():
+    """A time-integration sweep is a SweepResult like a harmonic-balance sweep: the same
+    table, but its residual column names what it is (the period-to-period difference, not
+    a harmonic-balance residual) and ``stable`` is NA (not computed), never True/False."""
+    from nlgrd.nonlinear.results import RESIDUAL_COLUMNS, SweepResult
+    from nlgrd.timedomain.sdof import time_sweep
+
+    om = KUBO_SDOF.natural_frequency * np.array([0.5, 0.55])
+    td = time_sweep(KUBO_SDOF, om, "up")
+    hb = sweep(KUBO_SDOF.reduced_model(), om, H=5, directions="up", stability=True)
+    assert isinstance(td, SweepResult) and td.residual_kind == "period difference"
+    f_td, f_hb = td.to_frame(), hb.to_frame()
+    assert "period_difference [-]" in f_td and "residual [-]" not in f_td
+    assert "residual [-]" in f_hb and "period_difference [-]" not in f_hb
+    def named(frame, residual):  # the amplitude columns follow each result's H
+        return {c for c in frame.columns if not c.startswith("dte_amp_")} - {residual}
+
+    assert named(f_td, "period_difference [-]") == named(f_hb, "residual [-]")
+    assert f_td["converged"].all() and f_td["stable"].isna().all() and f_hb["stable"].all()
+    assert str(f_td["stable"].dtype) == "boolean" == str(f_hb["stable"].dtype)
+    assert set(RESIDUAL_COLUMNS) == {"relative residual", "period difference"}
+    with pytest.raises(ModelError, match="residual_kind"):
+        dc.replace(hb, residual_kind="error")
+
+
 def test_continuation_residual_is_the_sweep_residual_and_converged_is_computed():
     """Each curve point's residual equals max|R| / max(|L z|, |G|, |F|) recomputed at that
     point (the measure sweeps converge on), to 1e-6 relative or 1e-15 absolute, and
@@ -90,7 +115,7 @@ def test_modal_receptances_and_floquet_are_byte_identical_in_one_process():
     frames = []
     for _ in range(2):
         m = build_geared_model(s, om.max(), H=3, receptance="modal")
-        frames.append(geared_sweep(s, mesh_frequencies=om, H=3, model=m).to_frame())
+        frames.append(geared_sweep(s, omegas=om, H=3, model=m).to_frame())
     a, b = (f.to_csv(index=False) for f in frames)
     assert a == b
     ok = frames[0]["converged"].to_numpy(bool)
@@ -105,9 +130,9 @@ def test_reused_model_refuses_frequencies_and_harmonics_it_was_not_built_for():
     f0 = 2 * np.pi * gear_pair_mode(s)[0]
     m = build_geared_model(s, f0, H=3)
     with pytest.raises(ModelError, match="built for mesh frequencies"):
-        geared_sweep(s, mesh_frequencies=np.array([0.9, 1.5]) * f0, H=3, model=m)
+        geared_sweep(s, omegas=np.array([0.9, 1.5]) * f0, H=3, model=m)
     with pytest.raises(ModelError, match="H <= 3"):
-        geared_sweep(s, mesh_frequencies=np.array([0.9]) * f0, H=5, model=m)
+        geared_sweep(s, omegas=np.array([0.9]) * f0, H=5, model=m)
 
 
 def test_stability_basis_follows_the_requested_cutoff():

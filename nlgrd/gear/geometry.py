@@ -53,14 +53,41 @@ _MEMBERS = ("pinion", "gear")
 
 
 def involute(angle: ArrayLike) -> NDArray | float:
-    """Involute function inv α = tan α - α of a pressure angle α [rad]."""
+    """Involute function inv α = tan α - α of a pressure angle α [rad].
+
+    Parameters
+    ----------
+    angle : array_like
+        Pressure angle α [rad].
+
+    Returns
+    -------
+    float or ndarray
+        inv α [rad], a float for a scalar ``angle``, else shaped like it.
+    """
     a = np.asarray(angle, dtype=float)
     out = np.tan(a) - a
     return float(out) if out.ndim == 0 else out
 
 
 def inverse_involute(value: float) -> float:
-    """Pressure angle α [rad] whose involute function tan α - α equals ``value`` (>= 0)."""
+    """Pressure angle α [rad] whose involute function tan α - α equals ``value`` (>= 0).
+
+    Parameters
+    ----------
+    value : float
+        Involute function value inv α [rad], finite and >= 0.
+
+    Returns
+    -------
+    float
+        α [rad] in [0, π/2).
+
+    Raises
+    ------
+    ValueError
+        When ``value`` is negative or not finite.
+    """
     if not math.isfinite(value) or value < 0:
         raise ValueError(f"involute value must be finite and >= 0, got {value!r}")
     if value == 0:

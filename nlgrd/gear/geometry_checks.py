@@ -18,7 +18,18 @@ _MEMBERS = ("pinion", "gear")
 
 
 def check_cutter(g: GearGeometry) -> None:
-    """The cutter tip round fits on the cutter tooth (its flat half-width u_c >= 0)."""
+    """The cutter tip round fits on the cutter tooth (its flat half-width u_c >= 0).
+
+    Parameters
+    ----------
+    g : GearGeometry
+        The gear pair being validated.
+
+    Raises
+    ------
+    ModelError
+        Naming ``root_radius_coefficient`` when the tip round does not fit.
+    """
     a = g.pressure_angle
     h_f, rho = g.dedendum_coefficient, g.root_radius_coefficient
     if h_f <= rho * (1.0 - math.sin(a)):
@@ -34,7 +45,19 @@ def check_cutter(g: GearGeometry) -> None:
 
 
 def check_radii(g: GearGeometry) -> None:
-    """Tip outside base and root circles, teeth not pointed, some involute left."""
+    """Tip outside base and root circles, teeth not pointed, some involute left.
+
+    Parameters
+    ----------
+    g : GearGeometry
+        The gear pair being validated.
+
+    Raises
+    ------
+    ModelError
+        Naming ``profile_shift_*``, ``tip_diameter_*`` or ``tip_rounding``, the field
+        to change.
+    """
     for i, member in enumerate(_MEMBERS):
         key = f"tip_diameter_{member}"
         ra, rb, rf = g.tip_radii[i], g.base_radii[i], g.root_radii[i]
@@ -59,7 +82,23 @@ def check_radii(g: GearGeometry) -> None:
 
 def check_mesh(g: GearGeometry) -> None:
     """Centre distance, tip clearance, no involute interference, contact ratio >= 1;
-    warns of contact below the form circle."""
+    warns of contact below the form circle.
+
+    Parameters
+    ----------
+    g : GearGeometry
+        The gear pair being validated.
+
+    Raises
+    ------
+    ModelError
+        Naming ``centre_distance``, ``tip_diameter_*`` or ``contact_ratio`` (ε_α < 1).
+
+    Warns
+    -----
+    UserWarning
+        When a tip contacts the mating flank below its form circle (trochoid interference).
+    """
     a = g.operating_centre_distance
     rb1, rb2 = g.base_radii
     if a <= rb1 + rb2:
@@ -116,7 +155,18 @@ def check_mesh(g: GearGeometry) -> None:
 
 
 def warn_undercut(g: GearGeometry) -> None:
-    """Warns when a gear is undercut, z < 2 (h_a* - x) / sin² α."""
+    """Warns when a gear is undercut, z < 2 (h_a* - x) / sin² α.
+
+    Parameters
+    ----------
+    g : GearGeometry
+        The gear pair being validated.
+
+    Warns
+    -----
+    UserWarning
+        For each undercut member.
+    """
     s2 = math.sin(g.pressure_angle) ** 2
     for i, member in enumerate(_MEMBERS):
         z = g.teeth[i]

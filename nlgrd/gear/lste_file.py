@@ -18,7 +18,7 @@ column, names case-insensitive:
 - ``ste_m`` (metres) or ``ste_um`` (micrometres): the static transmission error.
 
 The phase must increase strictly. If the last sample lies one period after the first
-(the file includes the endpoint) the two values must agree (to ``periodic_tolerance``
+(the file includes the endpoint) the two values must agree (to ``periodic_rtol``
 times the peak-to-peak value) and the last sample is dropped; otherwise the samples
 must fill one period, the gap from the last sample to the first plus one period
 being no longer than 1.5 times the largest spacing inside the file.
@@ -96,14 +96,14 @@ class MeshExcitation:
         """Number H of harmonics held."""
         return int(self.a.size)
 
-    def harmonics(self, n_harmonics: int | None = None) -> NDArray:
+    def harmonics(self, H: int | None = None) -> NDArray:
         """Complex coefficients E_m, m = 0 .. H, with e = Re Σ E_m exp(i m ω t) [m].
 
         E_0 = e0, E_m = a_m - i b_m; zero beyond the harmonics held, truncated below.
         """
-        H = self.n_harmonics if n_harmonics is None else int(n_harmonics)
+        H = self.n_harmonics if H is None else int(H)
         if H < 0:
-            raise ValueError("n_harmonics must be >= 0")
+            raise ValueError("H must be >= 0")
         out = np.zeros(H + 1, dtype=complex)
         out[0] = self.e0
         n = min(H, self.n_harmonics)
@@ -130,9 +130,9 @@ class MeshExcitation:
         """Copy with e0 = 0."""
         return MeshExcitation(0.0, self.a, self.b)
 
-    def truncated(self, n_harmonics: int) -> MeshExcitation:
-        """Copy keeping harmonics 1 .. ``n_harmonics`` (zero-padded if more than held)."""
-        E = self.harmonics(n_harmonics)
+    def truncated(self, H: int) -> MeshExcitation:
+        """Copy keeping harmonics 1 .. ``H`` (zero-padded if more than held)."""
+        E = self.harmonics(H)
         return MeshExcitation(self.e0, np.real(E[1:]), -np.imag(E[1:]))
 
     @property
@@ -142,9 +142,9 @@ class MeshExcitation:
         return float(np.ptp(self.value(phase)))
 
     @classmethod
-    def fit(cls, phase: ArrayLike, values: ArrayLike, n_harmonics: int) -> MeshExcitation:
+    def fit(cls, phase: ArrayLike, values: ArrayLike, H: int) -> MeshExcitation:
         """Least-squares Fourier fit of samples over one period (see :func:`fourier_fit`)."""
-        return fourier_fit(phase, values, n_harmonics)
+        return fourier_fit(phase, values, H)
 
     def to_frame(self):
         """Coefficients as a tidy :class:`pandas.DataFrame` (µm), harmonic 0 holding e0."""
@@ -173,7 +173,7 @@ class MeshExcitation:
         Path(path).write_text(text, encoding="utf-8")
 
 
-def fourier_fit(phase: ArrayLike, values: ArrayLike, n_harmonics: int) -> MeshExcitation:
+def fourier_fit(phase: ArrayLike, values: ArrayLike, H: int) -> MeshExcitation:
     """Fit e0, a_m, b_m (m = 1 .. H) to samples of one period by linear least squares.
 
     Parameters
@@ -182,8 +182,18 @@ def fourier_fit(phase: ArrayLike, values: ArrayLike, n_harmonics: int) -> MeshEx
         Sample phases in cycles [-] (any spacing; one period, endpoint excluded).
     values : array_like
         Sample values [m].
-    n_harmonics : int
-        H; needs at least 2 H + 1 samples.
+    H : int
+        Number of harmonics H [-]; needs at least 2 H + 1 samples.
+
+    Returns
+    -------
+    MeshExcitation
+        e0, a_m, b_m [m].
+
+    Raises
+    ------
+    ModelError
+        When H < 0, the arrays differ in length or there are fewer than 2 H + 1 samples.
 
     Notes
     -----
@@ -192,13 +202,13 @@ def fourier_fit(phase: ArrayLike, values: ArrayLike, n_harmonics: int) -> MeshEx
     """
     ph = np.asarray(phase, dtype=float).reshape(-1)
     v = np.asarray(values, dtype=float).reshape(-1)
-    H = int(n_harmonics)
+    H = int(H)
     if H < 0:
-        raise ModelError("n_harmonics", f"must be >= 0, got {n_harmonics!r}")
+        raise ModelError("H", f"must be >= 0, got {H!r}")
     if ph.shape != v.shape:
         raise ModelError("values", f"needs one value per phase ({ph.size}), got {v.size}")
     if v.size < 2 * H + 1:
-        raise ModelError("n_harmonics", f"{H} harmonics need at least {2 * H + 1} samples, got {v.size}")
+        raise ModelError("H", f"{H} harmonics need at least {2 * H + 1} samples, got {v.size}")
     m = np.arange(1, H + 1)
     arg = 2 * np.pi * ph[:, None] * m
     basis = np.hstack([np.ones((ph.size, 1)), np.cos(arg), np.sin(arg)])
@@ -207,21 +217,45 @@ def fourier_fit(phase: ArrayLike, values: ArrayLike, n_harmonics: int) -> MeshEx
 
 
 def resample(
-    phase: ArrayLike, values: ArrayLike, n_points: int, kind: str = "cubic"
+    phase: ArrayLike, values: ArrayLike, n_samples: int, kind: str = "cubic"
 ) -> tuple[NDArray, NDArray]:
     """Resample one period of samples onto n uniform phases 0, 1/n, .. (n-1)/n.
 
     ``kind="cubic"`` uses a periodic cubic spline, ``"linear"`` periodic linear
     interpolation. The input phases must increase strictly within one period
     (endpoint excluded).
+
+    Parameters
+    ----------
+    phase : array_like
+        Sample phases in cycles [-].
+    values : array_like
+        Sample values, one per phase (STE [m]; returned in the same unit).
+    n_samples : int
+        Number n of uniform phases, >= 2.
+    kind : {"cubic", "linear"}
+        Periodic interpolation.
+
+    Returns
+    -------
+    phase : ndarray, shape (n,)
+        Uniform phases k / n [-].
+    values : ndarray, shape (n,)
+        Interpolated values.
+
+    Raises
+    ------
+    ModelError
+        When n < 2, the phases are not strictly increasing within one period or
+        ``kind`` is unknown.
     """
     ph = np.asarray(phase, dtype=float).reshape(-1)
     v = np.asarray(values, dtype=float).reshape(-1)
-    if n_points < 2:
-        raise ModelError("n_points", f"must be at least 2, got {n_points!r}")
+    if n_samples < 2:
+        raise ModelError("n_samples", f"must be at least 2, got {n_samples!r}")
     if np.any(np.diff(ph) <= 0) or ph[-1] - ph[0] >= 1:
         raise ModelError("phase", "must increase strictly within one period")
-    new = np.arange(int(n_points)) / int(n_points)
+    new = np.arange(int(n_samples)) / int(n_samples)
     xp = np.concatenate([ph, [ph[0] + 1.0]])
     fp = np.concatenate([v, [v[0]]])
     shifted = ph[0] + np.mod(new - ph[0], 1.0)
@@ -280,7 +314,7 @@ def _pick(frame, options: tuple[str, ...], what: str, path: Path) -> str:
 
 
 def read_lste_samples(
-    path: str | Path, teeth_pinion: int | None = None, periodic_tolerance: float = 1e-3
+    path: str | Path, teeth_pinion: int | None = None, periodic_rtol: float = 1e-3
 ) -> tuple[NDArray, NDArray]:
     """Read sampled STE from a CSV file and check it covers one period.
 
@@ -290,15 +324,20 @@ def read_lste_samples(
         CSV file (see the module notes for columns).
     teeth_pinion : int, optional
         z1, required with a ``roll_angle`` column.
-    periodic_tolerance : float
-        Allowed mismatch of the endpoint values, relative to the peak-to-peak value.
+    periodic_rtol : float
+        Allowed mismatch of the endpoint values, relative to the peak-to-peak value [-].
 
     Returns
     -------
     phase : ndarray
-        Phases in cycles, starting at the first sample, endpoint excluded.
+        Phases in cycles [-], starting at the first sample, endpoint excluded.
     ste : ndarray
         STE [m].
+
+    Raises
+    ------
+    ModelError
+        When the file, its columns or its samples break the rules of the module notes.
     """
     path = Path(path)
     frame = _read_csv(path)
@@ -324,7 +363,7 @@ def read_lste_samples(
     tol = 1e-9
     if abs(span - 1.0) <= tol:
         ptp = np.ptp(ste)
-        if abs(ste[-1] - ste[0]) > periodic_tolerance * ptp + 1e-300:
+        if abs(ste[-1] - ste[0]) > periodic_rtol * ptp + 1e-300:
             raise ModelError(
                 vcol,
                 f"not periodic: the last sample (one period after the first) is {ste[-1]!r}, "
@@ -348,10 +387,10 @@ def read_lste_samples(
 
 def read_lste_csv(
     path: str | Path,
-    n_harmonics: int | None = None,
+    H: int | None = None,
     teeth_pinion: int | None = None,
     resample_points: int | None = None,
-    periodic_tolerance: float = 1e-3,
+    periodic_rtol: float = 1e-3,
 ) -> MeshExcitation:
     """Mesh excitation fitted to sampled STE in a CSV file.
 
@@ -359,19 +398,29 @@ def read_lste_csv(
     ----------
     path : str or Path
         CSV file of samples (module notes).
-    n_harmonics : int, optional
+    H : int, optional
         Harmonics to fit; default the most the samples allow, (n - 1) // 2.
     teeth_pinion : int, optional
         z1, for a ``roll_angle`` column.
     resample_points : int, optional
         Resample onto this many uniform phases (periodic cubic spline) before fitting.
-    periodic_tolerance : float
-        See :func:`read_lste_samples`.
+    periodic_rtol : float
+        See :func:`read_lste_samples` [-].
+
+    Returns
+    -------
+    MeshExcitation
+        The Fourier fit, mean e0 kept [m].
+
+    Raises
+    ------
+    ModelError
+        When the samples are invalid or too few for H harmonics.
     """
-    phase, ste = read_lste_samples(path, teeth_pinion=teeth_pinion, periodic_tolerance=periodic_tolerance)
+    phase, ste = read_lste_samples(path, teeth_pinion=teeth_pinion, periodic_rtol=periodic_rtol)
     if resample_points is not None:
         phase, ste = resample(phase, ste, resample_points)
-    H = (len(ste) - 1) // 2 if n_harmonics is None else n_harmonics
+    H = (len(ste) - 1) // 2 if H is None else H
     try:
         return fourier_fit(phase, ste, H)
     except ModelError as exc:
@@ -379,7 +428,24 @@ def read_lste_csv(
 
 
 def read_fourier_csv(path: str | Path) -> MeshExcitation:
-    """Mesh excitation from a CSV table of Fourier coefficients (module notes)."""
+    """Mesh excitation from a CSV table of Fourier coefficients (module notes).
+
+    Parameters
+    ----------
+    path : str or Path
+        CSV file with columns ``harmonic``, ``a_m``/``b_m`` or ``a_um``/``b_um``.
+
+    Returns
+    -------
+    MeshExcitation
+        Coefficients in m; harmonics not listed are zero.
+
+    Raises
+    ------
+    ModelError
+        On a missing column, mixed units, invalid or repeated harmonics, or a sine
+        coefficient for harmonic 0.
+    """
     path = Path(path)
     frame = _read_csv(path)
     if "harmonic" not in frame.columns:
@@ -406,7 +472,24 @@ def read_fourier_csv(path: str | Path) -> MeshExcitation:
 
 
 def read_fourier_toml(path: str | Path) -> MeshExcitation:
-    """Mesh excitation from a TOML file with ``version``, ``e0``, ``a``, ``b`` (``unit``)."""
+    """Mesh excitation from a TOML file with ``version``, ``e0``, ``a``, ``b`` (``unit``).
+
+    Parameters
+    ----------
+    path : str or Path
+        TOML file (module notes).
+
+    Returns
+    -------
+    MeshExcitation
+        Coefficients in m.
+
+    Raises
+    ------
+    ModelError
+        On a parse error, a wrong version or unit, an unknown key or missing or
+        non-numeric coefficients.
+    """
     path = Path(path)
     with open(path, "rb") as fh:
         try:
@@ -442,6 +525,19 @@ def read_excitation(path: str | Path, **kwargs) -> MeshExcitation:
 
     ``.toml``: coefficients; ``.csv`` with a ``harmonic`` column: coefficients; other
     ``.csv``: samples, fitted by :func:`read_lste_csv` (``kwargs`` passed on).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    **kwargs
+        Options of :func:`read_lste_csv` (``H``, ``teeth_pinion``, ...), used for
+        sample files only.
+
+    Returns
+    -------
+    MeshExcitation
+        The excitation [m], mean kept.
     """
     path = Path(path)
     if path.suffix.lower() == ".toml":
@@ -453,7 +549,24 @@ def read_excitation(path: str | Path, **kwargs) -> MeshExcitation:
 
 
 def write_lste_csv(path: str | Path, phase: ArrayLike, ste: ArrayLike, unit: str = "um") -> None:
-    """Write samples in the CSV sample format (columns ``phase`` and ``ste_um``/``ste_m``)."""
+    """Write samples in the CSV sample format (columns ``phase`` and ``ste_um``/``ste_m``).
+
+    Parameters
+    ----------
+    path : str or Path
+        File written.
+    phase : array_like
+        Mesh phases in cycles [-].
+    ste : array_like
+        STE [m], one value per phase.
+    unit : {"um", "m"}
+        Unit of the values in the file.
+
+    Raises
+    ------
+    ModelError
+        When ``unit`` is not "um" or "m".
+    """
     if unit not in _UNIT_SCALE:
         raise ModelError("unit", f"must be 'm' or 'um', got {unit!r}")
     ph = np.asarray(phase, dtype=float).reshape(-1)

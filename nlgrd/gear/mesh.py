@@ -47,7 +47,7 @@ class GearMesh:
         Average mesh stiffness k_h [N/m]; None computes it from the geometry (mean of the
         loaded mesh stiffness over a mesh cycle at W_0).
     damping_ratio : float
-        Mesh damping ratio ζ of the gear-pair torsional mode: c_m = 2 ζ sqrt(k_h m_eq),
+        Mesh damping ratio ζ [-] of the gear-pair torsional mode: c_m = 2 ζ sqrt(k_h m_eq),
         m_eq = I_p I_g / (I_p r_bg² + I_g r_bp²) from the disks at the two nodes.
     mesh_damping : float, optional
         Mesh damping coefficient c_m [N s/m]; overrides ``damping_ratio`` when given.
@@ -63,7 +63,7 @@ class GearMesh:
     modifications : ProfileModification, optional
         Tip relief of pinion and gear, used when the LSTE is computed.
     lste_points : int
-        Samples per mesh cycle of the computed LSTE.
+        Samples per mesh cycle of the computed LSTE, >= 16.
 
     Notes
     -----
@@ -226,7 +226,7 @@ class GearMesh:
             raise ModelError("torque", "a positive torque is needed to compute the LSTE from the geometry")
         return _lste_cached(self.geometry, self.static_load, self.modifications, self.lste_points)
 
-    def excitation(self, n_harmonics: int = 30):
+    def excitation(self, H: int = 30):
         """The LSTE as a :class:`~nlgrd.gear.lste_file.MeshExcitation`, mean removed [m].
 
         From ``lste_file`` when given, else computed from the geometry.
@@ -236,7 +236,7 @@ class GearMesh:
         if self.lste_file:
             ex = read_excitation(self.lste_file, teeth_pinion=self.geometry.teeth_pinion)
             return ex.without_mean()
-        return self.lste_result().excitation(n_harmonics)
+        return self.lste_result().excitation(H)
 
     def damping_coefficient(self, system) -> float:
         """Mesh damping coefficient c_m [N s/m]."""

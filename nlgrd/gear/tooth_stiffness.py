@@ -188,7 +188,20 @@ def _make_profile(geometry: GearGeometry, index: int) -> ToothProfile:
 
 
 def tooth_profile(geometry: GearGeometry, member: str = "pinion") -> ToothProfile:
-    """Rack-generated tooth flank (fillet and involute) of ``member``, tooth coordinates [m]."""
+    """Rack-generated tooth flank (fillet and involute) of ``member``, tooth coordinates [m].
+
+    Parameters
+    ----------
+    geometry : GearGeometry
+        The gear pair.
+    member : {"pinion", "gear"}
+        Which member.
+
+    Returns
+    -------
+    ToothProfile
+        Kept in ``geometry.cache``.
+    """
     return _profile(geometry, geometry.member_index(member))
 
 
@@ -199,9 +212,9 @@ class ToothCompliance:
     Parameters
     ----------
     bending, shear, axial : ndarray
-        1/k_b, 1/k_s, 1/k_a of the cantilever tooth (Yang & Lin 1987; Tian 2004).
+        1/k_b, 1/k_s, 1/k_a of the cantilever tooth [m/N] (Yang & Lin 1987; Tian 2004).
     fillet : ndarray
-        1/k_f of the gear body (Sainsot et al. 2004).
+        1/k_f of the gear body [m/N] (Sainsot et al. 2004).
     """
 
     bending: NDArray
@@ -322,6 +335,11 @@ def sainsot_coefficients(root_half_angle: float, radius_ratio: float) -> tuple[f
         θ_f [rad].
     radius_ratio : float
         h_f = r_f / r_int [-].
+
+    Returns
+    -------
+    L_star, M_star, P_star, Q_star : float
+        The coefficients L*, M*, P*, Q* [-] of the fillet-foundation compliance.
     """
     t, h = root_half_angle, radius_ratio
     basis = np.array([1.0 / t**2, h**2, h / t, 1.0 / t, h, 1.0])
@@ -355,6 +373,16 @@ def hertz_stiffness(geometry: GearGeometry) -> float:
     """Load-independent Hertzian contact stiffness k_h = π E L / (4 (1 - ν²)) [N/m].
 
     Yang & Sun (1985), as used by Tian (2004).
+
+    Parameters
+    ----------
+    geometry : GearGeometry
+        The gear pair.
+
+    Returns
+    -------
+    float
+        k_h [N/m].
     """
     E, nu, L = geometry.young_modulus, geometry.poisson_ratio, geometry.face_width
     return math.pi * E * L / (4.0 * (1.0 - nu**2))
@@ -400,7 +428,20 @@ class PairCompliance:
 
 
 def pair_compliance(geometry: GearGeometry, position: ArrayLike) -> PairCompliance:
-    """Compliance components of a tooth pair in contact at positions ``s`` from T1 [m]."""
+    """Compliance components of a tooth pair in contact at positions ``s`` from T1 [m].
+
+    Parameters
+    ----------
+    geometry : GearGeometry
+        The gear pair.
+    position : array_like
+        Contact positions s along the line of action from T1 [m].
+
+    Returns
+    -------
+    PairCompliance
+        Pinion and gear tooth compliances and the Hertzian one [m/N].
+    """
     s = np.asarray(position, dtype=float)
     return PairCompliance(
         position=s,
@@ -411,17 +452,56 @@ def pair_compliance(geometry: GearGeometry, position: ArrayLike) -> PairComplian
 
 
 def pair_stiffness(geometry: GearGeometry, position: ArrayLike) -> NDArray:
-    """Single tooth-pair stiffness k_t along the line of action [N/m] at positions ``s`` [m]."""
+    """Single tooth-pair stiffness k_t along the line of action [N/m] at positions ``s`` [m].
+
+    Parameters
+    ----------
+    geometry : GearGeometry
+        The gear pair.
+    position : array_like
+        Contact positions s along the line of action from T1 [m].
+
+    Returns
+    -------
+    ndarray
+        k_t [N/m], shaped like ``position``.
+    """
     return pair_compliance(geometry, position).stiffness
 
 
 def pair_stiffness_at_roll_angle(
     geometry: GearGeometry, roll_angle: ArrayLike, member: str = "pinion"
 ) -> NDArray:
-    """Single tooth-pair stiffness [N/m] where ``member`` has roll angle ξ [rad]."""
+    """Single tooth-pair stiffness [N/m] where ``member`` has roll angle ξ [rad].
+
+    Parameters
+    ----------
+    geometry : GearGeometry
+        The gear pair.
+    roll_angle : array_like
+        Roll angle ξ of ``member`` at the contact point [rad].
+    member : {"pinion", "gear"}
+        Whose roll angle is given.
+
+    Returns
+    -------
+    ndarray
+        k_t [N/m], shaped like ``roll_angle``.
+    """
     return pair_stiffness(geometry, geometry.position_from_roll_angle(roll_angle, member))
 
 
 def pitch_point_stiffness(geometry: GearGeometry) -> float:
-    """Single tooth-pair stiffness at the pitch point [N/m]."""
+    """Single tooth-pair stiffness at the pitch point [N/m].
+
+    Parameters
+    ----------
+    geometry : GearGeometry
+        The gear pair.
+
+    Returns
+    -------
+    float
+        k_t at the pitch point C [N/m].
+    """
     return float(pair_stiffness(geometry, geometry.pitch_point))

@@ -84,6 +84,11 @@ def share_load(load: float, separation: NDArray, stiffness: NDArray) -> tuple[ND
         Approach δ [m].
     loads : ndarray, shape (n, J)
         Pair loads F_j [N] (0 for absent or separated pairs).
+
+    Raises
+    ------
+    ModelError
+        When some sample has no tooth pair in contact.
     """
     sep = np.where(np.isfinite(separation), separation, np.inf)
     k = np.where(np.isfinite(sep), stiffness, 0.0)
@@ -197,18 +202,18 @@ class LSTEResult:
         return np.sum(self.pair_loads > 0, axis=1)
 
     # ---------------------------------------------------------------- Fourier
-    def fourier(self, n_harmonics: int) -> NDArray:
+    def fourier(self, H: int) -> NDArray:
         """Complex Fourier coefficients of the LSTE at the mesh harmonics [m].
 
-        Returns E_m, m = 0 .. n_harmonics, with E_0 = e0 and E_m = a_m - i b_m, so
+        Returns E_m, m = 0 .. H, with E_0 = e0 and E_m = a_m - i b_m, so
         that e(t) ≈ Re Σ_m E_m exp(i m ω t) = e0 + Σ_m a_m cos(m ω t) + b_m sin(m ω t),
         ω the mesh frequency and ω t = 2π phase. Over a hunting period of N cycles the
         coefficients are those of the orders m N of the period (the rotation-order
         sidebands are left out).
         """
-        H = int(n_harmonics)
+        H = int(H)
         if H < 0:
-            raise ValueError("n_harmonics must be >= 0")
+            raise ValueError("H must be >= 0")
         n = len(self.lste)
         if 2 * H * self.n_cycles >= n:
             raise ValueError(
@@ -220,15 +225,15 @@ class LSTEResult:
         out[1:] = 2.0 * spec[self.n_cycles * np.arange(1, H + 1)]
         return out
 
-    def excitation(self, n_harmonics: int, keep_mean: bool = False):
-        """The LSTE as a :class:`~nlgrd.gear.lste_file.MeshExcitation` with ``n_harmonics`` harmonics.
+    def excitation(self, H: int, keep_mean: bool = False):
+        """The LSTE as a :class:`~nlgrd.gear.lste_file.MeshExcitation` with ``H`` harmonics.
 
         ``keep_mean=False`` (default) sets e0 = 0: the static deflection then comes from
         the mean mesh load acting on k_h, not twice.
         """
         from nlgrd.gear.lste_file import MeshExcitation
 
-        E = self.fourier(n_harmonics)
+        E = self.fourier(H)
         return MeshExcitation(
             e0=float(E[0].real) if keep_mean else 0.0,
             a=np.real(E[1:]).copy(),
@@ -296,6 +301,13 @@ def loaded_static_transmission_error(
     Returns
     -------
     LSTEResult
+        LSTE, mesh stiffness and load sharing at every sample.
+
+    Raises
+    ------
+    ModelError
+        On a non-positive load, modifications or errors of the wrong type, fewer than 8
+        points per cycle or fewer than 1 cycle.
     """
     check_positive("mesh_load", mesh_load)
     modifications = ProfileModification() if modifications is None else modifications
@@ -361,6 +373,23 @@ def single_pair_deflection(geometry: GearGeometry, mesh_load: float) -> float:
 
     The classical estimate of the tip relief that smooths the LSTE at that load
     (Harris 1958, Proc. IMechE 172:87; Lin et al. 1994).
+
+    Parameters
+    ----------
+    geometry : GearGeometry
+        The gear pair.
+    mesh_load : float
+        Mesh load W along the line of action [N], > 0.
+
+    Returns
+    -------
+    float
+        W / k_t(C) [m].
+
+    Raises
+    ------
+    ModelError
+        When ``mesh_load`` is not positive.
     """
     check_positive("mesh_load", mesh_load)
     return float(mesh_load) / pitch_point_stiffness(geometry)
@@ -381,9 +410,9 @@ class TipReliefSweep:
     k_mean : ndarray
         Mean tangent mesh stiffness for each amount [N/m].
     mesh_load : float
-        Mesh load [N].
+        Mesh load along the LOA [N].
     shape : str
-        Relief shape.
+        Relief shape, "linear" or "parabolic".
     """
 
     amounts: NDArray
@@ -443,6 +472,11 @@ def tip_relief_sweep(
         Start of relief [rad]; default the highest point of single tooth contact.
     points_per_cycle : int
         Samples per mesh cycle.
+
+    Returns
+    -------
+    TipReliefSweep
+        Peak-to-peak and mean LSTE [m] and mean mesh stiffness [N/m] per amount.
     """
     amounts = np.atleast_1d(np.asarray(amounts, dtype=float))
     check_finite("amounts", amounts)

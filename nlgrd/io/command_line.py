@@ -52,7 +52,26 @@ def _split(text: str, name: str, forms: tuple[int, ...], expected: str) -> tuple
 
 
 def parse_range(text: str, name: str = "--rpm"):
-    """Parse ``START:STOP:COUNT`` (or a single value) into an array; all finite."""
+    """Parse ``START:STOP:COUNT`` (or a single value) into an array; all finite.
+
+    Parameters
+    ----------
+    text : str
+        The option's text: ``START:STOP:COUNT`` (COUNT from 2 to :data:`MAX_POINTS`) or one
+        number, in the option's unit (rpm for ``--rpm``).
+    name : str
+        The option's name, used in the error message.
+
+    Returns
+    -------
+    numpy.ndarray
+        The COUNT values from START to STOP (``numpy.linspace``), or the one value.
+
+    Raises
+    ------
+    ModelError
+        When the text is not of that form, a number is not finite or COUNT is out of range.
+    """
     import numpy as np
 
     values, count = _split(text, name, (1, 3), _RANGE)
@@ -60,7 +79,28 @@ def parse_range(text: str, name: str = "--rpm"):
 
 
 def parse_span(text: str, name: str) -> tuple[float, float, int | None]:
-    """Parse ``START:STOP`` or ``START:STOP:COUNT`` (a continuation's range) into (start, stop, count)."""
+    """Parse ``START:STOP`` or ``START:STOP:COUNT`` (a continuation's range) into (start, stop, count).
+
+    Parameters
+    ----------
+    text : str
+        The option's text, in the option's unit.
+    name : str
+        The option's name, used in the error message.
+
+    Returns
+    -------
+    start, stop : float
+        The ends of the range (different from each other).
+    count : int or None
+        COUNT when given, else None.
+
+    Raises
+    ------
+    ModelError
+        When the text is not of that form, a number is not finite, START equals STOP or
+        COUNT is out of range.
+    """
     values, count = _split(text, name, (2, 3), _SPAN)
     if values[0] == values[1]:
         raise ModelError(name, f"a continuation needs {_SPAN}, got {text!r}")
@@ -68,13 +108,44 @@ def parse_span(text: str, name: str) -> tuple[float, float, int | None]:
 
 
 def check_at_least(name: str, value: int, low: int) -> None:
-    """Raise unless the integer option ``name`` is at least ``low``."""
+    """Raise unless the integer option ``name`` is at least ``low``.
+
+    Parameters
+    ----------
+    name : str
+        The option's name, used in the error message.
+    value : int
+        The option's value.
+    low : int
+        The smallest value allowed.
+
+    Raises
+    ------
+    ModelError
+        When ``value`` is less than ``low``.
+    """
     if value < low:
         raise ModelError(name, f"must be at least {low}, got {value}")
 
 
 def parse_speed(text: str) -> float:
-    """The one speed of ``--rpm`` (a range is an error)."""
+    """The one speed of ``--rpm`` (a range is an error).
+
+    Parameters
+    ----------
+    text : str
+        The text of ``--rpm``: one number [rpm].
+
+    Returns
+    -------
+    float
+        The speed [rpm].
+
+    Raises
+    ------
+    ModelError
+        When the text is not a finite number or is a range.
+    """
     values = parse_range(text, "--rpm")
     if len(values) != 1:
         raise ModelError("--rpm", f"give one speed for modal analysis, got the range {text!r}")
@@ -82,7 +153,23 @@ def parse_speed(text: str) -> float:
 
 
 def parse_orders(text: str) -> dict[str, float]:
-    """``--orders`` (comma-separated positive numbers) as ``{"25x": 25.0, ...}``."""
+    """``--orders`` (comma-separated positive numbers) as ``{"25x": 25.0, ...}``.
+
+    Parameters
+    ----------
+    text : str
+        The text of ``--orders``: comma-separated engine orders [-].
+
+    Returns
+    -------
+    dict of str to float
+        Each order [-] under its label (``"25x"``), in the order given.
+
+    Raises
+    ------
+    ModelError
+        When an order is not a number, not finite or not positive.
+    """
     try:
         values = [float(o) for o in text.split(",")]
     except ValueError:
@@ -93,7 +180,23 @@ def parse_orders(text: str) -> dict[str, float]:
 
 
 def check_quantity(name: str) -> str:
-    """``--quantity``: one of :data:`nlgrd.nonlinear.metrics.METRIC_NAMES`."""
+    """``--quantity``: one of :data:`nlgrd.nonlinear.metrics.METRIC_NAMES`.
+
+    Parameters
+    ----------
+    name : str
+        The text of ``--quantity``.
+
+    Returns
+    -------
+    str
+        ``name``, checked.
+
+    Raises
+    ------
+    ModelError
+        When ``name`` is not a metric name.
+    """
     from nlgrd.nonlinear.metrics import METRIC_NAMES
 
     if name not in METRIC_NAMES:
@@ -117,7 +220,26 @@ def _writable_folder(option: str, folder: Path) -> None:
 
 
 def output_folder(option: str, text: str) -> Path:
-    """An output folder: existing or to be made (nothing is made now)."""
+    """An output folder: existing or to be made (nothing is made now).
+
+    Parameters
+    ----------
+    option : str
+        The option's name, used in the error message.
+    text : str
+        The folder given on the command line.
+
+    Returns
+    -------
+    pathlib.Path
+        The folder.
+
+    Raises
+    ------
+    ModelError
+        When ``text`` is a file, or files cannot be made in the folder (or in the existing
+        folder it would be made in).
+    """
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise ModelError(option, f"{text} is a file, not a folder")
@@ -126,7 +248,27 @@ def output_folder(option: str, text: str) -> Path:
 
 
 def output_file(option: str, text: str, example: str) -> Path:
-    """An output file (not a folder) in a folder where files can be made."""
+    """An output file (not a folder) in a folder where files can be made.
+
+    Parameters
+    ----------
+    option : str
+        The option's name, used in the error message.
+    text : str
+        The file given on the command line.
+    example : str
+        A file name suggested in the message when ``text`` is a folder.
+
+    Returns
+    -------
+    pathlib.Path
+        The file.
+
+    Raises
+    ------
+    ModelError
+        When ``text`` is a folder, or files cannot be made in its folder.
+    """
     path = Path(text)
     if path.is_dir() or text.endswith(("/", os.sep)):
         raise ModelError(option, f"{text} is a folder; give a file name, e.g. {path / example}")
@@ -143,6 +285,14 @@ class Outputs:
     Each file is written to a temporary file in its own folder; :meth:`commit` renames
     them into place (``os.replace``). An exception or Ctrl-C before or during the
     commit removes the temporary files: the previous outputs stay as they were.
+
+    Used as a context manager: ``with Outputs() as out: out.csv(frame, path); ...;
+    out.commit()``. It takes no parameters.
+
+    Attributes
+    ----------
+    _staged : list of (str, pathlib.Path)
+        The temporary files written so far, each with the output it will replace (private).
     """
 
     def __init__(self):
@@ -165,9 +315,11 @@ class Outputs:
         write(tmp)
 
     def csv(self, frame, path: Path) -> None:
+        """Stage the table ``frame`` (a pandas DataFrame) as the CSV file ``path``, without its index."""
         self._add(path, lambda tmp: frame.to_csv(tmp, index=False))
 
     def figure(self, fig, path: Path) -> None:
+        """Stage the matplotlib figure ``fig`` as the PNG file ``path`` (100 dpi), then close it."""
         import matplotlib.pyplot as plt
 
         try:
@@ -176,6 +328,7 @@ class Outputs:
             plt.close(fig)
 
     def commit(self) -> None:
+        """Move the staged files into place (``os.replace``), keeping an existing output's mode."""
         umask = os.umask(0)
         os.umask(umask)
         for tmp, path in self._staged:
@@ -189,7 +342,13 @@ class Outputs:
 
 
 def pyplot():
-    """``matplotlib.pyplot`` on the file-only Agg backend."""
+    """``matplotlib.pyplot`` on the file-only Agg backend.
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``, after selecting the Agg backend.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

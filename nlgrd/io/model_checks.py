@@ -47,7 +47,22 @@ LSTE_BACKLASH_FACTOR = 100.0
 
 
 def check_model(system: RotorSystem) -> None:
-    """Raise :class:`ModelError` for a model that is legal field by field but absurd as a whole."""
+    """Raise :class:`ModelError` for a model that is legal field by field but absurd as a whole.
+
+    Runs the checks listed in the module docstring except the LSTE files (:func:`check_lste_files`).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model, built.
+
+    Raises
+    ------
+    ModelError
+        For the first check that fails (repeated shaft names, an unsupported group of shafts,
+        a damping ratio above 1 or loss factor above 2, a static mesh deflection above the
+        tooth depth), naming the key path.
+    """
     _check_shaft_names(system)
     _check_support(system)
     _check_damping(system)
@@ -61,6 +76,17 @@ def check_lste_files(system: RotorSystem) -> None:
 
     Relative paths are taken from the current directory: :func:`nlgrd.io.model_file.load_model`
     makes them relative to the model file first.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model, built; only its gear meshes with an ``lste_file`` are checked.
+
+    Raises
+    ------
+    ModelError
+        When a file cannot be read or used, or its peak-to-peak LSTE [m] exceeds the tooth
+        depth or :data:`LSTE_BACKLASH_FACTOR` times the backlash (``gear_pairs[i].lste_file``).
     """
     from nlgrd.gear.lste_file import read_excitation
 
@@ -97,7 +123,19 @@ def check_lste_files(system: RotorSystem) -> None:
 
 
 def tooth_depth(geometry) -> float:
-    """Whole depth of the teeth, (h_a* + h_f*) m [m]: 2.25 m for standard teeth."""
+    """Whole depth of the teeth, (h_a* + h_f*) m [m]: 2.25 m for standard teeth.
+
+    Parameters
+    ----------
+    geometry : GearGeometry
+        The gear pair's geometry: its ``module`` [m] and addendum and dedendum
+        coefficients [-].
+
+    Returns
+    -------
+    float
+        The tooth depth [m].
+    """
     return (geometry.addendum_coefficient + geometry.dedendum_coefficient) * geometry.module
 
 

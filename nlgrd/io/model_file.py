@@ -249,7 +249,19 @@ def _read_named(cls: type, raw: Any, table: str, rd: _Reader) -> dict[str, Any]:
 
 
 def field_hints(cls: type) -> dict[str, Any]:
-    """Resolved type hints of a dataclass, also when its module imports types lazily."""
+    """Resolved type hints of a dataclass, also when its module imports types lazily.
+
+    Parameters
+    ----------
+    cls : type
+        The dataclass.
+
+    Returns
+    -------
+    dict of str to Any
+        Each field's type hint, by field name (``typing.get_type_hints``); names the module
+        cannot resolve are looked up among the classes of the loaded ``nlgrd`` modules.
+    """
     try:
         return typing.get_type_hints(cls)
     except NameError:
@@ -347,6 +359,18 @@ def _sequence_item(hint: Any) -> Any:
 
 
 def union_members(hint: Any) -> list[Any]:
+    """The members of a union type hint other than None (``X | None`` gives ``[X]``).
+
+    Parameters
+    ----------
+    hint : Any
+        A type hint.
+
+    Returns
+    -------
+    list
+        The members of the union without ``NoneType``; ``[hint]`` when it is not a union.
+    """
     if typing.get_origin(hint) in (typing.Union, types.UnionType):
         return [a for a in typing.get_args(hint) if a is not type(None)]
     return [hint]

@@ -16,7 +16,26 @@ _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 
 
 def dumps(data: dict[str, Any], header: str | None = None) -> str:
-    """TOML text of ``data``: the subset nlgrd needs (tables, arrays of tables, scalars, arrays)."""
+    """TOML text of ``data``: the subset nlgrd needs (tables, arrays of tables, scalars, arrays).
+
+    Parameters
+    ----------
+    data : dict of str to Any
+        The document: nested dictionaries are tables, lists (or tuples) of dictionaries
+        arrays of tables, other values are written by :func:`toml_value`.
+    header : str or None
+        Text written first as comment lines (``# ...``), one per line; None for none.
+
+    Returns
+    -------
+    str
+        The TOML text, ending with a newline.
+
+    Raises
+    ------
+    TypeError
+        When an array mixes tables and other values, or a value has no TOML form.
+    """
     lines: list[str] = []
     if header:
         lines.extend(f"# {line}".rstrip() for line in header.splitlines())
@@ -55,6 +74,18 @@ def _write_table(lines: list[str], path: list[str], table: dict[str, Any]) -> No
 
 
 def toml_key(key: str) -> str:
+    """A key in TOML syntax: bare when it may be, else a quoted string.
+
+    Parameters
+    ----------
+    key : str
+        The key.
+
+    Returns
+    -------
+    str
+        ``key`` itself when it is made of ``A-Za-z0-9_-`` only, else quoted and escaped.
+    """
     return key if _BARE_KEY.fullmatch(key) else _toml_string(key)
 
 
@@ -74,7 +105,24 @@ def _toml_string(text: str) -> str:
 
 
 def toml_value(value: Any) -> str:
-    """One value in TOML syntax; floats keep ``repr`` precision, so they read back exactly."""
+    """One value in TOML syntax; floats keep ``repr`` precision, so they read back exactly.
+
+    Parameters
+    ----------
+    value : Any
+        A boolean, integer, float (NaN and infinities too), string, list or tuple of such
+        values, or a dictionary (written as an inline table); numpy scalars too.
+
+    Returns
+    -------
+    str
+        The TOML text of the value.
+
+    Raises
+    ------
+    TypeError
+        When the value (or an item of it) has no TOML form.
+    """
     if isinstance(value, (bool, np.bool_)):
         return "true" if value else "false"
     if isinstance(value, (int, np.integer)):

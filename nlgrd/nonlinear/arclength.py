@@ -31,7 +31,23 @@ from nlgrd.nonlinear.solvers import solve
 @dataclass(frozen=True)
 class CurvePoint:
     """A point of the curve: harmonics, frequency [rad/s], unit tangent (scaled), corrector
-    iterations and relative residual."""
+    iterations and relative residual.
+
+    Attributes
+    ----------
+    z : ndarray
+        Real harmonics [x0, a1, b1, ...] of the nonlinear coordinates, flattened
+        coordinate-major from shape (n_nl, 2H+1) [m].
+    omega : float
+        Mesh frequency of the point [rad/s].
+    tangent : ndarray
+        Unit tangent of the curve in the scaled unknowns u = (z / L_z, ω / L_ω), size
+        n_nl (2H+1) + 1, frequency last [-].
+    iterations : int
+        Corrector (Newton) iterations (0 at the start).
+    residual : float
+        Relative residual max|R| / max(|L z|, |B G|, |F|) at the point [-].
+    """
 
     z: NDArray
     omega: float
@@ -41,7 +57,32 @@ class CurvePoint:
 
 
 class Tracer:
-    """The scaled pseudo-arc-length stepper shared by continuation and sweep jumps."""
+    """The scaled pseudo-arc-length stepper shared by continuation and sweep jumps.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The harmonic-balance model as a function of the mesh frequency.
+    H : int
+        Number of harmonics.
+    z0 : ndarray
+        Harmonics at the start: real harmonics [x0, a1, b1, ...] of the nonlinear
+        coordinates, shape (n_nl, 2H+1) or flattened coordinate-major [m]; they set the
+        scales.
+    omega0 : float
+        Mesh frequency at the start [rad/s]; sets the frequency scale.
+    tol : float
+        Convergence tolerance of the corrector (relative residual).
+
+    Attributes
+    ----------
+    Lz : float
+        Harmonics scale max |z0| (1 if zero) [m].
+    Lw : float
+        Frequency scale |omega0| (1 if zero) [rad/s].
+    Fs : float
+        Force scale of the residual, max(|L z0|, |B G|, |F|) at the start [N].
+    """
 
     def __init__(self, model: ReducedModel, H: int, z0: NDArray, omega0: float, tol: float = 1e-9):
         self.model, self.H, self.tol = model, H, tol
@@ -166,6 +207,39 @@ def jump_to_branch(
     branch). Returns (harmonics or None, continuation steps, turning points passed); no
     turning point means Newton had failed on the same branch (e.g. at grazing), not a
     jump.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The harmonic-balance model as a function of the mesh frequency.
+    H : int
+        Number of harmonics.
+    z_prev : ndarray
+        The solution at ``omega_prev``: real harmonics [x0, a1, b1, ...] of the nonlinear
+        coordinates, shape (n_nl, 2H+1) or flattened coordinate-major [m].
+    omega_prev : float
+        Mesh frequency of the last point on the branch [rad/s].
+    omega_target : float
+        Mesh frequency to land at [rad/s].
+    max_steps : int
+        Limit of continuation steps.
+    tol : float
+        Convergence tolerance of Newton at ``omega_target`` (relative residual); the
+        corrector of the continuation converges to 1e-9.
+    require_stable : bool
+        Accept only a Floquet-stable crossing (when the model has a state space).
+    max_excursion : float
+        Give up when the curve strays from ``omega_prev`` by more than ``max_excursion``
+        times |omega_target - omega_prev| plus half of |omega_prev| [-].
+
+    Returns
+    -------
+    harmonics : ndarray or None
+        The landing at ``omega_target``, shape (n_nl, 2H+1) [m]; None when none was found.
+    steps : int
+        Continuation steps taken.
+    folds : int
+        Turning points passed.
     """
     direction = 1 if omega_target > omega_prev else -1
     tracer = Tracer(model, H, z_prev, omega_prev, 1e-9)

@@ -61,20 +61,39 @@ def continuation(
     Parameters
     ----------
     model : ReducedModel
+        The harmonic-balance model as a function of the mesh frequency.
     omega_start, omega_end : float
         Frequency range [rad/s]; the curve starts at ``omega_start`` (solved by Newton
         from ``z0`` or the linear response) and stops when ω leaves the range.
     H : int
         Harmonics.
+    z0 : array_like, optional
+        Start of Newton at ``omega_start``: real harmonics [x0, a1, b1, ...] of the
+        nonlinear coordinates, shape (n_nl, 2H+1) or flat [m]; default the full-contact
+        linear response.
     ds, ds_min, ds_max : float
-        Initial, minimum and maximum scaled arc-length step.
+        Initial, minimum and maximum scaled arc-length step [-].
     max_steps : int
+        Limit of continuation steps.
     tol : float
         Scaled residual tolerance of the corrector.
     stability : bool
         Floquet multipliers per point (needs ``model.state_space``).
     mesh : BacklashMesh, optional
         For the output metrics (default the model's mesh).
+    n_samples : int
+        Samples per period for the force extremes of the metrics.
+
+    Returns
+    -------
+    ContinuationResult
+        The curve (one row per point, ``direction`` "curve"), its arc length and turning
+        points; ``complete`` tells whether it left the range past ``omega_end``.
+
+    Raises
+    ------
+    RuntimeError
+        No converged starting solution at ``omega_start``.
     """
     mesh = mesh or model.mesh
     first = solve(model.at(omega_start, H), z0)

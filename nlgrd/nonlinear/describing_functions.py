@@ -38,7 +38,20 @@ from nlgrd.nonlinear.harmonics import (
 
 
 def deadzone(x: ArrayLike, b: float) -> NDArray[np.float64]:
-    """Backlash function f(x) = x - b (x > b), 0 (|x| <= b), x + b (x < -b); 2b total backlash [m]."""
+    """Backlash function f(x) = x - b (x > b), 0 (|x| <= b), x + b (x < -b); 2b total backlash [m].
+
+    Parameters
+    ----------
+    x : array_like
+        Argument, the mesh deflection x = δ - e [m], any shape.
+    b : float
+        Half backlash [m] (total backlash 2b), >= 0.
+
+    Returns
+    -------
+    ndarray
+        f(x) [m], shaped like ``x``.
+    """
     x = np.asarray(x, dtype=float)
     return np.where(x > b, x - b, np.where(x < -b, x + b, 0.0))
 
@@ -196,6 +209,23 @@ def contact_intervals(x: ArrayLike, b: float, crossings: str = "auto") -> Contac
     polynomials (companion matrix), polished by Newton. Before that the grid is refined
     eightfold once (cheaper than the companion matrix, of size 2D for D harmonics). Each
     interval's state is decided at its midpoint.
+
+    Parameters
+    ----------
+    x : array_like
+        Real harmonics [x_0, a_1, b_1, ..., a_D, b_D] of x = δ - e (1-D, length 2D + 1) [m].
+    b : float
+        Half backlash [m] (total backlash 2b), >= 0; with b = 0 the state is +1 where
+        x >= 0 and -1 elsewhere.
+    crossings : {"auto", "companion"}
+        How the crossings are found: dense grid with the companion matrix as the fallback,
+        or the companion matrix only.
+
+    Returns
+    -------
+    ContactIntervals
+        Intervals from one crossing to the next around the period (one interval [0, 2π)
+        when the state never changes), each with its contact state.
     """
     x = np.asarray(x, dtype=float)
     amp = np.hypot(x[1::2], x[2::2])
@@ -269,6 +299,14 @@ def fourier_exact(
     intervals : ContactIntervals, optional
         ``contact_intervals(x, b)`` when the caller has it already.
 
+    Returns
+    -------
+    G : ndarray (2H+1,)
+        Real harmonics [G_0, a_1, b_1, ..., a_H, b_H] of stiffness · f(x(θ)) [N] (in m with
+        the default ``stiffness`` 1).
+    dG : ndarray (2H+1, 2H+1)
+        dG/dx [N/m], only when ``jacobian``.
+
     Notes
     -----
     With s(θ) the contact indicator and β(θ) = ±b on drive/back contact, g = k_h s (x - β),
@@ -302,7 +340,18 @@ def fourier_exact(
 
 
 def default_aft_samples(H: int) -> int:
-    """Default AFT sample count: a power of two >= 16 (H + 1), at least 64."""
+    """Default AFT sample count: a power of two >= 16 (H + 1), at least 64.
+
+    Parameters
+    ----------
+    H : int
+        Number of harmonics to resolve.
+
+    Returns
+    -------
+    int
+        Samples per period N [-].
+    """
     return int(max(64, 2 ** np.ceil(np.log2(16 * (H + 1)))))
 
 
@@ -320,6 +369,37 @@ def fourier_aft(
     samples analysed by FFT. The Jacobian is the exact derivative of this discrete map:
     the Toeplitz matrix of the DFT of the sampled contact indicator. For the kinked f the
     error decays as N^-2 (see :func:`aft_convergence`).
+
+    Parameters
+    ----------
+    x : array_like
+        Real harmonics [x_0, a_1, b_1, ..., a_D, b_D] of x = δ - e (1-D, any number D of
+        harmonics, may exceed ``H``) [m].
+    b : float
+        Half backlash [m] (total backlash 2b), >= 0.
+    H : int
+        Number of harmonics returned.
+    stiffness : float
+        k_h [N/m]; the result is in N.
+    n_samples : int, optional
+        N, samples per period, more than 2 max(H, D); default
+        :func:`default_aft_samples` (max(H, D)).
+    jacobian : bool
+        Also return dG/dx, the (2H+1) x (2H+1) derivative with respect to the first
+        2H + 1 real harmonics of x (which equals dG/dδ since x = δ - e).
+
+    Returns
+    -------
+    G : ndarray (2H+1,)
+        Real harmonics [G_0, a_1, b_1, ..., a_H, b_H] of stiffness · f(x(θ)) [N] (in m with
+        the default ``stiffness`` 1).
+    dG : ndarray (2H+1, 2H+1)
+        dG/dx [N/m], only when ``jacobian``.
+
+    Raises
+    ------
+    ModelError
+        When ``n_samples`` <= 2 max(H, D).
     """
     x = np.asarray(x, dtype=float)
     D = n_harmonics(x)
@@ -340,9 +420,23 @@ def aft_convergence(
 ) -> dict[str, NDArray]:
     """Error of the AFT harmonics against the exact ones as the sample count N grows.
 
-    Returns a dict with ``n_samples``, ``error`` (max-norm of the harmonic error, in the
-    units of x) and ``order`` (the observed log-log slope between successive N; ≈ -2
-    for the kinked backlash function).
+    Parameters
+    ----------
+    x : array_like
+        Real harmonics [x_0, a_1, b_1, ..., a_D, b_D] of x = δ - e (1-D) [m].
+    b : float
+        Half backlash [m] (total backlash 2b), >= 0.
+    H : int
+        Number of harmonics compared.
+    n_samples : array_like of int
+        Sample counts N to try; those <= 2 max(H, D) are skipped.
+
+    Returns
+    -------
+    dict of str to ndarray
+        A dict with ``n_samples``, ``error`` (max-norm of the harmonic error, in the
+        units of x) and ``order`` (the observed log-log slope between successive N; ≈ -2
+        for the kinked backlash function).
     """
     x = np.asarray(x, dtype=float)
     exact = fourier_exact(x, b, H)
@@ -366,6 +460,27 @@ def one_sided_describing_function(x0: float, A: float, b: float) -> tuple[float,
     x0 - b = -A cos α, and a_1 = (1/π) ∫_{-α}^{α} A (cos θ - cos α) cos θ dθ.
     h equals the backlash function f of :func:`deadzone` whenever x0 - A >= -b (no
     back-side contact); this is the one-sided contact-loss describing function.
+
+    Parameters
+    ----------
+    x0 : float
+        Mean of x [m].
+    A : float
+        Amplitude of the cosine of x [m], > 0.
+    b : float
+        Threshold of h: the half backlash [m].
+
+    Returns
+    -------
+    mean : float
+        Mean of h(x(θ)) [m].
+    a1 : float
+        Coefficient of cos θ in h(x(θ)) [m].
+
+    Raises
+    ------
+    ModelError
+        When ``A`` is not positive.
     """
     check_positive("A", A)
     ca = (b - x0) / A
@@ -383,6 +498,22 @@ def describing_gains(x: ArrayLike, b: float, H: int, method: str = "exact") -> N
 
     F_k and X_k are the complex amplitudes of f(x(θ)) and x(θ) at harmonic k = 0..H, so
     that the nonlinear force is k_h Σ ν_k X_k e^{ikθ}. Harmonics with X_k = 0 get NaN.
+
+    Parameters
+    ----------
+    x : array_like
+        Real harmonics [x_0, a_1, b_1, ...] of x = δ - e (1-D) [m].
+    b : float
+        Half backlash [m] (total backlash 2b), >= 0.
+    H : int
+        Highest harmonic k.
+    method : {"exact", "aft"}
+        F_k by :func:`fourier_exact` ("exact") or by :func:`fourier_aft` (any other value).
+
+    Returns
+    -------
+    ndarray of complex (H+1,)
+        ν_k, k = 0..H [-]; NaN where X_k = 0.
     """
     x = resize_harmonics(x, max(H, n_harmonics(x)))
     G = fourier_exact(x, b, H) if method == "exact" else fourier_aft(x, b, H)

@@ -85,6 +85,11 @@ class FloquetCache(BoundedCache):
     shared by the state spaces of a model (``LinearStateSpace(..., cache=...)``).
 
     Keys are tuples of hashables; :meth:`get` computes a missing entry with ``make``.
+
+    Parameters
+    ----------
+    maxsize : int
+        Most entries kept (default 16); the oldest goes first.
     """
 
 
@@ -242,7 +247,24 @@ def _state_matrix(ss: LinearStateSpace) -> tuple[NDArray, NDArray]:
 
 def expm_monodromy(ss: LinearStateSpace, breaks: NDArray, Kt: NDArray, omega: float) -> NDArray:
     """Π exp(A_i Δt_i) over the pieces from ``breaks[0]`` (the first acts first) in the
-    unscaled state (q, q'), by scipy's ``expm``: the reference product (``method="expm"``)."""
+    unscaled state (q, q'), by scipy's ``expm``: the reference product (``method="expm"``).
+
+    Parameters
+    ----------
+    ss : LinearStateSpace
+        The linear part M, D, K, W (N DOFs), used as given (no deflation, no mesh block).
+    breaks : ndarray (n+1,)
+        Angles θ [rad] bounding the n pieces of one period.
+    Kt : ndarray (n, n_nl, n_nl)
+        Tangent stiffness of the nonlinear coordinates on each piece [N/m].
+    omega : float
+        Mesh frequency [rad/s]: piece i lasts (breaks[i+1] - breaks[i]) / omega [s].
+
+    Returns
+    -------
+    ndarray (2N, 2N)
+        The monodromy matrix Φ: (q, q') at θ = ``breaks[0]`` to (q, q') at ``breaks[-1]``.
+    """
     Minv, A = _state_matrix(ss)
     N = ss.M.shape[0]
     Phi = np.eye(2 * N)
@@ -296,6 +318,33 @@ def floquet_multipliers(
     reference method (unscaled state matrix, scipy ``expm``), for comparisons. State
     spaces built with a shared ``cache`` reuse the multipliers of a frequency met before
     with the same contact states and intervals (:func:`_revisit`).
+
+    Parameters
+    ----------
+    state_space : LinearStateSpace
+        The linear part M, D, K and the projection W (N x n_nl) onto the nonlinear coordinates.
+    nonlinearities : sequence of LocalNonlinearity
+        The force laws; their ``tangent_segments`` give K_t(θ).
+    harmonics : array_like (n_nl, 2H+1)
+        Real harmonics [y_0, a_1, b_1, ..., a_H, b_H] of the nonlinear coordinates of the
+        periodic solution (δ [m] for a mesh); 1-D for one coordinate.
+    omega : float
+        Mesh frequency ω [rad/s]; the period is 2π/ω.
+    deflate : bool
+        Remove the free rigid-body modes first.
+    method : {"auto", "dense", "expm"}
+        See above and the module docstring.
+
+    Returns
+    -------
+    ndarray of complex
+        Floquet multipliers μ [-]: every one (2N, less 2 per deflated mode), or with
+        ``"auto"`` above ``DENSE_STATE_LIMIT`` the dominant ones only.
+
+    Raises
+    ------
+    ModelError
+        When ``method`` is not one of ``METHODS``.
     """
     if method not in METHODS:
         raise ModelError("method", f"one of {', '.join(map(repr, METHODS))}, got {method!r}")
@@ -368,7 +417,25 @@ def monodromy(
     state_space: LinearStateSpace, nonlinearities: Sequence, harmonics: ArrayLike, omega: float
 ) -> NDArray[np.float64]:
     """The monodromy of :func:`floquet_multipliers`: deflated, mesh block, scaled state, the
-    period from a contact change (similar to the one from θ = 0)."""
+    period from a contact change (similar to the one from θ = 0).
+
+    Parameters
+    ----------
+    state_space : LinearStateSpace
+        The linear part M, D, K and the projection W (N x n_nl) onto the nonlinear coordinates.
+    nonlinearities : sequence of LocalNonlinearity
+        The force laws; their ``tangent_segments`` give K_t(θ).
+    harmonics : array_like (n_nl, 2H+1)
+        Real harmonics [y_0, a_1, b_1, ..., a_H, b_H] of the nonlinear coordinates of the
+        periodic solution (δ [m] for a mesh); 1-D for one coordinate.
+    omega : float
+        Mesh frequency ω [rad/s]; the period is 2π/ω.
+
+    Returns
+    -------
+    ndarray (2n_b, 2n_b)
+        Φ in the scaled state (w_s η, η') of the n_b coordinates of the deflated mesh block.
+    """
     ss = state_space.deflated
     Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
     states, seq = _state_sequence(*_tangent_pieces(nonlinearities, Y, ss.W.shape[1]))

@@ -40,6 +40,12 @@ class LocalNonlinearity(Protocol):
     It acts on the nonlinear coordinates ``coords`` (indices into the solver's
     n_nl-vector y of nonlinear coordinates, e.g. y_0 = δ, the mesh relative
     displacement) and adds the force vector g(y(θ), θ) to their equations.
+
+    Attributes
+    ----------
+    coords : tuple of int
+        Indices of the m coordinates it acts on among the n_nl nonlinear coordinates; its
+        harmonics, forces and tangents are ordered like them.
     """
 
     coords: tuple[int, ...]

@@ -20,6 +20,7 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.bearing_loads import BearingResponse, bearing_response
 from nlgrd.nonlinear.continuation import continuation
 from nlgrd.nonlinear.floquet import FloquetCache
 from nlgrd.nonlinear.force_laws import BacklashMesh
@@ -45,6 +46,12 @@ class GearedModel:
         k_h, b, LSTE harmonics (mean removed), c_m and W_0.
     reduced : ReducedModel
         κ_k(ω), F_k(ω) and the projected linear part for Floquet stability.
+    bearing_dofs : ndarray of int
+        The (uy, uz) DOFs of each bearing node, bearing by bearing.
+    max_mesh_frequency : float
+        Highest mesh frequency the model was built for [rad/s].
+    H : int
+        Largest number of harmonics the model was built for.
     """
 
     system: RotorSystem
@@ -100,6 +107,16 @@ def build_geared_model(
         Harmonics kept of the LSTE (solutions use the first H).
     aft : bool
         Fourier coefficients of the mesh force by AFT instead of exact integration.
+
+    Returns
+    -------
+    GearedModel
+        The reduced model, valid up to ``max_mesh_frequency`` and ``H``.
+
+    Raises
+    ------
+    ModelError
+        Not exactly one gear pair, or ``max_mesh_frequency`` not positive and finite.
     """
     if len(system.gear_pairs) != 1:
         raise ModelError(
@@ -158,25 +175,6 @@ def build_geared_model(
 
 #: Bearing outputs below this fraction of the largest of their kind (over bearings and
 #: points) are rounding of the recovery, not response.
-RECOVERY_RTOL = 1e-12
-
-
-@dataclass(frozen=True)
-class BearingResponse:
-    """Bearing displacements and forces per sweep point, arrays (n_points, n_bearings).
-
-    Displacement and force are radial magnitudes |(y, z)| over one period:
-    ``*_mean`` of the static part, ``*_rms`` of the alternating part, ``*_max`` overall;
-    ``force_amplitude`` is the amplitude of the first mesh harmonic (largest axis).
-    """
-
-    displacement_mean: NDArray
-    displacement_rms: NDArray
-    displacement_max: NDArray
-    force_mean: NDArray
-    force_rms: NDArray
-    force_max: NDArray
-    force_amplitude: NDArray
 
 
 @dataclass(frozen=True)
@@ -191,6 +189,9 @@ class GearedSweepResult:
     rpm : ndarray
         Pinion speed of each point [rpm].
     bearing_names : list of str
+        One name per bearing (its own, or shaft and node).
+    H : int
+        Number of harmonics of the mesh solution.
     """
 
     mesh: SweepResult
@@ -231,87 +232,9 @@ class GearedSweepResult:
         return self.mesh.plot(quantity=quantity, ax=ax)
 
 
-def _radial_maxima(X: NDArray) -> NDArray:
-    """Maximum over one period of |(x_y, x_z)| for complex harmonics X (n_points, H+1, 2 n_b).
-
-    Columns come in (y, z) pairs. The magnitude is sampled at 64 (H+1) points per period
-    and its maximum refined by a parabola through the largest sample and its two
-    neighbours (relative error below 1e-5 for H = 5; 2048 plain samples erred by up to
-    3e-5).
-    """
-    H = X.shape[1] - 1
-    n = 64 * (H + 1)
-    theta = 2 * np.pi * np.arange(n) / n
-    kt = np.outer(theta, np.arange(H + 1))  # (n, H+1)
-    x = np.cos(kt) @ X.real - np.sin(kt) @ X.imag  # Re Σ X_k e^{ikθ}: (p, n, m)
-    mag = np.hypot(x[..., 0::2], x[..., 1::2])  # (p, n, nb)
-    j = np.argmax(mag, axis=1)[:, None, :]
-    y0 = np.take_along_axis(mag, (j - 1) % n, axis=1)[:, 0]
-    y1 = np.take_along_axis(mag, j, axis=1)[:, 0]
-    y2 = np.take_along_axis(mag, (j + 1) % n, axis=1)[:, 0]
-    den = y0 - 2 * y1 + y2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        peak = np.where(den < 0, y1 - (y2 - y0) ** 2 / (8 * den), y1)
-    return np.maximum(peak, y1)
-
-
-def bearing_response(model: GearedModel, result: SweepResult) -> BearingResponse:
-    """Recover bearing displacements and forces for every converged point of ``result``.
-
-    At a converged point the mesh force harmonics are G_k = F_k - κ_k Y_k (the balance
-    the solver met, to its tolerance), so recovery needs only the receptances the sweep
-    already computed: Q_k = U_k (F_k - G_k), Q_0 from the mean terms.
-    """
-    system, mr = model.system, model.receptance
-    nb = len(system.bearings)
-    n = len(result.omega)
-    out = {k: np.full((n, nb), np.nan) for k in BearingResponse.__dataclass_fields__}
-    pts = [i for i in range(n) if result.converged[i] and not result.no_stable[i]]
-    if not pts:
-        return BearingResponse(**out)
-    H = (result.harmonics[pts[0]].size - 1) // 2
-    k = np.arange(H + 1)
-    Qs = np.empty((len(pts), H + 1, 2 * nb), dtype=complex)
-    Fs = np.empty_like(Qs)
-    for row, i in enumerate(pts):
-        w = float(result.omega[i])
-        Y = real_to_complex(result.harmonics[i].reshape(-1))[:, None]
-        F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
-        kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, 1, 1)
-        G = F - kap[:, :, 0] * Y
-        Q = mr.recover(w, Y, G, F)
-        speed = mr.speed(w)
-        for j, b in enumerate(system.bearings):
-            s = system.shafts[b.shaft].speed_ratio * speed
-            q = Q[:, 2 * j : 2 * j + 2]
-            Fs[row, :, 2 * j : 2 * j + 2] = -(
-                q @ b.stiffness(s).T + (1j * k * w)[:, None] * (q @ b.damping(s).T)
-            )
-        Qs[row] = Q
-    rows = np.array(pts)
-    out["displacement_mean"][rows] = np.hypot(Qs[:, 0, 0::2].real, Qs[:, 0, 1::2].real)
-    out["displacement_rms"][rows] = np.sqrt(
-        np.sum(np.abs(Qs[:, 1:, 0::2]) ** 2 + np.abs(Qs[:, 1:, 1::2]) ** 2, axis=1) / 2
-    )
-    out["force_mean"][rows] = np.hypot(Fs[:, 0, 0::2].real, Fs[:, 0, 1::2].real)
-    out["force_rms"][rows] = np.sqrt(
-        np.sum(np.abs(Fs[:, 1:, 0::2]) ** 2 + np.abs(Fs[:, 1:, 1::2]) ** 2, axis=1) / 2
-    )
-    out["force_amplitude"][rows] = np.maximum(np.abs(Fs[:, 1, 0::2]), np.abs(Fs[:, 1, 1::2])) if H else 0.0
-    for a in range(0, len(pts), 200):
-        sl = slice(a, a + 200)
-        out["displacement_max"][rows[sl]] = _radial_maxima(Qs[sl])
-        out["force_max"][rows[sl]] = _radial_maxima(Fs[sl])
-    # A bearing the mesh does not load (a stub shaft coupled in torsion only) gets
-    # rounding, 1e-60 and below, which differs from machine to machine: written as 0.
-    for v in out.values():
-        v[np.abs(v) <= RECOVERY_RTOL * np.nanmax(np.abs(v))] = 0.0
-    return BearingResponse(**out)
-
-
 def geared_sweep(
     system: RotorSystem,
-    mesh_frequencies: NDArray | None = None,
+    omegas: NDArray | None = None,
     rpm: NDArray | None = None,
     H: int | None = None,
     directions: str = "both",
@@ -332,7 +255,7 @@ def geared_sweep(
     ----------
     system : RotorSystem
         With one gear pair.
-    mesh_frequencies : array_like, optional
+    omegas : array_like, optional
         Mesh frequencies [rad/s]; or
     rpm : array_like, optional
         pinion speeds [rpm].
@@ -347,6 +270,9 @@ def geared_sweep(
     stability : bool
         Floquet multipliers of each point (projected linear part).
     receptance : {"auto", "direct", "modal"}
+        See :class:`~nlgrd.nonlinear.receptance.MeshReceptance` (when ``model`` is built here).
+    tol : float
+        Convergence tolerance of the solver (relative residual).
     max_iter : int
         Newton iterations per point. The Jacobian jumps where contact is first lost
         (grazing), where damped Newton can need a hundred iterations; each costs little.
@@ -357,16 +283,24 @@ def geared_sweep(
         Reuse a reduced model (e.g. across directions or harmonics).
     progress : callable, optional
         ``progress(i, n)`` after each point.
+    harmonic_rtol : float
+        Tolerance of the estimated relative error when ``H`` is chosen (``H`` None).
 
     Returns
     -------
     GearedSweepResult
         Points that did not converge carry ``converged = False`` and NaN outputs.
+
+    Raises
+    ------
+    ModelError
+        Both or neither of ``omegas`` and ``rpm``, frequencies not positive and finite, or
+        a ``model`` built for a lower frequency or H.
     """
-    if (rpm is None) == (mesh_frequencies is None):
+    if (rpm is None) == (omegas is None):
         raise ModelError("rpm", "give either pinion speeds (rpm) or mesh frequencies, not both")
     if model is None:
-        top = np.max(mesh_frequencies) if mesh_frequencies is not None else None
+        top = np.max(omegas) if omegas is not None else None
         if top is None:
             if not system.gear_pairs:
                 raise ModelError("gear_pairs", "the model has no gear pair")
@@ -374,11 +308,9 @@ def geared_sweep(
             s_p = abs(system.shafts[gp.pinion_shaft].speed_ratio)
             top = np.max(rpm) * np.pi / 30 * gp.geometry.teeth_pinion * s_p
         model = build_geared_model(system, float(top), H=H or LADDER[-1], receptance=receptance)
-    omegas = np.asarray(
-        mesh_frequencies if mesh_frequencies is not None else model.mesh_frequency(rpm), float
-    )
+    omegas = np.asarray(omegas if omegas is not None else model.mesh_frequency(rpm), float)
     if omegas.ndim != 1 or len(omegas) < 1 or not np.all(np.isfinite(omegas)) or np.any(omegas <= 0):
-        raise ModelError("mesh_frequencies", "must be a non-empty list of positive finite frequencies")
+        raise ModelError("omegas", "must be a non-empty list of positive finite frequencies")
     ladder = _ladder(model) if H is None else ()
     model.check_range(omegas, H if H is not None else ladder[-1])
     count = {"i": 0}
@@ -436,6 +368,34 @@ def geared_continuation(
     Returns the whole response curve, unstable branch included
     (:func:`nlgrd.nonlinear.continuation.continuation`; ``kwargs`` are passed on). ``H`` default:
     chosen by the error estimate (:func:`nlgrd.nonlinear.harmonic_convergence.converged_continuation`).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        With one gear pair.
+    omega_start, omega_end : float
+        Frequency range of the curve [rad/s].
+    H : int, optional
+        Number of harmonics; default chosen by the error estimate.
+    model : GearedModel, optional
+        Reuse a reduced model.
+    stability : bool
+        Floquet multipliers of each point.
+    harmonic_rtol : float
+        Tolerance of the estimated relative error when ``H`` is chosen (``H`` None).
+    **kwargs
+        Further options of :func:`nlgrd.nonlinear.continuation.continuation`.
+
+    Returns
+    -------
+    ContinuationResult
+        The response curve of the mesh coordinate (no bearing recovery).
+
+    Raises
+    ------
+    ModelError
+        Not exactly one gear pair (when ``model`` is built here), or a ``model`` built for
+        a lower frequency or H.
     """
     if model is None:
         model = build_geared_model(system, max(omega_start, omega_end), H=H or LADDER[-1])
@@ -473,6 +433,21 @@ def sdof_model(system: RotorSystem):
     m_eq from the disks at the gear nodes, k_h, c_m, b, W_0 and the LSTE of the gear pair
     (mean removed): the model the paper compares NLGRD with. Returns
     :class:`nlgrd.nonlinear.sdof.SDOFGearPair`.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        With exactly one gear pair.
+
+    Returns
+    -------
+    SDOFGearPair
+        m_eq [kg], k_h [N/m], b [m], W_0 [N], c_m [N s/m] and 30 LSTE harmonics [m].
+
+    Raises
+    ------
+    ModelError
+        Not exactly one gear pair.
     """
     from nlgrd.nonlinear.sdof import SDOFGearPair
 
@@ -499,6 +474,22 @@ def gear_pair_mode(system: RotorSystem, speed: float = 0.0, n_modes: int = 40) -
     The mode of the linear system (mesh at k_h) whose share of strain energy in the mesh
     spring, k_h |wᵀφ|² / φᴴ K φ, is largest: where the mesh frequency meets it, the main
     resonance of the gear dynamics lies.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        With at least one gear pair (the first mesh is used).
+    speed : float
+        Reference shaft speed Ω of the modal analysis [rad/s].
+    n_modes : int
+        Number of modes computed.
+
+    Returns
+    -------
+    frequency : float
+        Undamped natural frequency of the gear-pair mode [Hz].
+    fraction : float
+        Its share of strain energy in the mesh spring [-].
     """
     from nlgrd.rotor.assembly import assemble
     from nlgrd.rotor.modal import modal_analysis

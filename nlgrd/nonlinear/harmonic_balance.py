@@ -69,6 +69,23 @@ def real_block_matrix(A: ArrayLike) -> NDArray[np.float64]:
     """Real (n(2H+1))² matrix of the harmonic-wise complex map Y_k -> A_k Y_k.
 
     With Y_k = a - i b and A_k = p + i q: Re(A Y) = p a + q b, -Im(A Y) = -q a + p b.
+
+    Parameters
+    ----------
+    A : array_like of complex
+        A_k, k = 0..H: shape (H+1,) for one coordinate or (H+1, n, n), in any unit (κ_k
+        [N/m], h_k [m/N]); only the real part of A_0 is used.
+
+    Returns
+    -------
+    ndarray (n(2H+1), n(2H+1))
+        The real matrix on coordinate-major real harmonics z[i (2H+1) + r], in the unit of
+        ``A``.
+
+    Raises
+    ------
+    ModelError
+        When ``A`` is not (H+1,) or (H+1, n, n).
     """
     A = _as_matrices(A)
     H, n = A.shape[0] - 1, A.shape[1]
@@ -270,6 +287,8 @@ class HarmonicSolution:
         Solver that produced the last iterate.
     iterate : ndarray
         The last iterate, kept for diagnostics even when not converged.
+    message : str
+        The solver's message ("converged", or why it stopped).
     multipliers : ndarray or None
         Floquet multipliers, when stability was computed.
     """
@@ -325,8 +344,11 @@ class ReducedModel:
     Parameters
     ----------
     kappa : callable (omega [rad/s], H) -> (H+1,) or (H+1, n, n) complex [N/m]
+        κ_k, k = 0..H, at mesh frequency omega (see :class:`ReducedProblem`).
     force : callable (omega, H) -> (H+1,) or (H+1, n) complex [N]
+        F_k, k = 0..H.
     nonlinearities : sequence of LocalNonlinearity
+        Force laws acting on the nonlinear coordinates (e.g. :class:`BacklashMesh`).
     nl_gain : callable (omega, H) -> (H+1, n, n), optional
         B_k; identity when None.
     state_space : LinearStateSpace, optional

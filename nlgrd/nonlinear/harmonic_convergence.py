@@ -71,6 +71,22 @@ class HarmonicCheck:
     ``error`` per point (NaN where the point was not checked: not converged, or unstable);
     ``jumps_held`` whether every jump is also a jump at H'; ``history`` the ladder steps
     as (H, largest error, jumps held).
+
+    Attributes
+    ----------
+    H : int
+        Number of harmonics of the result checked.
+    H_check : int
+        The larger number of harmonics H' it was re-solved at.
+    error : ndarray
+        Estimated relative error of the outputs per point [-]: NaN where not checked, inf
+        where no solution on the branch was found at H'.
+    jumps_held : bool
+        Every jump of the result is also a jump at H'.
+    history : tuple
+        The ladder steps as (H, largest error, jumps held).
+    solutions : dict
+        {row index: HarmonicSolution at H' or None} of every converged point re-solved.
     """
 
     H: int
@@ -92,13 +108,40 @@ class HarmonicCheck:
 
 
 def next_harmonics(H: int, ladder: Sequence[int] = LADDER) -> int:
-    """The H' a solution with H harmonics is checked against: the next rung (1.5 H above the top)."""
+    """The H' a solution with H harmonics is checked against: the next rung (1.5 H above the top).
+
+    Parameters
+    ----------
+    H : int
+        Number of harmonics of the solution.
+    ladder : sequence of int
+        Increasing harmonic counts (default :data:`LADDER`).
+
+    Returns
+    -------
+    int
+        The first rung above ``H``, or ceil(1.5 H) when ``H`` is at or above the top.
+    """
     above = [h for h in ladder if h > H]
     return above[0] if above else int(np.ceil(1.5 * H))
 
 
 def pad_harmonics(z: ArrayLike, H_new: int) -> NDArray:
-    """Real harmonics (n, 2H+1) [c_0, a_1, b_1, ...] extended (zeros) or cut to H_new."""
+    """Real harmonics (n, 2H+1) [c_0, a_1, b_1, ...] extended (zeros) or cut to H_new.
+
+    Parameters
+    ----------
+    z : array_like
+        Real harmonics [x0, a1, b1, ...], shape (n_nl, 2H+1) or (2H+1,) for one
+        coordinate [m].
+    H_new : int
+        Number of harmonics of the result.
+
+    Returns
+    -------
+    ndarray
+        Shape (n_nl, 2 H_new + 1), same unit as ``z`` [m].
+    """
     z = np.atleast_2d(np.asarray(z, dtype=float))
     out = np.zeros((z.shape[0], 2 * H_new + 1))
     m = min(z.shape[1], out.shape[1])
@@ -138,6 +181,32 @@ def check_harmonics(
     See the module docstring. Points checked: converged, and stable where stability was
     computed (an unstable point is not the response). ``jumps=False`` skips the jump
     check (a continuation curve has folds, not jumps).
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model the result was solved on.
+    result : SweepResult
+        The sweep (or continuation curve) at H.
+    H_check : int, optional
+        The H' to re-solve at (> H); default :func:`next_harmonics` of H.
+    tol : float
+        Convergence tolerance of Newton at H' (relative residual).
+    rtol : float
+        Relative tolerance of the jump check: the branch left, continued at H', matches
+        the point after the jump within ``rtol``.
+    jumps : bool
+        Check that every jump holds at H'.
+
+    Returns
+    -------
+    HarmonicCheck
+        The error estimate per point, the jump verdict and the H' solutions.
+
+    Raises
+    ------
+    ModelError
+        ``H_check`` not above the result's H.
     """
     H = (result.harmonics.shape[-1] - 1) // 2
     H2 = next_harmonics(H) if H_check is None else int(H_check)
@@ -214,7 +283,24 @@ def lift(
     full sweep is needed: a converged point that has no solution near it at H', a point
     whose contact-loss fraction moved by more than 0.05 or whose stability changed (the
     branch structure differs), or a jump that does not hold. Each point is then the H'
-    solution on the branch the sweep chose, as a sweep at H' would find it."""
+    solution on the branch the sweep chose, as a sweep at H' would find it.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model the sweep was solved on.
+    result : SweepResult
+        The sweep at H.
+    check : HarmonicCheck
+        Its check against H' (:func:`check_harmonics`), with the re-solved points.
+    stability : bool
+        Compute Floquet multipliers at H' (and compare stability with ``result``).
+
+    Returns
+    -------
+    SweepResult or None
+        The sweep at H'; None when a full sweep at H' is needed.
+    """
     if not check.jumps_held:
         return None
     H2 = check.H_check
@@ -262,7 +348,23 @@ def lift(
 
 
 def with_harmonic_error(result: SweepResult, check: HarmonicCheck, rtol: float) -> SweepResult:
-    """``result`` with the estimate stored per point; points above ``rtol`` not converged."""
+    """``result`` with the estimate stored per point; points above ``rtol`` not converged.
+
+    Parameters
+    ----------
+    result : SweepResult
+        The sweep checked.
+    check : HarmonicCheck
+        Its check (:func:`check_harmonics`).
+    rtol : float
+        Largest accepted estimated relative error.
+
+    Returns
+    -------
+    SweepResult
+        ``result`` with ``harmonic_error`` and ``H_check`` set; points above ``rtol`` are
+        marked not converged and not stable.
+    """
     with np.errstate(invalid="ignore"):
         bad = result.converged & (check.error > rtol)  # NaN compares False
     return replace(
@@ -292,6 +394,45 @@ def converged_sweep(
 
     The last rung only checks the one before (the highest H solved is ``ladder[-1]``).
     ``on_rung(H)`` is called before each sweep; ``kwargs`` go to :func:`sweep`.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The harmonic-balance model as a function of the mesh frequency.
+    omegas : array_like
+        Mesh frequencies [rad/s].
+    directions : "up", "down", "both" or a sequence of them
+        The sweeps (see :func:`nlgrd.nonlinear.sweep.sweep`).
+    rtol : float
+        Tolerance of the estimated relative error of RMS DTE and maximum mesh force, in
+        (0, 1).
+    ladder : sequence of int
+        Increasing harmonic counts tried, at least two.
+    tol : float
+        Convergence tolerance of the solver (relative residual).
+    stability : bool
+        Floquet multipliers per point.
+    on_rung : callable, optional
+        ``on_rung(H)``, called before each rung.
+    **kwargs
+        Further options of :func:`nlgrd.nonlinear.sweep.sweep`.
+
+    Returns
+    -------
+    SweepResult
+        The sweep at the chosen H, with ``harmonic_error`` and ``H_check``; points above
+        ``rtol`` at the top of the ladder are marked not converged.
+
+    Raises
+    ------
+    ModelError
+        A ladder that is not increasing positive counts or has fewer than two, or
+        ``rtol`` outside (0, 1).
+
+    Warns
+    -----
+    HarmonicsWarning
+        The ladder ended before the estimate met ``rtol``.
     """
     if not ladder or any(int(h) < 1 for h in ladder) or list(ladder) != sorted(set(ladder)):
         raise ModelError("ladder", f"must be increasing positive harmonic counts, got {tuple(ladder)}")
@@ -366,6 +507,35 @@ def converged_continuation(
     moves at higher H has no solution there: the fold is not converged either).
 
     Returns the :class:`~nlgrd.nonlinear.continuation.ContinuationResult` with the estimate per point.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The harmonic-balance model as a function of the mesh frequency.
+    omega_start, omega_end : float
+        Frequency range of the curve [rad/s].
+    rtol : float
+        Tolerance of the estimated relative error of RMS DTE and maximum mesh force.
+    ladder : sequence of int
+        Increasing harmonic counts tried, at least two.
+    **kwargs
+        Further options of :func:`nlgrd.nonlinear.continuation.continuation` (its ``tol``,
+        default 1e-9, is also that of the check).
+
+    Returns
+    -------
+    ContinuationResult
+        The curve at the chosen H, its points carrying ``harmonic_error`` and ``H_check``.
+
+    Raises
+    ------
+    ModelError
+        A ladder that is not increasing or has fewer than two counts.
+
+    Warns
+    -----
+    HarmonicsWarning
+        The ladder ended before the estimate met ``rtol``.
     """
     from nlgrd.nonlinear.continuation import continuation
 

@@ -19,7 +19,25 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def tangent_spectrum(nonlinearities: Sequence, harmonics: ArrayLike, n: int, n_max: int) -> NDArray:
-    """Fourier coefficients T_m = (1/2π) ∫ K_t(θ) e^{-imθ} dθ, m = -n_max..n_max, shape (2n_max+1, n, n)."""
+    """Fourier coefficients T_m = (1/2π) ∫ K_t(θ) e^{-imθ} dθ, m = -n_max..n_max, shape (2n_max+1, n, n).
+
+    Parameters
+    ----------
+    nonlinearities : sequence of LocalNonlinearity
+        The force laws; their ``tangent_segments`` give K_t(θ).
+    harmonics : array_like (n_nl, 2H+1)
+        Real harmonics [y_0, a_1, b_1, ..., a_H, b_H] of the nonlinear coordinates of the
+        periodic solution (δ [m] for a mesh); 1-D for one coordinate.
+    n : int
+        Number of nonlinear coordinates n_nl (the size of K_t).
+    n_max : int
+        Highest harmonic |m| returned.
+
+    Returns
+    -------
+    ndarray of complex (2n_max+1, n, n)
+        T_m at index n_max + m [N/m].
+    """
     Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
     breaks, Kt = _tangent_pieces(nonlinearities, Y, n)
     m = np.arange(-n_max, n_max + 1)
@@ -48,6 +66,26 @@ def hill_multipliers(
     |Im λ| are kept (fundamental strip) and μ = exp(λ 2π/ω) returned. Truncation error
     decays slowly for the discontinuous tangent of the backlash law; prefer
     :func:`floquet_multipliers`. This is the route when the linear part is polynomial.
+
+    Parameters
+    ----------
+    state_space : LinearStateSpace
+        The linear part M, D, K and the projection W (N x n_nl) onto the nonlinear
+        coordinates; its free rigid-body modes are deflated first.
+    nonlinearities : sequence of LocalNonlinearity
+        The force laws; their ``tangent_segments`` give K_t(θ).
+    harmonics : array_like (n_nl, 2H+1)
+        Real harmonics [y_0, a_1, b_1, ..., a_H, b_H] of the nonlinear coordinates of the
+        periodic solution (δ [m] for a mesh); 1-D for one coordinate.
+    omega : float
+        Mesh frequency ω [rad/s]; the period is 2π/ω.
+    n_hill : int
+        Harmonics of the Floquet ansatz: k = -n_hill..n_hill.
+
+    Returns
+    -------
+    ndarray of complex (2N_d,)
+        Floquet multipliers μ [-] of the deflated system (N_d DOFs).
     """
     ss = state_space.deflated
     N = ss.M.shape[0]
@@ -79,6 +117,22 @@ def harmonic_solution_stability(
 
     "monodromy" is :func:`floquet_multipliers` with its default method: above
     ``DENSE_STATE_LIMIT`` only the dominant multipliers are attached.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        Gives the nonlinearities and the linear state space at ``solution.omega``.
+    solution : HarmonicSolution
+        A solution of ``model``.
+    method : {"monodromy", "hill"}
+        :func:`floquet_multipliers` or :func:`hill_multipliers` (``"hill"``; any other
+        value is the monodromy).
+
+    Returns
+    -------
+    HarmonicSolution
+        A copy with ``multipliers`` attached; ``solution`` itself when it did not converge
+        or the model has no state space.
     """
     ss = model.linear_state_space(solution.omega)
     if ss is None or not solution.converged:

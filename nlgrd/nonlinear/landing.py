@@ -27,20 +27,49 @@ WANDER_ITER = 20
 
 
 def distance(sol: HarmonicSolution, z_prev: NDArray) -> float:
-    """Euclidean distance of a solution's harmonics from ``z_prev``."""
+    """Euclidean distance of a solution's harmonics from ``z_prev``.
+
+    Parameters
+    ----------
+    sol : HarmonicSolution
+        The solution whose harmonics are compared.
+    z_prev : ndarray
+        Harmonics to measure from: real harmonics [x0, a1, b1, ...] of the
+        nonlinear coordinates, shape (n_nl, 2H+1) or flattened coordinate-major [m].
+
+    Returns
+    -------
+    float
+        ‖z - z_prev‖ over all harmonics of all coordinates [m].
+    """
     return float(np.linalg.norm(sol.harmonics.reshape(-1) - np.asarray(z_prev).reshape(-1)))
 
 
-def is_stable(model, sol: HarmonicSolution, w: float) -> bool:
-    """Floquet-stable (True also when the model has no linear state space to check)."""
-    ss = model.linear_state_space(w)
+def is_stable(model, sol: HarmonicSolution, omega: float) -> bool:
+    """Floquet-stable (True also when the model has no linear state space to check).
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model solved (its linear state space at ``omega`` gives the multipliers).
+    sol : HarmonicSolution
+        The solution checked.
+    omega : float
+        Mesh frequency of the solution [rad/s].
+
+    Returns
+    -------
+    bool
+        max |μ| < 1 + ``STABLE_RTOL``, or True when ``model`` has no state space.
+    """
+    ss = model.linear_state_space(omega)
     if ss is None:
         return True
-    mu = floquet_multipliers(ss, model.nonlinearities, sol.harmonics, w)
+    mu = floquet_multipliers(ss, model.nonlinearities, sol.harmonics, omega)
     return bool(np.max(np.abs(mu)) < 1 + STABLE_RTOL)
 
 
-def restart(model, problem, z_prev, w, H, method, tol, max_iter):
+def restart(model, problem, z_prev, omega, H, method, tol, max_iter):
     """Land on another branch after a fold without arc-length continuation.
 
     Newton is started from the full-contact linear response and from the previous
@@ -49,6 +78,31 @@ def restart(model, problem, z_prev, w, H, method, tol, max_iter):
     the one nearest the previous solution is returned (None if there is none): after a
     fold a slow sweep falls to the nearest coexisting stable branch, in the usual case
     of an S-shaped curve the one the unstable branch leads to.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model solved (for the stability check).
+    problem : ReducedProblem
+        The harmonic-balance problem at ``omega`` (``model.at(omega, H)``).
+    z_prev : ndarray
+        The previous solution: real harmonics [x0, a1, b1, ...] of the
+        nonlinear coordinates, shape (n_nl, 2H+1) or flattened coordinate-major [m].
+    omega : float
+        Mesh frequency of the new point [rad/s].
+    H : int
+        Number of harmonics.
+    method : str
+        Solver of :func:`nlgrd.nonlinear.solvers.solve` for each start.
+    tol : float
+        Convergence tolerance of the solver (relative residual).
+    max_iter : int
+        Iteration limit of the solver per start.
+
+    Returns
+    -------
+    HarmonicSolution or None
+        The converged stable solution nearest ``z_prev``; None when no start gives one.
     """
     z_prev = np.asarray(z_prev, dtype=float)
     nh = 2 * H + 1
@@ -60,7 +114,7 @@ def restart(model, problem, z_prev, w, H, method, tol, max_iter):
     best, best_d = None, np.inf
     for guess in guesses:
         cand = solve(problem, guess, method=method, tol=tol, max_iter=max_iter, fallback=False)
-        if not cand.converged or not is_stable(model, cand, w):
+        if not cand.converged or not is_stable(model, cand, omega):
             continue
         d = distance(cand, z_prev)
         if d < best_d:
@@ -68,15 +122,39 @@ def restart(model, problem, z_prev, w, H, method, tol, max_iter):
     return best
 
 
-def pool_candidates(model, problem, pool, w, direction, tol, max_iter) -> list[HarmonicSolution]:
-    """Stable solutions at ``w`` of the other sweep directions (``pool``: {w: [(direction,
-    harmonics)]}), re-solved by Newton on ``problem`` (they are solutions: one iteration)."""
+def pool_candidates(model, problem, pool, omega, direction, tol, max_iter) -> list[HarmonicSolution]:
+    """Stable solutions at ``omega`` of the other sweep directions (``pool``: {omega: [(direction,
+    harmonics)]}), re-solved by Newton on ``problem`` (they are solutions: one iteration).
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model solved (for the stability check).
+    problem : ReducedProblem
+        The harmonic-balance problem at ``omega``.
+    pool : dict or None
+        {omega [rad/s]: [(direction, harmonics)]}, the harmonics real [x0, a1, b1, ...] of
+        the nonlinear coordinates, shape (n_nl, 2H+1) [m]; None: no candidates.
+    omega : float
+        Mesh frequency of the point [rad/s].
+    direction : str
+        The sweep's own direction ("up" or "down"), whose entries are skipped.
+    tol : float
+        Convergence tolerance of Newton (relative residual).
+    max_iter : int
+        Newton iteration limit.
+
+    Returns
+    -------
+    list of HarmonicSolution
+        The candidates that converged and are stable (empty when there are none).
+    """
     out = []
-    for d, z in (pool or {}).get(float(w), ()):
+    for d, z in (pool or {}).get(float(omega), ()):
         if d == direction:
             continue
         cand = solve(problem, z, method="newton", tol=tol, max_iter=max_iter, fallback=False)
-        if cand.converged and is_stable(model, cand, w):
+        if cand.converged and is_stable(model, cand, omega):
             out.append(cand)
     return out
 
@@ -86,14 +164,38 @@ SAME_ORBIT_RTOL = 1e-6
 
 
 def same_orbit(a, b) -> bool:
-    """Harmonics ``a`` and ``b`` within SAME_ORBIT_RTOL of the larger norm of the two."""
+    """Harmonics ``a`` and ``b`` within SAME_ORBIT_RTOL of the larger norm of the two.
+
+    Parameters
+    ----------
+    a, b : array_like
+        The two solutions: real harmonics [x0, a1, b1, ...] of the
+        nonlinear coordinates, shape (n_nl, 2H+1) or flattened coordinate-major [m].
+
+    Returns
+    -------
+    bool
+        ‖a - b‖ <= ``SAME_ORBIT_RTOL`` max(‖a‖, ‖b‖).
+    """
     a, b = np.ravel(a), np.ravel(b)
     scale = max(float(np.linalg.norm(a)), float(np.linalg.norm(b)))
     return bool(np.linalg.norm(a - b) <= SAME_ORBIT_RTOL * scale)
 
 
 def nearer(cand, best, z_prev) -> bool:
-    """``cand`` is another orbit than ``best`` and nearer ``z_prev`` (arrays of harmonics)."""
+    """``cand`` is another orbit than ``best`` and nearer ``z_prev`` (arrays of harmonics).
+
+    Parameters
+    ----------
+    cand, best, z_prev : array_like
+        The candidate, the landing so far and the departed orbit: real harmonics [x0, a1, b1, ...] of the
+        nonlinear coordinates, shape (n_nl, 2H+1) or flattened coordinate-major [m].
+
+    Returns
+    -------
+    bool
+        True when ``cand`` is not :func:`same_orbit` as ``best`` and strictly nearer ``z_prev``.
+    """
     if same_orbit(cand, best):
         return False
     c, b, p = (np.ravel(x) for x in (cand, best, z_prev))
@@ -108,7 +210,23 @@ def nearest_landing(landing, z_prev, others=()):
     Arc length alone takes the far stable branch of an S. Where the curve folds twice
     more, as onto the back-side impact orbit of Kubo's single-DOF model near 10 500 rpm,
     a slow sweep falls to a nearer attractor (time integration:
-    tests/test_sweep_landing.py)."""
+    tests/test_sweep_landing.py).
+
+    Parameters
+    ----------
+    landing : HarmonicSolution
+        The arc-length landing.
+    z_prev : ndarray
+        The orbit that folded: real harmonics [x0, a1, b1, ...] of the
+        nonlinear coordinates, shape (n_nl, 2H+1) or flattened coordinate-major [m].
+    others : sequence of HarmonicSolution or None
+        Further stable candidates at the same frequency (None entries are skipped).
+
+    Returns
+    -------
+    HarmonicSolution
+        ``landing``, or the candidate of ``others`` nearer ``z_prev`` (another orbit).
+    """
     best = landing
     for cand in others:
         if cand is not None and nearer(cand.harmonics, best.harmonics, z_prev):
@@ -116,17 +234,56 @@ def nearest_landing(landing, z_prev, others=()):
     return best
 
 
-def follow_branch(model, problem, sol, z_prev, w_prev, w, H, method, tol, max_iter, stability, others=()):
-    """The solution at ``w`` on the branch through (z_prev, w_prev), when Newton from z_prev
+def follow_branch(
+    model, problem, sol, z_prev, omega_prev, omega, H, method, tol, max_iter, stability, others=()
+):
+    """The solution at ``omega`` on the branch through (z_prev, omega_prev), when Newton from z_prev
     needed more than WANDER_ITER iterations and may have wandered onto another orbit.
 
     Arc-length continuation from the previous point (:func:`nlgrd.nonlinear.arclength.jump_to_branch`)
-    follows the branch to ``w``; if it folds on the way the point is a jump, landed by
+    follows the branch to ``omega``; if it folds on the way the point is a jump, landed by
     :func:`nearest_landing` with Newton's own solution and ``others`` as candidates.
-    Newton's solution is kept when continuation does not reach ``w``. Returns (solution,
+    Newton's solution is kept when continuation does not reach ``omega``. Returns (solution,
     switched).
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model swept.
+    problem : ReducedProblem
+        The harmonic-balance problem at ``omega``.
+    sol : HarmonicSolution
+        Newton's solution at ``omega`` from ``z_prev``.
+    z_prev : ndarray
+        The previous point's solution: real harmonics [x0, a1, b1, ...] of the
+        nonlinear coordinates, shape (n_nl, 2H+1) or flattened coordinate-major [m].
+    omega_prev : float
+        Mesh frequency of the previous point [rad/s].
+    omega : float
+        Mesh frequency of the new point [rad/s].
+    H : int
+        Number of harmonics.
+    method : str
+        Solver of the sweep (unused here: the polish after continuation is Newton).
+    tol : float
+        Convergence tolerance of Newton at ``omega`` (relative residual).
+    max_iter : int
+        Newton iteration limit.
+    stability : bool
+        Land only on a Floquet-stable crossing of ``omega`` (``require_stable`` of
+        :func:`nlgrd.nonlinear.arclength.jump_to_branch`).
+    others : sequence of HarmonicSolution
+        Further stable candidates at ``omega`` (the other sweep directions' solutions).
+
+    Returns
+    -------
+    solution : HarmonicSolution
+        The solution on the branch followed (``sol`` when continuation fails or lands on
+        the same orbit).
+    switched : bool
+        Continuation passed a fold on the way: the point is a jump.
     """
-    zj, steps, folds = jump_to_branch(model, H, z_prev, w_prev, w, tol=tol, require_stable=stability)
+    zj, steps, folds = jump_to_branch(model, H, z_prev, omega_prev, omega, tol=tol, require_stable=stability)
     if zj is None:
         return sol, False
     fol = solve(problem, zj, method="newton", tol=tol, max_iter=max_iter, fallback=False)
@@ -154,14 +311,43 @@ def approach(model, problem, order, i, H, method, tol, max_iter, stability, look
     """A start for a sweep's first point ``order[i]`` when Newton from the full-contact
     linear response fails there: solve at the next frequencies of the sweep (up to
     ``lookahead``) and follow the curve back by arc-length continuation
-    (:func:`nlgrd.nonlinear.arclength.jump_to_branch`). Returns a solution or None."""
-    w = float(order[i])
+    (:func:`nlgrd.nonlinear.arclength.jump_to_branch`). Returns a solution or None.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model swept.
+    problem : ReducedProblem
+        The harmonic-balance problem at ``order[i]``.
+    order : ndarray
+        Mesh frequencies of the sweep in sweep order [rad/s].
+    i : int
+        Index in ``order`` of the point to start.
+    H : int
+        Number of harmonics.
+    method : str
+        Solver of :func:`nlgrd.nonlinear.solvers.solve` at the next frequencies.
+    tol : float
+        Convergence tolerance of the solvers (relative residual).
+    max_iter : int
+        Iteration limit of the solvers.
+    stability : bool
+        Accept only a Floquet-stable crossing of ``order[i]`` (``require_stable``).
+    lookahead : int
+        Number of following frequencies tried.
+
+    Returns
+    -------
+    HarmonicSolution or None
+        The converged solution at ``order[i]``; None when no following frequency leads there.
+    """
+    omega = float(order[i])
     for wk in order[i + 1 : i + 1 + lookahead]:
         start = solve(model.at(float(wk), H), None, method=method, tol=tol, max_iter=max_iter, fallback=True)
         if not start.converged:
             continue
         zj, steps, _ = jump_to_branch(
-            model, H, start.harmonics, float(wk), w, tol=tol, require_stable=stability
+            model, H, start.harmonics, float(wk), omega, tol=tol, require_stable=stability
         )
         if zj is None:
             continue

@@ -32,7 +32,18 @@ _THETA13 = 5.371920351148152
 def expm(X: NDArray) -> NDArray[np.float64]:
     """exp(X) by Padé [13/13] with scaling and squaring (Higham 2005), scaled by
     α₄ = max(‖X⁴‖^¼, ‖X⁵‖^⅕) <= 2^s θ₁₃ (Al-Mohy & Higham 2009, Thm 4.2; 27 >= 4 x 3),
-    ‖X⁵‖₁ <= ‖X⁴‖₁ ‖X‖₁: fewer squarings than ‖X‖₁ for these non-normal matrices."""
+    ‖X⁵‖₁ <= ‖X⁴‖₁ ‖X‖₁: fewer squarings than ‖X‖₁ for these non-normal matrices.
+
+    Parameters
+    ----------
+    X : ndarray (n, n)
+        A real square matrix (a state matrix times a time: dimensionless).
+
+    Returns
+    -------
+    ndarray (n, n)
+        exp(X).
+    """
     n = X.shape[0]
     X2 = X @ X
     X4 = X2 @ X2
@@ -101,6 +112,21 @@ def psd_null_space(A: NDArray, rtol: float = CERTIFICATE_RTOL) -> tuple[bool, ND
     Pivoted Cholesky of Ã = S A S (:func:`_jacobi_scaled`) stopped at pivots <= ``rtol``;
     semi-definite when the rest of the Schur complement is within 10 ``rtol`` of zero.
     (False, None) if not, else (True, null-space basis with unit columns).
+
+    Parameters
+    ----------
+    A : ndarray (n, n)
+        A symmetric matrix, in any unit (a stiffness [N/m]).
+    rtol : float
+        Relative tolerance [-] of symmetry, of the pivots and of the Schur complement, on
+        the Jacobi-scaled matrix.
+
+    Returns
+    -------
+    ok : bool
+        Whether ``A`` is positive semi-definite to ``rtol``.
+    null_space : ndarray (n, r) or None
+        Basis of its null space with unit columns when ``ok``, else None.
     """
     A = np.asarray(A, dtype=float)
     if not np.any(A.diagonal()):
@@ -117,7 +143,21 @@ def psd_null_space(A: NDArray, rtol: float = CERTIFICATE_RTOL) -> tuple[bool, ND
 
 def psd_to_tolerance(A: NDArray, rtol: float = CERTIFICATE_RTOL) -> bool:
     """sym(A) is positive semi-definite to ``rtol``: S sym(A) S + rtol I (S as in
-    :func:`_jacobi_scaled`) has a Cholesky factor."""
+    :func:`_jacobi_scaled`) has a Cholesky factor.
+
+    Parameters
+    ----------
+    A : ndarray (n, n)
+        A square matrix, in any unit (a damping matrix [N s/m]); only sym(A) = (A + Aᵀ)/2
+        counts.
+    rtol : float
+        Relative tolerance [-] on the Jacobi-scaled sym(A).
+
+    Returns
+    -------
+    bool
+        True when sym(A) is positive semi-definite to ``rtol`` (or A is zero).
+    """
     A = np.asarray(A, dtype=float)
     A = (A + A.T) / 2
     scaled = _jacobi_scaled(A, rtol) if np.any(A.diagonal()) else None
@@ -138,7 +178,22 @@ def free_modes(K: NDArray, D: NDArray, W: NDArray) -> NDArray | None:
     :func:`psd_null_space` (a coordinate whose diagonal is rounding counts as free)
     restricted, as ``rigid_body_modes`` does, to the directions with singular values of
     [K; D; Wᵀ] Z (each scaled by its norm) <= CONSTRAINT_RTOL; undecided when one lies
-    within a factor 100 above that."""
+    within a factor 100 above that.
+
+    Parameters
+    ----------
+    K : ndarray (N, N)
+        Stiffness matrix of the linear part, without the nonlinear elements [N/m, N m/rad].
+    D : ndarray (N, N)
+        Damping matrix [N s/m, N m s/rad].
+    W : ndarray (N, n_nl)
+        Projection onto the nonlinear coordinates y = Wᵀ q.
+
+    Returns
+    -------
+    ndarray (N, r) or None
+        Orthonormal columns spanning the free modes (r = 0: none), or None when undecided.
+    """
     Ks = (K + K.T) / 2
     n = Ks.shape[0]
     diag = np.abs(np.diag(Ks))
@@ -164,7 +219,20 @@ def mesh_block(M: NDArray, D: NDArray, K: NDArray, W: NDArray) -> NDArray[np.boo
     """The coordinates W touches and those connected to them in the coupling graph of M,
     D, K (entries above ``BLOCK_RTOL`` of each matrix's largest). The rest splits off
     (time-invariant in every contact state) only if all its couplings to the block and its
-    W rows are below ``GAP_RTOL``: rounding of the basis projection (~1e-12 here)."""
+    W rows are below ``GAP_RTOL``: rounding of the basis projection (~1e-12 here).
+
+    Parameters
+    ----------
+    M, D, K : ndarray (N, N)
+        Mass [kg, kg m²], damping [N s/m, N m s/rad] and stiffness [N/m, N m/rad] matrices.
+    W : ndarray (N, n_nl)
+        Projection onto the nonlinear coordinates y = Wᵀ q.
+
+    Returns
+    -------
+    ndarray of bool (N,)
+        The coordinates of the mesh block; all True when nothing splits off.
+    """
     mask = np.zeros(M.shape, dtype=bool)
     for A in (M, D, K):
         mask |= np.abs(A) > BLOCK_RTOL * np.max(np.abs(A))

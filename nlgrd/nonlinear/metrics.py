@@ -23,10 +23,10 @@ from nlgrd.nonlinear.describing_functions import deadzone
 from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonics import differentiate, n_harmonics, real_to_complex, resize_harmonics, sample
 
-#: Names of the scalar metrics, in the order of :meth:`MeshMetrics.as_tuple`.
 #: What the CSV's ``response`` column says where a sweep found no stable periodic orbit.
 NO_STABLE = "no stable mesh-periodic response"
 
+#: Names of the scalar metrics, in the order of :meth:`MeshMetrics.as_tuple`.
 METRIC_NAMES = (
     "dte_mean",
     "dte_rms",
@@ -129,7 +129,29 @@ def _lste_samples(mesh: BacklashMesh, n_samples: int) -> tuple[NDArray, NDArray]
 
 
 def time_history(harmonics, omega: float, mesh: BacklashMesh, n_samples: int = 1024) -> TimeHistory:
-    """Reconstruct one period of δ, e and W from the harmonics of δ (1-D, real convention)."""
+    """Reconstruct one period of δ, e and W from the harmonics of δ (1-D, real convention).
+
+    Parameters
+    ----------
+    harmonics : array_like
+        Real harmonics [δ_0, a_1, b_1, ..., a_H, b_H] of δ [m] (length 2H + 1, or (1, 2H+1)).
+    omega : float
+        Mesh frequency ω [rad/s] (θ = ω t).
+    mesh : BacklashMesh
+        The mesh: LSTE, k_h, b and c_m.
+    n_samples : int
+        Samples per period, more than twice the harmonics of δ and of the LSTE.
+
+    Returns
+    -------
+    TimeHistory
+        δ, δ', e, e' and W at t_j = 2πj / (N ω), j = 0..N-1.
+
+    Raises
+    ------
+    ModelError
+        When ``n_samples`` is too small for the harmonics.
+    """
     z = np.asarray(harmonics, dtype=float).reshape(-1)
     theta = 2 * np.pi * np.arange(n_samples) / n_samples
     delta = sample(z, n_samples)
@@ -151,6 +173,23 @@ def metrics_from_harmonics(harmonics, omega: float, mesh: BacklashMesh, n_sample
     fraction and back-side flag from the exact contact intervals; peak-to-peak and
     force extremes from ``n_samples`` samples per period (relative error of the extremes
     about (π k_max / n_samples)² / 2, below 1e-4 for k_max <= 9 at the default).
+
+    Parameters
+    ----------
+    harmonics : array_like
+        Real harmonics [δ_0, a_1, b_1, ..., a_H, b_H] of δ [m] (length 2H + 1, or (1, 2H+1)).
+    omega : float
+        Mesh frequency ω [rad/s] (θ = ω t).
+    mesh : BacklashMesh
+        The mesh: LSTE, k_h, b, c_m and W_0.
+    n_samples : int
+        Samples per period for the extremes, more than twice the harmonics of δ and of the
+        LSTE.
+
+    Returns
+    -------
+    MeshMetrics
+        The metrics in SI units; all NaN when a harmonic is not finite.
     """
     z = np.asarray(harmonics, dtype=float).reshape(-1)
     H = n_harmonics(z)
@@ -175,7 +214,22 @@ def metrics_from_harmonics(harmonics, omega: float, mesh: BacklashMesh, n_sample
 
 
 def metrics_from_history(history: TimeHistory, mesh: BacklashMesh, H: int = 15) -> MeshMetrics:
-    """Metrics from equally spaced samples over one period (time integration)."""
+    """Metrics from equally spaced samples over one period (time integration).
+
+    Parameters
+    ----------
+    history : TimeHistory
+        One period sampled at equal steps.
+    mesh : BacklashMesh
+        The mesh: b and W_0.
+    H : int
+        Harmonic amplitudes |δ_k| reported for k = 0..H (by FFT of the samples).
+
+    Returns
+    -------
+    MeshMetrics
+        The metrics in SI units, all from the samples.
+    """
     d = history.delta
     n = d.size
     spec = np.fft.rfft(d) / n
@@ -198,7 +252,20 @@ def metrics_from_history(history: TimeHistory, mesh: BacklashMesh, H: int = 15) 
 
 
 def harmonic_amplitudes(harmonics, H: int | None = None) -> NDArray:
-    """|δ_k|, k = 0..H, of real harmonics."""
+    """|δ_k|, k = 0..H, of real harmonics.
+
+    Parameters
+    ----------
+    harmonics : array_like
+        Real harmonics [δ_0, a_1, b_1, ...] (flattened to 1-D), in any unit (δ [m]).
+    H : int, optional
+        Truncate or zero-pad to H harmonics first; default: as given.
+
+    Returns
+    -------
+    ndarray (H+1,)
+        |X_k| = sqrt(a_k² + b_k²) (k = 0: |δ_0|), in the unit of ``harmonics``.
+    """
     z = np.asarray(harmonics, dtype=float).reshape(-1)
     if H is not None:
         z = resize_harmonics(z, H)

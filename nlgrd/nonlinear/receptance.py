@@ -98,7 +98,19 @@ def _lowest_modes(K, M, cutoff: float, start: int, cap: int, what: str) -> tuple
 
 @dataclass(frozen=True)
 class MeanTerms:
-    """Mean (k = 0) reduction at one speed: κ_0, F_0 and what recovery needs."""
+    """Mean (k = 0) reduction at one speed: κ_0, F_0 and what recovery needs.
+
+    Attributes
+    ----------
+    kappa : ndarray (n_nl, n_nl)
+        κ_0 = (Wᵀ K_r⁻¹ W)⁻¹ - diag(k_h) [N/m].
+    force : ndarray (n_nl,)
+        F_0 = (Wᵀ K_r⁻¹ W)⁻¹ Wᵀ K_r⁻¹ F_static [N].
+    x_static : ndarray (n,)
+        K_r⁻¹ F_static, the static deflection of every DOF [m, rad].
+    x_mesh : ndarray (n, n_nl)
+        K_r⁻¹ W, the deflection per unit mesh force [m/N, rad/N].
+    """
 
     kappa: NDArray  # (n_nl, n_nl)
     force: NDArray  # (n_nl,)
@@ -535,7 +547,27 @@ class MeshReceptance:
 
 
 def dense_reference(system: RotorSystem, omega: float, H: int) -> NDArray:
-    """h_k by dense solves of the full model (tests only)."""
+    """h_k by dense solves of the full model (tests only).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        Model with at least one gear pair.
+    omega : float
+        Mesh frequency ω [rad/s].
+    H : int
+        Harmonics k = 1..H.
+
+    Returns
+    -------
+    ndarray of complex (H, n_nl, n_nl)
+        h_k = Wᵀ Z_k⁻¹ W [m/N], k = 1..H.
+
+    Raises
+    ------
+    ModelError
+        When ``system`` has no gear pair.
+    """
     mr = MeshReceptance(system, method="direct")
     speed = mr.speed(omega)
     out = []

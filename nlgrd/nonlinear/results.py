@@ -21,6 +21,12 @@ from nlgrd.nonlinear.metrics import METRIC_NAMES, NO_STABLE, MeshMetrics
 #: A point is stable when max |μ| < 1 + STABLE_RTOL.
 STABLE_RTOL = 1e-6
 
+#: What ``residual`` means, by kind of result, and its column in :meth:`SweepResult.to_frame`.
+RESIDUAL_COLUMNS = {
+    "relative residual": "residual [-]",  # harmonic balance: max|R| / max(|L z|, |B G|, |F|)
+    "period difference": "period_difference [-]",  # time integration: last period to the one before
+}
+
 _UNITS = {
     "dte_mean": ("dte_mean [um]", 1e6),
     "dte_rms": ("dte_rms [um]", 1e6),
@@ -50,6 +56,18 @@ def floquet_output(values: NDArray, signed: bool = False) -> NDArray:
     neutral multiplier would otherwise be written as 1 ± noise. Rounded to 10 digits
     (quantum 1e-9, far above the noise, far below the stability margin 1e-6) the column
     is the same from run to run and machine to machine.
+
+    Parameters
+    ----------
+    values : ndarray
+        Multiplier moduli, or real or imaginary parts with ``signed`` [-].
+    signed : bool
+        Round to the absolute quantum 1e-9 instead of 10 significant digits.
+
+    Returns
+    -------
+    ndarray
+        The rounded values (NaN kept).
     """
     v = np.asarray(values, dtype=float).copy()
     if signed:
@@ -64,7 +82,20 @@ def floquet_output(values: NDArray, signed: bool = False) -> NDArray:
 def instability_kind(mu: NDArray, stable: NDArray) -> NDArray:
     """Per point: "" (stable), or the dominant multiplier's kind where unstable: "real > 1"
     (a fold: saddle-node), "real < -1" (period doubling), "complex" (a torus, Neimark-
-    Sacker); a pair counts as complex when |Im μ| > 1e-6 |μ| (rounding leaves ~1e-15)."""
+    Sacker); a pair counts as complex when |Im μ| > 1e-6 |μ| (rounding leaves ~1e-15).
+
+    Parameters
+    ----------
+    mu : ndarray of complex
+        Dominant multiplier per point [-] (NaN where not computed).
+    stable : ndarray of bool
+        Stability per point.
+
+    Returns
+    -------
+    ndarray of str (object)
+        "", "real > 1", "real < -1" or "complex" per point.
+    """
     mu = np.asarray(mu, dtype=complex)
     out = np.full(mu.shape, "", dtype=object)
     with np.errstate(invalid="ignore"):
@@ -86,7 +117,13 @@ def _significant(values: NDArray, digits: int) -> NDArray:
 
 
 def check_quantity(quantity: str) -> None:
-    """Raise ModelError("quantity") unless ``quantity`` is one of :data:`METRIC_NAMES`."""
+    """Raise ModelError("quantity") unless ``quantity`` is one of :data:`METRIC_NAMES`.
+
+    Parameters
+    ----------
+    quantity : str
+        A metric name, e.g. "dte_rms".
+    """
     if quantity not in METRIC_NAMES:
         raise ModelError("quantity", f"must be one of {', '.join(METRIC_NAMES)}, got {quantity!r}")
 
@@ -95,8 +132,17 @@ def check_quantity(quantity: str) -> None:
 class Jump:
     """A jump of a swept branch between two consecutive points.
 
-    ``omega_from`` is the last point on the branch left, ``omega_to`` the first on the
-    new one [rad/s]; the fold lies between them. ``omega`` is their midpoint.
+    Attributes
+    ----------
+    direction : str
+        "up" or "down".
+    omega_from : float
+        The last point on the branch left [rad/s].
+    omega_to : float
+        The first point on the new branch [rad/s]; the fold lies between the two, their
+        midpoint is :attr:`omega`.
+    value_from, value_to : float
+        The quantity tested at the two points (SI).
     """
 
     direction: str
@@ -112,16 +158,33 @@ class Jump:
 
 
 def find_jumps(
-    omega: NDArray, value: NDArray, direction: str, rel_tol: float = 0.15, ratio: float = 4.0
+    omegas: NDArray, value: NDArray, direction: str, rtol: float = 0.15, ratio: float = 4.0
 ) -> list[Jump]:
     """Jumps in one sweep direction: steps much larger than their neighbours.
 
-    A step i -> i+1 (in sweep order) is a jump when |Δv| exceeds ``rel_tol`` times the
+    A step i -> i+1 (in sweep order) is a jump when |Δv| exceeds ``rtol`` times the
     range of v over the sweep and ``ratio`` times both neighbouring steps.
+
+    Parameters
+    ----------
+    omegas : ndarray
+        Frequencies in sweep order [rad/s].
+    value : ndarray
+        The quantity per point (NaN points are skipped).
+    direction : str
+        Sweep direction written into the jumps.
+    rtol : float
+        Smallest jump relative to the range of ``value`` [-].
+    ratio : float
+        How much larger than both neighbouring steps a jump must be [-].
+
+    Returns
+    -------
+    list of Jump
     """
     v = np.asarray(value, dtype=float)
     ok = np.isfinite(v)
-    w, v = np.asarray(omega, dtype=float)[ok], v[ok]
+    w, v = np.asarray(omegas, dtype=float)[ok], v[ok]
     if v.size < 2:
         return []
     dv = np.abs(np.diff(v))
@@ -130,7 +193,7 @@ def find_jumps(
     for i, step in enumerate(dv):
         left = dv[i - 1] if i > 0 else 0.0
         right = dv[i + 1] if i + 1 < dv.size else 0.0
-        if step > rel_tol * rng and step > ratio * left and step > ratio * right:
+        if step > rtol * rng and step > ratio * left and step > ratio * right:
             out.append(Jump(direction, float(w[i]), float(w[i + 1]), float(v[i]), float(v[i + 1])))
     return out
 
@@ -149,7 +212,8 @@ class SweepResult:
         Real harmonics of the nonlinear coordinates [m]; NaN where not converged.
     converged : ndarray of bool
     residual : ndarray
-        Relative residual (HB) or final period-to-period difference (time domain) [-].
+        What ``residual_kind`` says [-]: the relative residual of the harmonic balance, or
+        the last relative period-to-period difference of a time integration.
     iterations : ndarray of int
         Solver iterations (HB) or simulated periods (time domain).
     stable : ndarray of bool
@@ -177,6 +241,9 @@ class SweepResult:
     dominant_multiplier : ndarray of complex
         The Floquet multiplier of largest modulus (NaN where not computed): real > 1 (a
         fold), real < -1 (period doubling) or a complex pair (a torus) at an instability.
+    residual_kind : str
+        A key of :data:`RESIDUAL_COLUMNS`: "relative residual" (harmonic balance, curves)
+        or "period difference" (time integration).
     """
 
     omega: NDArray
@@ -195,8 +262,11 @@ class SweepResult:
     H_check: int | None = None
     no_stable: NDArray | None = None
     dominant_multiplier: NDArray | None = None
+    residual_kind: str = "relative residual"
 
     def __post_init__(self):
+        if self.residual_kind not in RESIDUAL_COLUMNS:
+            raise ModelError("residual_kind", f"must be one of {', '.join(RESIDUAL_COLUMNS)}")
         if self.branch_switch is None:
             object.__setattr__(self, "branch_switch", np.zeros(self.omega.size, dtype=bool))
         if self.no_stable is None:
@@ -245,6 +315,7 @@ class SweepResult:
             self.H_check,
             self.no_stable[keep],
             self.dominant_multiplier[keep],
+            self.residual_kind,
         )
 
     def failures(self) -> NDArray:
@@ -254,7 +325,7 @@ class SweepResult:
     def jumps(
         self,
         quantities: str | Sequence[str] = ("dte_rms", "contact_loss_fraction", "force_max"),
-        rel_tol: float = 0.1,
+        rtol: float = 0.1,
         ratio: float = 3.0,
     ) -> list[Jump]:
         """Jumps of each sweep direction, in sweep order.
@@ -273,7 +344,7 @@ class SweepResult:
             steps: set[int] = set(np.nonzero(part.branch_switch[1:])[0].tolist())
             steps |= set(np.nonzero(np.diff(part.no_stable.astype(int)) != 0)[0].tolist())
             for q in qs:
-                for j in find_jumps(part.omega, part.metrics[q], d, rel_tol, ratio):
+                for j in find_jumps(part.omega, part.metrics[q], d, rtol, ratio):
                     steps.add(int(np.nonzero(part.omega == j.omega_from)[0][0]))
             v = part.metrics[qs[0]]
             for i in sorted(steps):
@@ -306,7 +377,7 @@ class SweepResult:
             "mesh_frequency [Hz]": self.omega / (2 * np.pi),
             "direction": self.direction,
             "converged": ok,
-            "residual [-]": num(self.residual),
+            RESIDUAL_COLUMNS[self.residual_kind]: num(self.residual),
             "iterations": iterations,
             "stable": flag(self.stable, self.stability_known),
             "floquet_max [-]": floquet_output(num(self.floquet_max)),
@@ -353,8 +424,42 @@ def assemble_result(
     branch_switch: Sequence[bool] | None = None,
     no_stable: Sequence[bool] | None = None,
     dominant: Sequence[complex] | None = None,
+    residual_kind: str = "relative residual",
 ) -> SweepResult:
-    """Pack per-point lists into a :class:`SweepResult`."""
+    """Pack per-point lists into a :class:`SweepResult`.
+
+    Parameters
+    ----------
+    omegas : sequence of float
+        Frequencies [rad/s], in sweep order.
+    directions : sequence of str
+        Direction per point.
+    harmonics : sequence of ndarray
+        Real harmonics per point, shape (n_nl, 2H+1) [m].
+    converged : sequence of bool
+        Solver (or steady-state) success per point.
+    residual : sequence of float
+        Residual per point, of ``residual_kind`` [-].
+    iterations : sequence of int
+        Iterations (or periods) per point.
+    multipliers_max : sequence of float
+        Largest Floquet multiplier modulus per point (NaN: not computed) [-].
+    metrics : sequence of MeshMetrics
+        Output metrics per point.
+    source : str
+        What produced the points.
+    branch_switch, no_stable : sequence of bool, optional
+        Per-point flags (see :class:`SweepResult`).
+    dominant : sequence of complex, optional
+        Dominant multiplier per point [-].
+    residual_kind : str
+        A key of :data:`RESIDUAL_COLUMNS`.
+
+    Returns
+    -------
+    SweepResult
+        ``stable`` where converged and max |μ| < 1 + :data:`STABLE_RTOL`.
+    """
     fm = np.asarray(multipliers_max, dtype=float)
     conv = np.asarray(converged, dtype=bool)
     with np.errstate(invalid="ignore"):
@@ -380,6 +485,7 @@ def assemble_result(
         None,
         None if no_stable is None else np.asarray(no_stable, dtype=bool),
         None if dominant is None else np.asarray(dominant, dtype=complex),
+        residual_kind,
     )
 
 
@@ -438,7 +544,18 @@ class ContinuationResult:
 
 
 def dominant_multiplier(mu: NDArray) -> tuple[float, complex]:
-    """max |μ| and the multiplier that has it (the one with Im >= 0 of a pair)."""
+    """max |μ| and the multiplier that has it (the one with Im >= 0 of a pair).
+
+    Parameters
+    ----------
+    mu : ndarray of complex
+        Floquet multipliers [-].
+
+    Returns
+    -------
+    tuple of (float, complex)
+        The largest modulus and its multiplier.
+    """
     mu = np.asarray(mu, dtype=complex)
     top = float(np.max(np.abs(mu)))
     cand = mu[np.abs(mu) >= top * (1 - 1e-12)]

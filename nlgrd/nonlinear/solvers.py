@@ -179,14 +179,16 @@ def solve(
     Parameters
     ----------
     problem : ReducedProblem
+        The problem at one frequency.
     z0 : array_like, optional
-        Start (n_nl, 2H+1) or flat; default :meth:`ReducedProblem.linear_solution`.
+        Start: real harmonics [y_0, a_1, b_1, ...] of the nonlinear coordinates (δ [m] for a
+        mesh), (n_nl, 2H+1) or flat; default :meth:`ReducedProblem.linear_solution`.
         Harmonics beyond the problem's H are dropped, missing ones set to zero.
     method : {"newton", "quasi-linear", "hybr"}
         Damped Newton with analytic Jacobian; the paper's quasi-linear receptance
         iteration; or MINPACK hybr directly.
     tol : float
-        Convergence: max|R| <= tol · max(|L z|, |B G|, |F|).
+        Convergence: max|R| <= tol · max(|L z|, |B G|, |F|) [-].
     max_iter : int
         Iteration limit of the chosen method.
     fallback : bool
@@ -202,6 +204,12 @@ def solve(
     -------
     HarmonicSolution
         ``converged`` False (and harmonics NaN) when the tolerance was not met.
+
+    Raises
+    ------
+    ModelError
+        When ``method`` is unknown, or is "quasi-linear" with a nonlinearity acting on more
+        than one coordinate.
     """
     n, nh = problem.n_coords, 2 * problem.H + 1
     if z0 is None:

@@ -34,6 +34,25 @@ class LinearStateSpace:
     a sweep comes back to a frequency (the down sweep after the up sweep), keyed by the
     matrices' :attr:`digest`. Without it each state space keeps its own
     (:attr:`floquet_cache`).
+
+    Parameters
+    ----------
+    M : array_like or sparse matrix (N, N)
+        Mass matrix [kg, kg m²] (per DOF: translation, rotation); stored dense.
+    D : array_like or sparse matrix (N, N)
+        Damping matrix with the mesh damping [N s/m, N m s/rad]; stored dense.
+    K : array_like or sparse matrix (N, N)
+        Stiffness matrix without the nonlinear elements' stiffness [N/m, N m/rad]; stored dense.
+    W : array_like (N, n_nl)
+        Projection onto the nonlinear coordinates y = Wᵀ q (a mesh's projection vector w:
+        [-] on translations, base radii [m] on rotations).
+    cache : FloquetCache, optional
+        Shared store of Floquet work (see above).
+
+    Raises
+    ------
+    ModelError
+        When M, D, K are not N x N or W has not N rows.
     """
 
     M: NDArray
@@ -57,7 +76,7 @@ class LinearStateSpace:
         These move no nonlinear element and are neither restrained nor damped (the
         torsional rigid-body rotation of a whole free drive train); they give neutral
         Floquet multipliers μ = 1 in a Jordan block. Decided by the fast
-        :func:`nlgrd.nonlinear.floquet.free_modes` when it can (the tolerances of
+        :func:`nlgrd.nonlinear.linear_algebra.free_modes` when it can (the tolerances of
         :func:`nlgrd.rotor.rigid_body.rigid_body_modes`), else by ``rigid_body_modes``. Both
         see a free mode that a projected basis holds as one of its vectors (the stability
         basis of a free drive train, Kubo's rig), whose stiffness diagonal is rounding.

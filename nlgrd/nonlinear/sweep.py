@@ -35,6 +35,25 @@ JUMP_STRATEGIES = ("arclength", "restart", "auto", "none")
 
 
 def sweep_orders(omegas: NDArray, directions: str | Sequence[str]) -> list[tuple[str, NDArray]]:
+    """The frequency grid in the order of each sweep direction.
+
+    Parameters
+    ----------
+    omegas : ndarray
+        Mesh frequencies [rad/s], in any order.
+    directions : "up", "down", "both" or a sequence of "up" and "down"
+        The sweeps, in the order they are run ("both": up, then down).
+
+    Returns
+    -------
+    list of (str, ndarray)
+        (direction, frequencies [rad/s] sorted ascending for "up", descending for "down").
+
+    Raises
+    ------
+    ModelError
+        A direction other than "up", "down" or "both".
+    """
     if isinstance(directions, str):
         directions = ("up", "down") if directions == "both" else (directions,)
     out = []
@@ -72,23 +91,30 @@ def sweep(
     Parameters
     ----------
     model : ReducedModel
+        The harmonic-balance model as a function of the mesh frequency.
     omegas : array_like
         Mesh frequencies [rad/s] (sorted internally per direction).
     H : int
         Number of harmonics.
     directions : "up", "down", "both" or a sequence of them
-    method, tol, max_iter, fallback :
-        Passed to :func:`nlgrd.nonlinear.solvers.solve`.
+        The sweeps, in the order they are run ("both": up, then down).
+    method, tol, max_iter, fallback : str, float, int, bool
+        Passed to :func:`nlgrd.nonlinear.solvers.solve` (``tol``: convergence tolerance,
+        relative residual).
     stability : bool
         Floquet multipliers per point (needs ``model.state_space``).
     mesh : BacklashMesh, optional
         The mesh for the output metrics (default: the model's first BacklashMesh).
     n_samples : int
         Samples per period for the force extremes.
+    z0 : array_like, optional
+        Start of a sweep's first point (of the first sweep only, with ``chain``): real
+        harmonics [x0, a1, b1, ...] of the nonlinear coordinates, shape (n_nl, 2H+1) or
+        flat [m]; default the full-contact linear response.
     chain : bool
         With several directions, start each sweep from the last solution of the one
         before (as a rig is swept up and then back down), instead of afresh.
-    jump : {"arclength", "none"}
+    jump : {"arclength", "restart", "auto", "none"}
         When Newton fails from the previous point (its branch folded between the two
         frequencies), "arclength" follows the curve through the fold by pseudo-arc-length
         continuation to its first stable crossing of the new frequency
@@ -120,6 +146,13 @@ def sweep(
     Returns
     -------
     SweepResult
+        One row per point and direction; points that did not converge are kept, flagged,
+        with NaN outputs.
+
+    Raises
+    ------
+    ModelError
+        An unknown ``jump`` or direction.
     """
     if jump not in JUMP_STRATEGIES:
         raise ModelError("jump", f"must be one of {', '.join(map(repr, JUMP_STRATEGIES))}, got {jump!r}")

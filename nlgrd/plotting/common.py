@@ -39,14 +39,39 @@ NC_HEIGHT = 0.015
 
 
 def get_ax(ax=None, figsize=(7, 4)):
-    """``ax``, or the axes of a new figure when None."""
+    """``ax``, or the axes of a new figure when None.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+    figsize : (float, float)
+        Size of the new figure [in]; used only when ``ax`` is None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        ``ax``, or the axes of the new figure.
+    """
     if ax is None:
         _, ax = plt.subplots(figsize=figsize)
     return ax
 
 
 def direction_colours(series: int | tuple | dict | None = None) -> dict[str, str]:
-    """{direction: colour} for a series index, an (up, down) pair or a ready mapping."""
+    """{direction: colour} for a series index, an (up, down) pair or a ready mapping.
+
+    Parameters
+    ----------
+    series : int, (str, str), dict or None
+        Index of a pair of :data:`SERIES_COLOURS` (modulo their number; None: 0), an
+        (up, down) pair of matplotlib colours, or a {direction: colour} mapping.
+
+    Returns
+    -------
+    dict of str to str
+        The colours of "up", "down" and "curve" (the up colour); a copy of a given mapping.
+    """
     if isinstance(series, dict):
         return dict(series)
     if series is None:
@@ -62,6 +87,21 @@ def flags(values, size: int | None = None, default: bool = False) -> NDArray:
     """Booleans from a flag column that may hold NaN, None or the strings 'True'/'False'.
 
     Missing entries become ``default``; ``values=None`` gives ``size`` of them.
+
+    Parameters
+    ----------
+    values : array_like or None
+        The flag column: booleans, 0/1, NaN, None, ``pd.NA`` or strings (see
+        :func:`stability_codes`).
+    size : int, optional
+        Number of flags when ``values`` is None (None: 0).
+    default : bool
+        Value of the missing entries.
+
+    Returns
+    -------
+    ndarray of bool
+        One flag per entry of ``values`` (flattened).
     """
     if values is None:
         return np.full(size or 0, default, dtype=bool)
@@ -75,6 +115,20 @@ def stability_codes(stable, known=None) -> NDArray:
     ``stable`` may hold booleans, NaN, None or ``pd.NA`` (not computed), 0/1 or the
     strings of a CSV file; ``known`` (optional mask) marks where stability was computed, e.g. a finite
     largest Floquet multiplier, for results that store False where it is unknown.
+
+    Parameters
+    ----------
+    stable : array_like
+        Stability flag per point; the strings "true", "1", "1.0" (any case) are stable,
+        "false", "0", "0.0" unstable, any other string unknown.
+    known : array_like of bool, optional
+        True where stability was computed; the other points are :data:`UNKNOWN` whatever
+        ``stable`` holds.
+
+    Returns
+    -------
+    ndarray of int
+        One code per point (``stable`` flattened).
     """
     arr = np.asarray(stable, dtype=object).reshape(-1)
     out = np.full(arr.size, UNKNOWN, dtype=int)
@@ -123,6 +177,37 @@ def draw_points(
     Segments between two finite points are solid, or dashed when either end is unstable.
     Markers: filled (stable, labelled ``label``), open (unstable, ``label + ", unstable"``),
     half-filled (unknown, ``label + ", stability not computed"``). Returns the artists.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    x, y : array_like
+        Coordinates of the points in drawing order; a NaN y is a gap (no marker, no
+        segment to or from it).
+    codes : array_like of int
+        Stability code of each point (:func:`stability_codes`).
+    colour : str
+        Matplotlib colour of the lines and markers.
+    marker : str
+        Matplotlib marker (e.g. one of :data:`DIRECTION_MARKERS`).
+    label : str
+        Legend label of the stable markers; the others add the suffixes above.
+    lines : bool
+        Join consecutive finite points (False: markers only).
+    ms : float
+        Marker size of the stable points [pt] (unstable 1.4 times, unknown 1.3 times it).
+    lw : float
+        Line width [pt].
+    alpha : float
+        Opacity of the lines and markers.
+    zorder : float
+        Drawing order of the lines; the markers just above them.
+
+    Returns
+    -------
+    list of matplotlib.lines.Line2D
+        The artists drawn: line segments first, then markers.
     """
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     codes = np.asarray(codes, dtype=int)
@@ -167,6 +252,26 @@ def mark_not_converged(ax, x, colour: str, label: str, text: str = "not converge
     """Crosses (``marker``) on the bottom edge of the axes at ``x``, labelled ``"{label}: {text} (n)"``.
 
     Returns the artist (None when ``x`` is empty).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    x : array_like
+        Abscissae of the points, in data coordinates; non-finite ones are left out.
+    colour : str
+        Matplotlib colour of the marks.
+    label : str
+        Name of the series in the legend entry.
+    text : str
+        What the marks stand for, in the legend entry.
+    marker : str
+        Matplotlib marker.
+
+    Returns
+    -------
+    matplotlib.lines.Line2D or None
+        The marks, or None when ``x`` has no finite value.
     """
     x = np.asarray(x, dtype=float)
     x = x[np.isfinite(x)]
@@ -194,6 +299,31 @@ def clip_to_scale(ax, x, y, ylim, colour: str, label: str, codes=None) -> tuple[
     Each side with values beyond it gets carets on that edge of the axes (at the limit
     itself, in data coordinates) labelled with their count and extreme value; the caller
     sets the axes limits to ``ylim``. Returns (the clipped y, the marker artists).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw the carets on.
+    x : array_like
+        Abscissae of the points.
+    y : array_like
+        Values of the points; not modified (a copy is clipped).
+    ylim : (float or None, float or None) or None
+        The scale (low, high); None on one side: no limit there; None: nothing is clipped.
+    colour : str
+        Matplotlib colour of the carets.
+    label : str
+        Name of the series in the legend entries.
+    codes : array_like of int, optional
+        Stability codes of the points (:func:`stability_codes`): the carets of a side are
+        open when all its points beyond the scale are unstable, filled otherwise.
+
+    Returns
+    -------
+    y : ndarray
+        Copy of ``y`` (float) with the values beyond the scale replaced by NaN.
+    artists : list of matplotlib.lines.Line2D
+        The carets, one artist per side with values beyond it.
     """
     y = np.asarray(y, dtype=float).copy()
     x = np.asarray(x, dtype=float)
@@ -252,6 +382,13 @@ def record_caption(path: str | os.PathLike, caption: str) -> None:
 
     The file maps figure names to one-sentence descriptions (what the figure compares);
     the report index (:mod:`nlgrd.studies.reports`) shows them.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The figure file; its name is the key in ``figures.json``.
+    caption : str
+        One sentence; runs of whitespace are collapsed to single spaces.
     """
     path = Path(path)
     index = path.parent / FIGURES_FILE
@@ -266,6 +403,23 @@ def save_figure(fig, path: str | os.PathLike, caption: str | None = None, dpi: i
 
     With ``caption`` (one sentence: what the figure compares) it is recorded in
     ``figures.json`` beside the figure (:func:`record_caption`).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure to save.
+    path : str or os.PathLike
+        The output file (the format follows its suffix); missing parent directories are
+        created.
+    caption : str, optional
+        One sentence recorded in ``figures.json`` (None or empty: none recorded).
+    dpi : int
+        Resolution [dots per inch].
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

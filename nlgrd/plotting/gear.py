@@ -26,6 +26,20 @@ def plot_lste(result, ax=None, cycles: float = 2):
     """LSTE [µm] against the mesh phase over ``cycles`` mesh cycles (cf. Maliha et al. 2004, Fig. 4).
 
     The unloaded (no-load) transmission error is drawn dashed when it is not zero.
+
+    Parameters
+    ----------
+    result : nlgrd.gear.transmission_error.LSTEResult
+        The LSTE over one period of the mesh.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+    cycles : float
+        Number of mesh cycles shown [-]; the period of ``result`` is repeated to cover them.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     ax = _ax(ax)
     phase, lste = _periodic(result, result.lste, cycles)
@@ -43,7 +57,22 @@ def plot_lste(result, ax=None, cycles: float = 2):
 
 
 def plot_mesh_stiffness(result, ax=None, cycles: float = 2):
-    """Tangent mesh stiffness k(t) = dW/dδ [N/m] over ``cycles`` mesh cycles, with its mean."""
+    """Tangent mesh stiffness k(t) = dW/dδ [N/m] over ``cycles`` mesh cycles, with its mean.
+
+    Parameters
+    ----------
+    result : nlgrd.gear.transmission_error.LSTEResult
+        The LSTE over one period of the mesh.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+    cycles : float
+        Number of mesh cycles shown [-]; the period of ``result`` is repeated to cover them.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = _ax(ax)
     phase, k = _periodic(result, result.mesh_stiffness, cycles)
     ax.plot(phase, k, label="k(t)")
@@ -61,6 +90,18 @@ def plot_load_sharing(result, ax=None):
     Slot j of each sample is the pair that entered j cycles earlier, so the slots laid
     end to end trace one pair from the start to the end of contact (over the first
     mesh cycles of the result).
+
+    Parameters
+    ----------
+    result : nlgrd.gear.transmission_error.LSTEResult
+        The load sharing over one period of the mesh.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     ax = _ax(ax)
     n_pc = result.points_per_cycle
@@ -88,7 +129,24 @@ def plot_load_sharing(result, ax=None):
 
 
 def plot_tip_relief_sweep(sweep, ax=None, design_deflection: float | None = None):
-    """Peak-to-peak LSTE against the tip-relief amount (µm), with the optimum marked."""
+    """Peak-to-peak LSTE against the tip-relief amount (µm), with the optimum marked.
+
+    Parameters
+    ----------
+    sweep : nlgrd.gear.transmission_error.TipReliefSweep
+        The LSTE summaries over the tip-relief amounts.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+    design_deflection : float, optional
+        Deflection W / k_pair of one tooth pair under the load [m]
+        (:func:`~nlgrd.gear.transmission_error.single_pair_deflection`), marked by a dotted
+        line; not marked when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = _ax(ax)
     ax.plot(sweep.amounts * 1e6, sweep.fluctuation_pp * 1e6, "-o", ms=3, label=f"{sweep.shape} tip relief")
     ax.axvline(sweep.optimum * 1e6, color="C1", ls="--", label=f"minimum at {sweep.optimum * 1e6:.1f} µm")

@@ -80,6 +80,16 @@ def plot_sweep_frame(
 
     Parameters
     ----------
+    frame : pandas.DataFrame
+        The sweep table(s), e.g. :func:`sweep_table` or a written sweep table, several
+        concatenated. Rows with an optional ``response`` column other than "periodic" that
+        converged are marked apart on the bottom edge ("no stable periodic response").
+    x : str
+        Column of the abscissa (also the x label).
+    y : str
+        Column of the values drawn (also the y label).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
     label : str, optional
         Name of the series in the legend (entries "{label} up", "{label} down", ...).
     series : int, (up, down) colours or {direction: colour}
@@ -91,6 +101,19 @@ def plot_sweep_frame(
     sort : bool
         Draw each direction in order of ``x`` (False: in the table's order, e.g. along
         the arc length of a continuation curve).
+    ms : float
+        Marker size of the stable points [pt] (:func:`~nlgrd.plotting.common.draw_points`).
+    lw : float
+        Line width [pt].
+    alpha : float
+        Opacity of the lines and markers.
+    not_converged : str
+        Legend wording of the crosses of the non-converged rows.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     ax = get_ax(ax)
     colours = direction_colours(series)
@@ -132,10 +155,25 @@ def plot_sweep_frame(
 
 
 def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
-    """The columns :func:`plot_sweep_frame` reads, from a :class:`~nlgrd.nonlinear.sweep.SweepResult`.
+    """The columns :func:`plot_sweep_frame` reads, from a :class:`~nlgrd.nonlinear.results.SweepResult`.
 
     ``quantity`` (a metric name) becomes column "value" in the units of the axis label;
     frequencies are mesh frequencies [Hz].
+
+    Parameters
+    ----------
+    result : nlgrd.nonlinear.results.SweepResult
+        The sweep; its ``floquet_max`` and ``no_stable`` are used when it has them.
+    quantity : str
+        A metric name (:data:`~nlgrd.nonlinear.metrics.METRIC_NAMES`); the DTE metrics are
+        scaled to µm, the others kept as they are.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per point: "mesh_frequency [Hz]", "direction", "converged", "stable",
+        "floquet_max [-]" (NaN when not computed), "value" and "response" ("periodic", or
+        "no stable response" where no stable periodic response was found).
     """
     _, scale = _LABELS.get(quantity, (quantity, 1.0))
     n = len(result.omega)
@@ -163,11 +201,33 @@ def plot_sweep(
     series: int | tuple | dict | None = None,
     ylim: tuple[float | None, float | None] | None = None,
 ):
-    """Sweep curve(s) of a :class:`~nlgrd.nonlinear.sweep.SweepResult` against mesh frequency [Hz].
+    """Sweep curve(s) of a :class:`~nlgrd.nonlinear.results.SweepResult` against mesh frequency [Hz].
 
     Up ▲ and down ▼ in different colours; stable filled/solid, unstable open/dashed,
     unknown stability half-filled and stated in the legend; non-converged points as
     crosses on the bottom edge, counted in the legend (see :func:`plot_sweep_frame`).
+
+    Parameters
+    ----------
+    result : nlgrd.nonlinear.results.SweepResult
+        The sweep.
+    quantity : str
+        The metric drawn (:data:`~nlgrd.nonlinear.metrics.METRIC_NAMES`), in the units of
+        its axis label (see :func:`sweep_table`).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+    label : str, optional
+        Name of the series in the legend (entries "{label} up", "{label} down", ...).
+    series : int, (up, down) colours or {direction: colour}, optional
+        Colours (default: series 0 of :data:`~nlgrd.plotting.common.SERIES_COLOURS`).
+    ylim : (low, high), optional
+        The scale, in the units of the axis label: values beyond it become carets on the
+        edge, noted in the legend.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     ax = plot_sweep_frame(
         sweep_table(result, quantity), "mesh_frequency [Hz]", "value", ax, label, series, ylim=ylim
@@ -190,6 +250,29 @@ def plot_continuation(
 
     Points of unknown stability are half-filled and stated in the legend; turning
     points are marked with stars.
+
+    Parameters
+    ----------
+    result : nlgrd.nonlinear.results.ContinuationResult
+        The curve (its ``curve``, drawn in the order of the arc length) and its turning
+        points.
+    quantity : str
+        The metric drawn (:data:`~nlgrd.nonlinear.metrics.METRIC_NAMES`), in the units of
+        its axis label (see :func:`sweep_table`).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+    color : str
+        Matplotlib colour of the curve and its turning points.
+    label : str
+        Name of the curve in the legend.
+    ylim : (low, high), optional
+        The scale, in the units of the axis label: values beyond it become carets on the
+        edge, noted in the legend.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     ax = get_ax(ax)
     table = sweep_table(result.curve, quantity)
@@ -210,6 +293,22 @@ def plot_time_history(history, quantity: str = "delta", ax=None, label: str | No
     """One period of a :class:`~nlgrd.nonlinear.metrics.TimeHistory`.
 
     ``quantity``: "delta" (DTE δ and LSTE e, µm), "deflection" (δ - e, µm) or "force" (W, N).
+
+    Parameters
+    ----------
+    history : nlgrd.nonlinear.metrics.TimeHistory
+        The period, drawn against time [ms].
+    quantity : str
+        "delta", "deflection" or "force" (any other value: "delta").
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+    label : str, optional
+        Legend label of the main line (default "δ (DTE)", "δ - e" or "W").
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     ax = get_ax(ax)
     t = history.t * 1e3

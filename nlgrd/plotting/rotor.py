@@ -15,6 +15,20 @@ def plot_mode_shape(result, mode: int = 0, ax=None):
 
     Lateral (|uy|, |uz|), torsional (|θx|) and axial (|ux|) amplitudes are drawn for the
     families holding at least 5 % of the mode's kinetic energy.
+
+    Parameters
+    ----------
+    result : nlgrd.rotor.modal.ModalResult
+        Modes of a model with a rotor system (``result.model`` set).
+    mode : int
+        Index of the mode, from 0 (the title counts from 1).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     ax = _ax(ax)
     system = result.model.system
@@ -67,6 +81,18 @@ def campbell_breaks(result, crossing_gap: float = 0.01):
     may change identity between speeds i and i+1: its whirl or kind changes, a value is
     missing, or a neighbouring slot comes within ``crossing_gap`` (relative) at either
     speed, so that the frequency ordering may swap (a crossing or veering).
+
+    Parameters
+    ----------
+    result : nlgrd.rotor.modal.CampbellResult
+        Frequencies, whirl and kind of each mode slot at each speed.
+    crossing_gap : float
+        Relative frequency gap [-] within which two neighbouring mode slots may cross.
+
+    Returns
+    -------
+    breaks : ndarray of bool, shape (n_speeds - 1, n_modes)
+        True where the curve of a slot must be broken between two speeds.
     """
     F = np.asarray(result.frequencies, dtype=float)
     W = np.asarray(result.whirl, dtype=object)
@@ -88,6 +114,21 @@ def plot_campbell(result, ax=None, crossing_gap: float = 0.01):
     change of whirl or kind or a near-crossing with a neighbouring slot. Stability is
     the sign of the damping ratio: stable points filled and joined solid, unstable
     (ζ < 0) open and joined dashed; the legend says which occur.
+
+    Parameters
+    ----------
+    result : nlgrd.rotor.modal.CampbellResult
+        Frequencies [Hz] against speed (drawn in rpm), excitation orders and critical speeds.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+    crossing_gap : float
+        Relative frequency gap [-] within which two neighbouring mode slots may cross
+        (:func:`campbell_breaks`).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     ax = get_ax(ax, figsize=(9.5, 4.5))
     rpm = result.speeds * 30 / np.pi
@@ -170,7 +211,24 @@ def plot_campbell(result, ax=None, crossing_gap: float = 0.01):
 
 
 def plot_frequency_response(result, output: int = 0, input: int = 0, ax=None):
-    """Magnitude of one receptance against frequency (log scale)."""
+    """Magnitude of one receptance against frequency (log scale).
+
+    Parameters
+    ----------
+    result : nlgrd.rotor.frequency_response.FrequencyResponse
+        The receptance matrix, drawn against frequency [Hz].
+    output : int
+        Index of the response DOF in ``result.outputs``.
+    input : int
+        Index of the forced DOF in ``result.inputs``.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = _ax(ax)
     ax.semilogy(result.omega / (2 * np.pi), np.abs(result.H[:, output, input]))
     ax.set_xlabel("frequency [Hz]")
@@ -180,7 +238,20 @@ def plot_frequency_response(result, output: int = 0, input: int = 0, ax=None):
 
 
 def plot_static(result, ax=None):
-    """Lateral deflection uy, uz along each shaft."""
+    """Lateral deflection uy, uz along each shaft.
+
+    Parameters
+    ----------
+    result : nlgrd.rotor.frequency_response.StaticResult
+        The static deflection of a model with a rotor system.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = _ax(ax)
     system = result.model.system
     for s, shaft in enumerate(system.shafts):

@@ -48,7 +48,20 @@ class _Builder:
 
 @dataclass(frozen=True)
 class HystereticPart:
-    """One shaft's internal hysteretic damping: loss factor, speed ratio and its bending matrices."""
+    """One shaft's internal hysteretic damping: loss factor, speed ratio and its bending matrices.
+
+    Attributes
+    ----------
+    loss_factor : float
+        Factor applied to both matrices, the hysteretic loss factor eta_h [-];
+        :func:`assemble` folds eta_h into the matrices and stores 1.0 here.
+    speed_ratio : float
+        Spin speed of the shaft divided by the reference speed [-], signed.
+    Kb : scipy.sparse.csc_matrix, (n_dofs, n_dofs)
+        Bending stiffness of the shaft in global DOFs [N/m, N m/rad].
+    Kx : scipy.sparse.csc_matrix, (n_dofs, n_dofs)
+        The same stiffness cross-coupled between the bending planes [N/m, N m/rad].
+    """
 
     loss_factor: float
     speed_ratio: float
@@ -58,7 +71,18 @@ class HystereticPart:
 
 @dataclass(frozen=True)
 class MeshLink:
-    """A linear spring-damper along a projection vector w (a gear mesh at k_h, c_m)."""
+    """A linear spring-damper along a projection vector w (a gear mesh at k_h, c_m).
+
+    Attributes
+    ----------
+    w : ndarray, (n_dofs,)
+        Projection vector, δ = wᵀ q the compression along the line of action: unit-vector
+        components on the lateral DOFs [-], base radii on the torsional ones [m].
+    stiffness : float
+        Average mesh stiffness k_h [N/m].
+    damping : float
+        Mesh damping coefficient c_m [N s/m].
+    """
 
     w: NDArray
     stiffness: float
@@ -71,9 +95,12 @@ class LinearModel:
 
     Attributes
     ----------
+    system : RotorSystem or None
+        The system assembled; None for a model built from bare matrices.
     M, K, C, G : scipy.sparse.csc_matrix
-        Mass, speed-independent stiffness and damping (bearings without speed table,
-        couplings, mesh if included), gyroscopic per unit reference speed [kg m^2].
+        Mass [kg, kg m^2], speed-independent stiffness [N/m] and damping [N s/m]
+        (bearings without speed table, couplings, mesh if included), gyroscopic per
+        unit reference speed [kg m^2].
     Ci : csc_matrix
         Internal viscous damping sum of eta_v Kb over the shafts [N s/m].
     Kc : csc_matrix
@@ -112,6 +139,13 @@ class LinearModel:
             Mass [kg] and stiffness [N/m] matrices, n x n.
         C, G : array_like, optional
             Damping [N s/m] and gyroscopic (per unit speed) matrices; zero when omitted.
+        system : RotorSystem, optional
+            The system the matrices belong to (for DOF names); None by default.
+
+        Returns
+        -------
+        LinearModel
+            Without internal damping, tabulated bearings or meshes.
         """
         M = sp.csc_matrix(M, dtype=float)
         n = M.shape[0]
@@ -243,6 +277,18 @@ def mesh_matrix(W: NDArray, gains: NDArray) -> sp.csc_matrix:
 
     The meshes' stiffness (or damping) along their lines of action; W has a dozen
     non-zeros per mesh, so the n x n outer products are never formed densely.
+
+    Parameters
+    ----------
+    W : ndarray, (n,) or (n, n_nl)
+        Projection vectors w_j of the meshes as columns (see :class:`MeshLink`).
+    gains : array_like, (n_nl,)
+        Gain g_j of each mesh: a stiffness [N/m] or a damping coefficient [N s/m].
+
+    Returns
+    -------
+    scipy.sparse.csc_matrix, (n, n)
+        Σ_j g_j w_j w_jᵀ, in the unit of the gains (times m² on the torsional DOFs).
     """
     W = np.asarray(W, dtype=float).reshape(W.shape[0], -1)
     idx = np.flatnonzero(np.any(W != 0, axis=1))
@@ -269,6 +315,7 @@ def assemble(system: RotorSystem, mesh_stiffness: bool = True, mesh_damping: boo
     Returns
     -------
     LinearModel
+        The global matrices in SI units.
     """
     dm = system.dofs
     n = dm.n_dofs

@@ -61,10 +61,19 @@ class Disk:
 
         Parameters
         ----------
+        shaft, node : int
+            Where the disk sits.
         outer_diameter, inner_diameter, width : float
             Dimensions [m].
         density : float
             Density [kg/m^3], steel by default.
+        name : str
+            Label.
+
+        Returns
+        -------
+        Disk
+            With the mass [kg] and inertias [kg m^2] of the cylinder.
         """
         check_positive("outer_diameter", outer_diameter)
         check_positive("width", width)

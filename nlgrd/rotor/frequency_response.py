@@ -103,6 +103,9 @@ def frequency_response(
 
     Parameters
     ----------
+    system : RotorSystem or LinearModel
+        The model; a RotorSystem is assembled with its gear meshes at their average
+        stiffness.
     omega : array_like
         Frequencies [rad/s].
     inputs, outputs : sequence
@@ -110,6 +113,16 @@ def frequency_response(
         Outputs default to the inputs.
     speed : float
         Reference speed [rad/s].
+
+    Returns
+    -------
+    FrequencyResponse
+        Receptances H of shape (n_freq, n_out, n_in) [m/N or rad/(N m)].
+
+    Raises
+    ------
+    ModelError
+        When a frequency is not finite or a DOF does not exist.
     """
     model = _as_model(system)
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
@@ -133,9 +146,10 @@ class StaticResult:
 
     Attributes
     ----------
-    q : ndarray
+    q : ndarray, (n_dofs,)
         Displacements of all DOFs [m, rad].
     model : LinearModel
+        The model solved.
     """
 
     q: NDArray
@@ -184,10 +198,23 @@ def static_deflection(
 
     Parameters
     ----------
+    system : RotorSystem or LinearModel
+        The model; a RotorSystem is assembled with its gear meshes at their average
+        stiffness.
     loads : ndarray or dict
-        Force vector [N, N m] or ``{(shaft, node, dof): value}``.
+        Force vector (n_dofs,) [N, N m] or ``{(shaft, node, dof): value}``.
     speed : float
         Reference speed [rad/s] (circulatory terms).
+
+    Returns
+    -------
+    StaticResult
+        The deflection q [m, rad].
+
+    Raises
+    ------
+    ModelError
+        When the loads have the wrong length, are not finite or are not balanced.
     """
     model = _as_model(system)
     n = model.n_dofs

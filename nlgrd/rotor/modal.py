@@ -114,6 +114,8 @@ class ModalResult:
         Number of rigid-body modes found (left out of the arrays).
     damped : bool
         Whether damping and gyroscopic terms were included.
+    model : LinearModel or None
+        The model analysed.
     """
 
     speed: float
@@ -212,6 +214,7 @@ def modal_analysis(
     Returns
     -------
     ModalResult
+        The flexible modes, sorted by damped frequency.
     """
     model = _as_model(system)
     n = model.n_dofs
@@ -272,8 +275,11 @@ class CampbellResult:
     frequencies : ndarray, (n_speeds, n_modes)
         Damped natural frequencies [Hz], sorted at each speed.
     damping_ratios : ndarray, (n_speeds, n_modes)
+        Modal damping ratios ζ [-].
     whirl : ndarray of str, (n_speeds, n_modes)
+        'forward', 'backward', 'planar' or '-' (see :attr:`ModalResult.whirl`).
     kinds : ndarray of str, (n_speeds, n_modes)
+        'lateral', 'torsional', 'axial' or 'coupled' (see :attr:`ModalResult.kinds`).
     orders : dict
         Excitation orders: label -> multiple of the reference speed.
     critical_speeds : list of dict
@@ -325,12 +331,25 @@ def campbell(
 
     Parameters
     ----------
+    system : RotorSystem or LinearModel
+        The model; gear meshes enter at their average stiffness.
+    speeds : array_like
+        Reference (pinion) speeds Ω [rad/s].
+    n_modes : int
+        Number of flexible modes followed at each speed.
     orders : dict, optional
         Excitation orders as multiples of the reference speed, e.g.
         ``{"1x": 1, "mesh": 25}``; default ``{"1x": 1}``.
     progress : callable, optional
-        Called as ``progress(i, n)`` after each speed.
+        Called as ``progress(i, n)`` after each speed (i = 1 .. n).
 
+    Returns
+    -------
+    CampbellResult
+        Damped frequencies [Hz] per speed and mode, with the critical speeds.
+
+    Notes
+    -----
     Critical speeds are where a mode's damped frequency equals order x speed / 2π,
     found by linear interpolation between neighbouring speeds.
     """

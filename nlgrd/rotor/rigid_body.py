@@ -158,6 +158,22 @@ def check_balanced(R: NDArray, load: NDArray, key: str, what: str = "the static 
 
     The measure |R_jᵀ f| / (‖R_j‖ ‖f‖) lies in [0, 1] and is independent of the units of f
     and M; rounding gives ~1e-16, so BALANCE_RTOL = 1e-8 rejects only real imbalance.
+
+    Parameters
+    ----------
+    R : ndarray, (n, r)
+        Rigid-body modes as columns (:func:`rigid_body_modes`); r = 0 accepts any load.
+    load : array_like, (n,)
+        Generalised force vector f [N, N m].
+    key : str
+        Field named by the ModelError.
+    what : str
+        What the loads are, for the message.
+
+    Raises
+    ------
+    ModelError
+        When some |R_jᵀ f| / (‖R_j‖ ‖f‖) exceeds BALANCE_RTOL.
     """
     f = np.asarray(load, dtype=float)
     if R.shape[1] == 0 or not np.any(f):
@@ -172,7 +188,21 @@ def check_balanced(R: NDArray, load: NDArray, key: str, what: str = "the static 
 
 
 def complement(R: NDArray, M) -> NDArray:
-    """Orthonormal basis (n, n - r) of the M-orthogonal complement of span(R)."""
+    """Orthonormal basis (n, n - r) of the M-orthogonal complement of span(R).
+
+    Parameters
+    ----------
+    R : ndarray, (n, r)
+        Basis of the subspace, e.g. the rigid-body modes of :func:`rigid_body_modes`.
+    M : (n, n) array or sparse matrix
+        Mass matrix [kg, kg m²] of the M inner product.
+
+    Returns
+    -------
+    ndarray, (n, n - r)
+        Columns orthonormal in the Euclidean inner product, spanning {v : Rᵀ M v = 0};
+        the identity when r = 0.
+    """
     n = R.shape[0]
     if R.shape[1] == 0:
         return np.eye(n)

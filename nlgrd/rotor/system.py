@@ -27,6 +27,11 @@ class DofMap:
 
     Global index of (shaft s, node n, dof d) is ``6 * (first_node[s] + n) + d`` with d
     in the order ``(ux, uy, uz, θx, θy, θz)``.
+
+    Parameters
+    ----------
+    shafts : tuple of Shaft
+        The shafts of the system, in order; shafts and nodes count from 0.
     """
 
     shafts: tuple[Shaft, ...]

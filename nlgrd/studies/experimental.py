@@ -131,6 +131,17 @@ def _number(text: str, column: str, line: int, file: str) -> float:
 def load_experimental(path: str | os.PathLike) -> ExperimentalSet:
     """Read and check one data file (format: ``data/experimental/README.md``).
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+
+    Returns
+    -------
+    ExperimentalSet
+        The data set: abscissa in the file's unit (pinion speed [rpm] or mesh frequency
+        [Hz]), values in the unit of :data:`QUANTITIES`, and the header.
+
     Raises
     ------
     ModelError
@@ -219,6 +230,23 @@ def find_experimental(directory: str | os.PathLike, case: str) -> list[Experimen
     """All data sets of ``case`` among the ``*.csv`` files of ``directory`` (sorted by name).
 
     A missing directory gives an empty list; a bad file raises :class:`ModelError`.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        The folder searched (not its sub-folders), e.g. ``data/experimental``.
+    case : str
+        The case-study name the header's ``case`` must equal, e.g. ``"kubo"``.
+
+    Returns
+    -------
+    list of ExperimentalSet
+        The data sets of ``case``, in file-name order; empty when there is none.
+
+    Raises
+    ------
+    ModelError
+        When any ``*.csv`` file of the folder is bad (:func:`load_experimental`).
     """
     directory = Path(directory)
     if not directory.is_dir():
@@ -241,7 +269,7 @@ class CurveLandmarks:
     peak_x, peak_value : float
         Location and value of the largest y (the resonance location and peak).
     jump_x : float
-        Midpoint of the largest jump (:func:`nlgrd.nonlinear.sweep.find_jumps`); NaN if none.
+        Midpoint of the largest jump (:func:`nlgrd.nonlinear.results.find_jumps`); NaN if none.
     jump_from, jump_to : float
         The two points between which it lies (in sweep order); NaN if none.
     """
@@ -269,19 +297,39 @@ def _sweep_order(x: ArrayLike, y: ArrayLike, direction: str) -> tuple[NDArray, N
 
 
 def curve_landmarks(
-    x: ArrayLike, y: ArrayLike, direction: str = "up", rel_tol: float = 0.15, ratio: float = 3.0
+    x: ArrayLike, y: ArrayLike, direction: str = "up", rtol: float = 0.15, ratio: float = 3.0
 ) -> CurveLandmarks:
     """Peak and largest jump of a curve; NaN points are skipped.
 
     ``direction`` gives the sweep order ("down": decreasing x) for the jump; a jump is a
-    step larger than ``rel_tol`` times the range of y and ``ratio`` times its neighbours.
+    step larger than ``rtol`` times the range of y and ``ratio`` times its neighbours.
+
+    Parameters
+    ----------
+    x : array_like
+        Abscissa of the curve, in any unit (pinion speed [rpm], mesh frequency [Hz] or
+        [rad/s]); the landmarks' locations come in the same unit.
+    y : array_like
+        The curve's values, in any unit (the peak value comes in the same unit).
+    direction : str
+        Sweep order for the jump: "down" for decreasing x, anything else for increasing x.
+    rtol : float
+        Smallest jump as a fraction of the range of y [-].
+    ratio : float
+        Smallest ratio of a jump to each of its neighbouring steps [-].
+
+    Returns
+    -------
+    CurveLandmarks
+        Peak and largest jump; all NaN when no finite point is left, the jump fields NaN
+        when there is no jump.
     """
     x, y = _sweep_order(x, y, direction)
     nan = float("nan")
     if x.size == 0:
         return CurveLandmarks(nan, nan, nan, nan, nan)
     i = int(np.argmax(y))
-    jumps = find_jumps(x, y, direction, rel_tol, ratio)
+    jumps = find_jumps(x, y, direction, rtol, ratio)
     if not jumps:
         return CurveLandmarks(float(x[i]), float(y[i]), nan, nan, nan)
     j = max(jumps, key=lambda jp: abs(jp.value_to - jp.value_from))
@@ -296,22 +344,44 @@ def largest_jump(
     lo: float = -np.inf,
     hi: float = np.inf,
     sign: int = 0,
-    rel_tol: float = 0.1,
+    rtol: float = 0.1,
     ratio: float = 3.0,
 ) -> Jump | None:
     """The largest jump of one sweep direction with its midpoint in [lo, hi].
 
     ``x`` and ``y`` are sorted here into sweep order (``direction`` "down": decreasing x);
-    jumps are found by :func:`nlgrd.nonlinear.sweep.find_jumps` (``rel_tol``, ``ratio``). ``sign``
+    jumps are found by :func:`nlgrd.nonlinear.results.find_jumps` (``rtol``, ``ratio``). ``sign``
     +1 keeps only rises of y in sweep order (the up sweep landing on the upper branch),
     -1 only drops (the down sweep falling off it), 0 both. Returns None when there is none;
-    the returned :class:`~nlgrd.nonlinear.sweep.Jump` holds values of ``x`` (whatever their unit) in
+    the returned :class:`~nlgrd.nonlinear.results.Jump` holds values of ``x`` (whatever their unit) in
     its ``omega_from``, ``omega_to`` and ``omega``.
+
+    Parameters
+    ----------
+    x : array_like
+        Abscissa of the curve, in any unit; ``lo``, ``hi`` and the returned jump use the same.
+    y : array_like
+        The curve's values, in any unit; non-finite points are skipped.
+    direction : str
+        The sweep direction: "down" for decreasing x, anything else for increasing x.
+    lo, hi : float
+        The range of x the jump's midpoint must lie in, in the unit of ``x``.
+    sign : int
+        +1 for rises of y only, -1 for drops only, 0 for both.
+    rtol : float
+        Smallest jump as a fraction of the range of y [-].
+    ratio : float
+        Smallest ratio of a jump to each of its neighbouring steps [-].
+
+    Returns
+    -------
+    Jump or None
+        The jump with the largest change of y, or None.
     """
     x, y = _sweep_order(x, y, direction)
     found = [
         j
-        for j in find_jumps(x, y, direction, rel_tol, ratio)
+        for j in find_jumps(x, y, direction, rtol, ratio)
         if lo <= j.omega <= hi and (sign == 0 or np.sign(j.value_to - j.value_from) == sign)
     ]
     return max(found, key=lambda j: abs(j.value_to - j.value_from), default=None)
@@ -339,6 +409,24 @@ def resonance_jumps(
       jump (in down-sweep order) to less than half the value before it.
 
     Either is None when not found. The returned jumps hold x values in ``omega_*``.
+
+    Parameters
+    ----------
+    up : tuple of array_like
+        (x, y) of the up sweep; x in any unit, the same for every argument.
+    down : tuple of array_like
+        (x, y) of the down sweep; only the x points it shares with the up sweep form bands.
+    resonance : float
+        The linear resonance, in the unit of x.
+    window : tuple of float
+        (low, high) factors of ``resonance`` [-] between which a band must end.
+    rtol : float
+        Relative difference of the two sweeps that makes a point part of a band [-].
+
+    Returns
+    -------
+    up_jump, down_jump : Jump or None
+        The up and the down jump, each None when not found.
     """
     xu, yu = _sweep_order(*up, "up")
     xd, yd = _sweep_order(*down, "down")
@@ -362,7 +450,22 @@ def resonance_jumps(
 
 
 def local_peak(x: ArrayLike, y: ArrayLike, lo: float, hi: float) -> tuple[float, float]:
-    """(x, y) of the largest y with lo <= x <= hi; (NaN, NaN) when no finite point lies there."""
+    """(x, y) of the largest y with lo <= x <= hi; (NaN, NaN) when no finite point lies there.
+
+    Parameters
+    ----------
+    x : array_like
+        Abscissa of the curve, in any unit.
+    y : array_like
+        The curve's values, in any unit; non-finite points are skipped.
+    lo, hi : float
+        The range of x searched (ends included), in the unit of ``x``.
+
+    Returns
+    -------
+    x_peak, y_peak : float
+        Location and value of the largest y in the range, or NaN.
+    """
     x, y = _finite(x, y)
     keep = (x >= lo) & (x <= hi)
     if not np.any(keep):
@@ -379,6 +482,22 @@ def hysteresis_bands(
     ``x`` is shared by both curves (sorted here). A point differs when
     |up - down| > rtol · max(|up|, |down|); consecutive differing points form a band
     (x_first, x_last). Points where either sweep failed (NaN) neither start nor break a band.
+
+    Parameters
+    ----------
+    x : array_like
+        Abscissa shared by both curves, in any unit.
+    up : array_like
+        Values of the up sweep at ``x``, in any unit.
+    down : array_like
+        Values of the down sweep at ``x``, in the unit of ``up``.
+    rtol : float
+        Relative difference that makes a point differ [-].
+
+    Returns
+    -------
+    list of tuple of float
+        The bands (x_first, x_last) in increasing x, in the unit of ``x``.
     """
     x = np.asarray(x, dtype=float)
     up, down = np.asarray(up, dtype=float), np.asarray(down, dtype=float)
@@ -400,7 +519,27 @@ def hysteresis_bands(
 
 
 def directions_of(frame: pd.DataFrame, x_col: str, y_col: str) -> dict[str, tuple[NDArray, NDArray]]:
-    """{direction: (x, y)} of a sweep table, each sorted by x."""
+    """{direction: (x, y)} of a sweep table, each sorted by x.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        A sweep table (``to_frame()`` of a sweep result) with a ``direction`` column.
+    x_col : str
+        Column of the abscissa, e.g. ``"pinion_speed [rpm]"``.
+    y_col : str
+        Column of the values, e.g. ``"dslr [-]"``.
+
+    Returns
+    -------
+    dict of str to tuple of ndarray
+        (x, y) per direction, in the units of the columns, in table order of the directions.
+
+    Raises
+    ------
+    ModelError
+        When a column is not in the table.
+    """
     for c in (x_col, y_col, "direction"):
         if c not in frame.columns:
             raise ModelError(c, f"not a column of the sweep table (columns: {list(frame.columns)[:8]} ...)")
@@ -409,96 +548,3 @@ def directions_of(frame: pd.DataFrame, x_col: str, y_col: str) -> dict[str, tupl
         part = part.sort_values(x_col, kind="stable")
         out[str(d)] = (part[x_col].to_numpy(float), part[y_col].to_numpy(float))
     return out
-
-
-# --------------------------------------------------------------------------------------
-# Comparison
-# --------------------------------------------------------------------------------------
-
-
-def _model_curve(curves: dict, direction: str) -> tuple[NDArray, NDArray] | None:
-    """Model curve for a measured direction: the same direction, or for "unknown" the
-    upper envelope of all directions (None when there is none)."""
-    if direction in curves:
-        return curves[direction]
-    if direction != "unknown" or not curves:
-        return None
-    xs = np.unique(np.concatenate([c[0] for c in curves.values()]))
-    ys = []
-    for cx, cy in curves.values():
-        ok = np.isfinite(cy)
-        ys.append(np.interp(xs, cx[ok], cy[ok], left=np.nan, right=np.nan) if ok.sum() > 1 else xs * np.nan)
-    return xs, np.nanmax(np.vstack(ys), axis=0) if len(ys) > 1 else ys[0]
-
-
-def _rms_difference(curves: dict, direction: str, x: NDArray, y: NDArray) -> tuple[float, int]:
-    """RMS of model - measurement on the measured points inside the model's range."""
-    branches = [curves[direction]] if direction in curves else list(curves.values())
-    if direction not in curves and direction != "unknown":
-        return float("nan"), 0
-    diffs = []
-    for cx, cy in branches:
-        ok = np.isfinite(cy)
-        if ok.sum() < 2:
-            diffs.append(np.full(x.shape, np.nan))
-            continue
-        m = np.interp(x, cx[ok], cy[ok], left=np.nan, right=np.nan)
-        diffs.append(m - y)
-    D = np.vstack(diffs)
-    # "unknown": each measured point is compared with the nearest computed branch
-    with np.errstate(all="ignore"):
-        idx = np.nanargmin(np.where(np.isfinite(D), np.abs(D), np.inf), axis=0)
-    d = D[idx, np.arange(D.shape[1])]
-    d = d[np.isfinite(d)]
-    if d.size == 0:
-        return float("nan"), 0
-    return float(np.sqrt(np.mean(d**2))), int(d.size)
-
-
-def _percent(computed: float, measured: float) -> float:
-    """100 (computed - measured) / |measured|; NaN when measured is 0 or NaN."""
-    if not np.isfinite(measured) or measured == 0:
-        return float("nan")
-    return 100.0 * (computed - measured) / abs(measured)
-
-
-def compare(data: ExperimentalSet, frame: pd.DataFrame) -> pd.DataFrame:
-    """Score a sweep table against a measured data set, one row per measured direction.
-
-    The model curve of a direction is the sweep of the same direction; a direction
-    "unknown" is compared with the upper envelope of the sweeps (peak, jump) and, point by
-    point, with the nearest computed branch (RMS difference). Columns (units in names):
-    peak location and value, measured and computed, and their relative errors; location of
-    the largest jump, measured and computed; RMS difference and the number of measured
-    points inside the computed range. Non-converged (NaN) sweep points are skipped.
-    """
-    curves = directions_of(frame, data.frame_x_column, data.frame_column)
-    xu, vu = X_UNITS[data.x_column], QUANTITIES[data.quantity][1]
-    rows = []
-    for d in data.directions():
-        x, y = data.select(d)
-        meas = curve_landmarks(x, y, "down" if d == "down" else "up")
-        model = _model_curve(curves, d)
-        if model is None:
-            comp = CurveLandmarks(*(float("nan"),) * 5)
-        else:
-            comp = curve_landmarks(model[0], model[1], "down" if d == "down" else "up")
-        rms, n = _rms_difference(curves, d, x, y)
-        rows.append(
-            {
-                "data set": Path(data.path).name,
-                "quantity": data.quantity,
-                "direction": d,
-                f"peak location measured [{xu}]": meas.peak_x,
-                f"peak location computed [{xu}]": comp.peak_x,
-                "peak location error [%]": _percent(comp.peak_x, meas.peak_x),
-                f"peak value measured [{vu}]": meas.peak_value,
-                f"peak value computed [{vu}]": comp.peak_value,
-                "peak value error [%]": _percent(comp.peak_value, meas.peak_value),
-                f"jump measured [{xu}]": meas.jump_x,
-                f"jump computed [{xu}]": comp.jump_x,
-                f"rms difference [{vu}]": rms,
-                "points compared": n,
-            }
-        )
-    return pd.DataFrame(rows)

@@ -61,7 +61,18 @@ def _fmt(value) -> str:
 
 
 def read_json(path: Path) -> dict:
-    """The JSON object in ``path`` ({} when missing or unreadable)."""
+    """The JSON object in ``path`` ({} when missing or unreadable).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The JSON file (UTF-8).
+
+    Returns
+    -------
+    dict
+        The parsed object; ``{}`` when the file is missing, unreadable or not JSON.
+    """
     try:
         return json.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, ValueError):
@@ -69,7 +80,15 @@ def read_json(path: Path) -> dict:
 
 
 def write_text(path: Path, text: str) -> None:
-    """Write ``text`` to a temporary file beside ``path``, then rename it over ``path``."""
+    """Write ``text`` to a temporary file beside ``path``, then rename it over ``path``.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file written (its folder must exist).
+    text : str
+        The text, written as UTF-8.
+    """
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp")
     tmp.write_text(text, encoding="utf-8")
@@ -77,7 +96,15 @@ def write_text(path: Path, text: str) -> None:
 
 
 def write_json(path: Path, data: dict) -> None:
-    """``data`` as indented JSON (keys in their order), written atomically."""
+    """``data`` as indented JSON (keys in their order), written atomically.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file written (:func:`write_text`).
+    data : dict
+        The object written; non-ASCII text is kept as it is.
+    """
     write_text(path, json.dumps(data, indent=1, ensure_ascii=False) + "\n")
 
 
@@ -99,6 +126,17 @@ def record_settings(out_dir: str | os.PathLike, settings: Mapping[str, Any], key
     are replaced, new ones appended in order. Notebooks call this (as
     ``nlgrd.studies.index_page.record_settings``) with the values they actually use, after their
     defaults are resolved. ``key="run"`` holds the run mode.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        The report part's folder (made when missing).
+    settings : Mapping of str to Any
+        Label -> value; numbers are stored as numbers, booleans, strings and None as they
+        are, anything else as its text.
+    key : str
+        The entry of ``settings.json`` recorded: ``"settings"`` (the settings table of the
+        index) or ``"run"`` (the run mode).
     """
     path = Path(out_dir) / SETTINGS_FILE
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -118,7 +156,19 @@ def _git(root: Path, *args: str) -> str | None:
 
 
 def version_rows(root: Path) -> list[tuple[str, str]]:
-    """(label, text) rows: the library version, the git commit, Python and key packages."""
+    """(label, text) rows: the library version, the git commit, Python and key packages.
+
+    Parameters
+    ----------
+    root : pathlib.Path
+        The repository the git commit is read from (no row when git or the repository is missing).
+
+    Returns
+    -------
+    list of tuple of str
+        (label, text) rows: nlgrd, git commit, Python, then numpy, scipy, pandas, matplotlib
+        and papermill where installed.
+    """
     import nlgrd
 
     version = nlgrd.__version__
@@ -209,7 +259,24 @@ def _order(folder: Path) -> tuple[int, str]:
 
 
 def index_html(stage: Path, *, fast: bool, parts, root: Path) -> str:
-    """The text of ``index.html`` for the report folder ``stage``."""
+    """The text of ``index.html`` for the report folder ``stage``.
+
+    Parameters
+    ----------
+    stage : pathlib.Path
+        The report folder; each of its top-level folders (not hidden) is one section.
+    fast : bool
+        Whether this run was in fast mode (stated on the page).
+    parts : iterable of str
+        The report parts rebuilt by this run (stated on the page).
+    root : pathlib.Path
+        The repository, for the version rows (:func:`version_rows`).
+
+    Returns
+    -------
+    str
+        The HTML text; it holds no time and no absolute path.
+    """
     stage = Path(stage)
     folders = sorted((p for p in stage.iterdir() if p.is_dir() and not p.name.startswith(".")), key=_order)
     mode = "fast" if fast else "full"
@@ -239,7 +306,24 @@ def index_html(stage: Path, *, fast: bool, parts, root: Path) -> str:
 
 
 def write_index(stage: Path, *, fast: bool, parts, root: Path) -> Path:
-    """Write ``stage/index.html`` (:func:`index_html`); returns its path."""
+    """Write ``stage/index.html`` (:func:`index_html`); returns its path.
+
+    Parameters
+    ----------
+    stage : pathlib.Path
+        The report folder.
+    fast : bool
+        Whether this run was in fast mode.
+    parts : iterable of str
+        The report parts rebuilt by this run.
+    root : pathlib.Path
+        The repository, for the version rows.
+
+    Returns
+    -------
+    pathlib.Path
+        The path of the written ``index.html``.
+    """
     path = Path(stage) / INDEX
     write_text(path, index_html(stage, fast=fast, parts=parts, root=root))
     return path

@@ -26,6 +26,21 @@ def notebook_parameters(notebook: str | os.PathLike) -> dict[str, Any]:
 
     From :func:`papermill.inspect_notebook`; raises :class:`ModelError` when the notebook
     has no such cell.
+
+    Parameters
+    ----------
+    notebook : str or os.PathLike
+        The notebook file.
+
+    Returns
+    -------
+    dict of str to Any
+        Each parameter's papermill information (``default``, ``help``, ...) by name.
+
+    Raises
+    ------
+    ModelError
+        When the notebook has no cell tagged ``parameters``.
     """
     import papermill as pm
 
@@ -40,6 +55,19 @@ def check_parameters(notebook: str | os.PathLike, parameters: Mapping[str, Any])
 
     papermill itself only warns and then runs the notebook with its defaults, so a misspelt
     parameter would silently be ignored.
+
+    Parameters
+    ----------
+    notebook : str or os.PathLike
+        The notebook file.
+    parameters : Mapping of str to Any
+        The parameters a run would pass, by name (only the names are checked).
+
+    Raises
+    ------
+    ModelError
+        For the first unknown name (in sorted order), or when the notebook declares no
+        parameters.
     """
     declared = notebook_parameters(notebook)
     unknown = sorted(set(parameters) - set(declared))
@@ -52,7 +80,21 @@ def check_parameters(notebook: str | os.PathLike, parameters: Mapping[str, Any])
 
 
 def relative_path(path: Path, start: Path) -> str:
-    """``path`` relative to ``start`` when both lie in the repository, else absolute."""
+    """``path`` relative to ``start`` when both lie in the repository, else absolute.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The path written.
+    start : pathlib.Path
+        The folder it is taken relative to.
+
+    Returns
+    -------
+    str
+        The relative path (``os.path.relpath`` of the resolved paths), or the resolved
+        absolute ``path`` when either lies outside the repository.
+    """
     path, start = path.resolve(), start.resolve()
     if path.is_relative_to(ROOT) and start.is_relative_to(ROOT):
         return os.path.relpath(path, start)
@@ -81,6 +123,35 @@ def run_notebook(
     :class:`ModelError` for a parameter the notebook does not declare, and
     ``papermill.PapermillExecutionError`` when a cell raised (the notebook executed up to
     that cell is in ``out_dir``).
+
+    Parameters
+    ----------
+    notebook : str or os.PathLike
+        The notebook file.
+    out_dir : str or os.PathLike
+        The folder the executed notebook and its outputs go to (made when missing).
+    parameters : Mapping of str to Any or None
+        Notebook parameters, by name; ``out_dir`` is added unless given.
+    kernel_name : str
+        The Jupyter kernel.
+    timeout : float
+        Longest time one cell may run [s].
+    stream : file-like or None
+        Receives the notebook's printed output as it runs; None for none.
+    kernel_log : str or os.PathLike or None
+        File the kernel process appends its standard error to; None to leave it on ours.
+
+    Returns
+    -------
+    pathlib.Path
+        The executed notebook, ``out_dir / notebook's name``.
+
+    Raises
+    ------
+    ModelError
+        For a parameter the notebook does not declare.
+    papermill.PapermillExecutionError
+        When a cell raised.
     """
     import papermill as pm
 
@@ -130,6 +201,13 @@ def make_deterministic(executed: str | os.PathLike, out_dir: str | None = None) 
     per-cell execution times, and gives the injected-parameters cell a fixed id. With
     ``out_dir``, the injected ``out_dir`` parameter is rewritten to it: the directory the
     staged outputs are published to, so that the report reruns in place.
+
+    Parameters
+    ----------
+    executed : str or os.PathLike
+        The executed notebook, rewritten.
+    out_dir : str or None
+        The ``out_dir`` parameter written in its place; None to keep it.
     """
     import nbformat
 
@@ -155,7 +233,18 @@ def make_deterministic(executed: str | os.PathLike, out_dir: str | None = None) 
 
 
 def export_html(executed: str | os.PathLike) -> Path:
-    """HTML of an executed notebook (nbconvert), next to it; returns its path."""
+    """HTML of an executed notebook (nbconvert), next to it; returns its path.
+
+    Parameters
+    ----------
+    executed : str or os.PathLike
+        The executed notebook.
+
+    Returns
+    -------
+    pathlib.Path
+        The HTML file: the notebook's path with the suffix ``.html``.
+    """
     import nbformat
     from nbconvert import HTMLExporter
 
@@ -167,7 +256,21 @@ def export_html(executed: str | os.PathLike) -> Path:
 
 
 def parameter_rows(notebook: Path, executed: Path) -> list[list]:
-    """[name, value as run, the notebook's comment] for each declared parameter."""
+    """[name, value as run, the notebook's comment] for each declared parameter.
+
+    Parameters
+    ----------
+    notebook : pathlib.Path
+        The notebook as written (its declared parameters).
+    executed : pathlib.Path
+        The executed notebook (its injected parameters).
+
+    Returns
+    -------
+    list of list of str
+        One row per declared parameter: its name, the ``repr`` of the value injected (else
+        the declared default) and the notebook's comment on it ("" when none).
+    """
     import nbformat
 
     injected = nbformat.read(executed, as_version=4).metadata.get("papermill", {}).get("parameters", {})
@@ -179,7 +282,23 @@ def parameter_rows(notebook: Path, executed: Path) -> list[list]:
 
 
 def notebook_names(selected: tuple[str, ...] | None = None) -> list[str]:
-    """Names (stems) of the notebooks to run: all of ``notebooks/`` or the ``selected`` ones."""
+    """Names (stems) of the notebooks to run: all of ``notebooks/`` or the ``selected`` ones.
+
+    Parameters
+    ----------
+    selected : tuple of str or None
+        The names chosen (``--notebook``); None for all.
+
+    Returns
+    -------
+    list of str
+        The names, in sorted order.
+
+    Raises
+    ------
+    ModelError
+        When a selected name is not a notebook of ``notebooks/`` (``--notebook``).
+    """
     names = sorted(p.stem for p in NOTEBOOKS.glob("*.ipynb"))
     if selected is None:
         return names

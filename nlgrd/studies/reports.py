@@ -26,7 +26,6 @@ import io
 import os
 import shutil
 import signal
-import subprocess
 import sys
 import threading
 import time
@@ -49,6 +48,17 @@ from nlgrd.studies.notebooks import (
     relative_path,
     run_notebook,
 )
+from nlgrd.studies.publishing import (
+    PARTS,
+    ReportError,
+    carry_over,
+    clean_stale,
+    raise_interrupt,
+    say,
+    signals_held,
+    staging_dir,
+    summary,
+)
 
 __all__ = ["build_reports", "main"]
 
@@ -57,13 +67,8 @@ ROOT = Path(__file__).resolve().parents[2]
 REPORTS = ROOT / "reports"
 #: Campbell speed range [rpm] START:STOP:COUNT, full and fast mode.
 CAMPBELL_RPM = {False: "0:15000:61", True: "0:15000:16"}
-PARTS = ("models", "gears", "notebooks")
 #: Exit status of an interrupted run (128 + SIGINT).
 INTERRUPTED = 130
-
-
-class ReportError(RuntimeError):
-    """A part of the report build failed."""
 
 
 # --------------------------------------------------------------------------------------
@@ -73,7 +78,23 @@ class ReportError(RuntimeError):
 
 @dataclass(frozen=True)
 class Build:
-    """One run: where it publishes (``out``), where it builds (``stage``), in which mode."""
+    """One run: where it publishes (``out``), where it builds (``stage``), in which mode.
+
+    Attributes
+    ----------
+    out : pathlib.Path
+        The folder the run publishes to (``reports/``).
+    stage : pathlib.Path
+        The staging folder the run builds in (:func:`staging_dir`).
+    fast : bool
+        Fast mode: the notebooks' quick mode and fewer Campbell speeds.
+    notebooks : tuple of str or None
+        The notebooks to run (``--notebook``); None for all.
+    stream : file-like or None
+        Receives the notebooks' printed output; None for standard output.
+    parameters : Mapping of str to Any or None
+        Parameters passed to every notebook (``-p NAME VALUE``); None for none.
+    """
 
     out: Path
     stage: Path
@@ -84,6 +105,7 @@ class Build:
 
     @property
     def mode(self) -> str:
+        """The run mode: "fast" or "full"."""
         return "fast" if self.fast else "full"
 
 
@@ -107,7 +129,20 @@ def _cli(argv: list[str]) -> None:
 
 
 def build_model_reports(build: Build) -> None:
-    """Modes and Campbell diagram of each model in data/models/."""
+    """Modes and Campbell diagram of each model in data/models/.
+
+    Parameters
+    ----------
+    build : Build
+        The run: its stage (the part writes into ``build.stage / "models"``) and mode.
+
+    Raises
+    ------
+    ReportError
+        When an ``nlgrd`` command failed.
+    KeyboardInterrupt
+        When an ``nlgrd`` command was interrupted.
+    """
     models = sorted((ROOT / "data" / "models").glob("*.toml"))
     target = build.stage / "models"
     rpm = CAMPBELL_RPM[build.fast]
@@ -141,7 +176,20 @@ def build_model_reports(build: Build) -> None:
 
 
 def build_gear_reports(build: Build) -> None:
-    """LSTE of the geared example and the tip-relief sweep of Kubo's gears."""
+    """LSTE of the geared example and the tip-relief sweep of Kubo's gears.
+
+    Parameters
+    ----------
+    build : Build
+        The run: its stage (the part writes into ``build.stage / "gears"``) and mode.
+
+    Raises
+    ------
+    ReportError
+        When an ``nlgrd lste`` command failed.
+    KeyboardInterrupt
+        When an ``nlgrd`` command was interrupted.
+    """
     import numpy as np
 
     from nlgrd.gear.geometry import GearGeometry
@@ -196,6 +244,23 @@ def build_notebook_reports(build: Build) -> list[Path]:
     """Run the notebooks into ``stage/<name>/``; returns the directories.
 
     The notebooks' printed progress goes to ``build.stream`` (default: standard output).
+
+    Parameters
+    ----------
+    build : Build
+        The run: its stage, mode, notebooks, stream and notebook parameters.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The notebooks' folders in the stage, in the order run.
+
+    Raises
+    ------
+    ModelError
+        For an unknown notebook name or parameter.
+    papermill.PapermillExecutionError
+        When a notebook cell raised.
     """
     stream = build.stream or sys.stdout
     names = notebook_names(build.notebooks)
@@ -230,140 +295,6 @@ def build_notebook_reports(build: Build) -> list[Path]:
 BUILDERS = {"models": build_model_reports, "gears": build_gear_reports, "notebooks": build_notebook_reports}
 
 
-# --------------------------------------------------------------------------------------
-# Staging and publishing
-# --------------------------------------------------------------------------------------
-
-
-def staging_dir(out: Path, kind: str = "staging", pid: int | None = None) -> Path:
-    """``.<out name>.<kind>-<pid>`` beside ``out`` (same file system, so renames are atomic)."""
-    return out.parent / f".{out.name}.{kind}-{os.getpid() if pid is None else pid}"
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # someone else's process
-        pass
-    return True
-
-
-def clean_stale(out: Path) -> list[Path]:
-    """Remove staging and old folders of runs that are no longer running; returns them.
-
-    A run killed between its two renames leaves no ``out`` and its previous set in
-    ``.<name>.old-<pid>``: that folder is renamed back to ``out``.
-    """
-    removed = []
-    for kind in ("old", "staging"):
-        for path in sorted(out.parent.glob(f".{out.name}.{kind}-*")):
-            pid = path.name.rpartition("-")[2]
-            if pid.isdigit() and int(pid) != os.getpid() and _alive(int(pid)):
-                continue
-            if kind == "old" and not out.exists():
-                os.rename(path, out)
-                print(f"restored the previous complete set of {out.name}/ from {path.name}", flush=True)
-                continue
-            shutil.rmtree(path, ignore_errors=True)
-            removed.append(path)
-    return removed
-
-
-def tracked_files(out: Path) -> list[str]:
-    """Paths (relative to ``out``) of the files git tracks there; README.md without git."""
-    try:
-        res = subprocess.run(
-            ["git", "ls-files", "-z", "--", "."], cwd=out, capture_output=True, text=True, check=True
-        )
-        return sorted(p for p in res.stdout.split("\0") if p)
-    except (OSError, subprocess.CalledProcessError):
-        return ["README.md"] if (out / "README.md").is_file() else []
-
-
-def _link_tree(src: Path, dst: Path) -> None:
-    """Copy ``src`` to ``dst`` by hard links (files are never rewritten in place), else copies."""
-
-    def link(a, b):
-        try:
-            os.link(a, b)
-        except OSError:
-            shutil.copy2(a, b)
-
-    if src.is_dir():
-        shutil.copytree(src, dst, copy_function=link)
-    else:
-        dst.parent.mkdir(parents=True, exist_ok=True)
-        link(src, dst)
-
-
-@contextlib.contextmanager
-def _signals_held(reraise: bool = True):
-    """SIGINT and SIGTERM wait until the block is left, then interrupt (``reraise``) or not.
-
-    Their handlers only note them meanwhile (a signal mask would hold them in this thread
-    only: another thread, e.g. zmq's, would take them and interrupt the main thread).
-    """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    pending: list[int] = []
-    old = {}
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        if signal.getsignal(sig) not in (signal.SIG_IGN, None):
-            old[sig] = signal.signal(sig, lambda signum, frame: pending.append(signum))
-    try:
-        yield
-    finally:
-        for sig, handler in old.items():
-            signal.signal(sig, handler)
-        if pending and reraise:
-            raise KeyboardInterrupt(signal.Signals(pending[0]).name)
-
-
-def carry_over(build: Build, parts: tuple[str, ...]) -> None:
-    """Copy into the stage what this run keeps from the published set.
-
-    Always the files git tracks there (``reports/README.md``); for a partial run
-    (``--only``, ``--notebook``) also the folders of the parts it does not rebuild.
-    """
-    out, stage = build.out, build.stage
-    if not out.is_dir():
-        return
-    for rel in tracked_files(out):
-        if (out / rel).is_file() and not (stage / rel).exists():
-            _link_tree(out / rel, stage / rel)
-    if set(parts) == set(PARTS) and build.notebooks is None:
-        return
-    rebuilt = {"models", "gears"} & set(parts)
-    if "notebooks" in parts:
-        rebuilt |= set(notebook_names(build.notebooks))
-    for entry in sorted(out.iterdir()):
-        if entry.is_dir() and not entry.name.startswith(".") and entry.name not in rebuilt:
-            if not (stage / entry.name).exists():
-                _link_tree(entry, stage / entry.name)
-
-
-def _raise_interrupt(signum, frame):
-    raise KeyboardInterrupt(signal.Signals(signum).name)
-
-
-def _summary(err: BaseException) -> str:
-    """One line on an error: a notebook cell's exception, else the first line of the message."""
-    cause = err.__cause__ or err
-    if hasattr(cause, "ename"):  # papermill.PapermillExecutionError
-        text = f"{cause.ename}: {cause.evalue} (cell {cause.exec_count})"
-    else:
-        text = next((line for line in str(cause).splitlines() if line.strip()), type(cause).__name__)
-    part = str(err).partition(":")[0] if isinstance(err, ReportError) else ""
-    return f"{part}: {text}" if part else text
-
-
-def _say(text: str) -> None:
-    print(text, file=sys.stderr, flush=True)
-
-
 def build_reports(
     out: Path = REPORTS,
     parts: tuple[str, ...] = PARTS,
@@ -378,6 +309,26 @@ def build_reports(
     both leaving ``out`` as it was, with one line on standard error saying what it holds.
     Publishing renames ``out`` to ``.<name>.old-<pid>`` and the stage to ``out`` with the
     signals held, so an interrupt lands before both renames or after both.
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The folder published to.
+    parts : tuple of str
+        The parts rebuilt (of :data:`PARTS`); the others are carried over from ``out``.
+    fast : bool
+        Fast mode: the notebooks' quick mode and fewer Campbell speeds.
+    notebooks : tuple of str or None
+        The notebooks to run; None for all.
+    stream : file-like or None
+        Receives the notebooks' printed output; None for standard output.
+    parameters : Mapping of str to Any or None
+        Parameters passed to every notebook; None for none.
+
+    Returns
+    -------
+    int
+        The exit status: 0 published, 1 a part failed, 130 interrupted.
     """
     out = Path(out).resolve()
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -391,7 +342,7 @@ def build_reports(
     )
     published = False
     main_thread = threading.current_thread() is threading.main_thread()
-    old_term = signal.signal(signal.SIGTERM, _raise_interrupt) if main_thread else None
+    old_term = signal.signal(signal.SIGTERM, raise_interrupt) if main_thread else None
     t0 = time.perf_counter()
     try:
         build.stage.mkdir()
@@ -406,7 +357,7 @@ def build_reports(
 
         write_index(build.stage, fast=fast, parts=parts, root=ROOT)
         old = staging_dir(out, "old")
-        with _signals_held():  # the swap: two renames, not interruptible between them
+        with signals_held():  # the swap: two renames, not interruptible between them
             if out.exists():
                 os.rename(out, old)
             os.rename(build.stage, out)
@@ -415,17 +366,17 @@ def build_reports(
         print(f"reports written to {out} in {time.perf_counter() - t0:.1f} s", flush=True)
         return 0
     except KeyboardInterrupt:
-        with _signals_held(reraise=False):  # a second Ctrl-C does not cut the clean-up short
+        with signals_held(reraise=False):  # a second Ctrl-C does not cut the clean-up short
             shutil.rmtree(build.stage, ignore_errors=True)
             if published:
-                _say(f"interrupted after publishing: {name} holds this run's complete set")
+                say(f"interrupted after publishing: {name} holds this run's complete set")
             else:
-                _say(f"interrupted: {previous}; this run's partial output was removed")
+                say(f"interrupted: {previous}; this run's partial output was removed")
         return INTERRUPTED
     except Exception as err:
         traceback.print_exc()
-        _say(
-            f"failed: {_summary(err)}; {previous}; this run's output is in {build.stage} "
+        say(
+            f"failed: {summary(err)}; {previous}; this run's output is in {build.stage} "
             "(removed at the next run)"
         )
         return 1
@@ -445,7 +396,20 @@ def _literal(text: str) -> Any:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Build all reports; returns the exit status."""
+    """Build all reports; returns the exit status.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        The command-line arguments (``--fast``, ``--only``, ``--notebook``, ``--out``,
+        ``-p NAME VALUE``); None for ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit status: that of :func:`build_reports`, 2 for an unknown notebook name or
+        parameter, 130 when interrupted before the build started.
+    """
     parser = argparse.ArgumentParser(
         prog="python -m nlgrd.studies.reports", description=__doc__.splitlines()[0]
     )
@@ -472,10 +436,10 @@ def main(argv: list[str] | None = None) -> int:
                 check_parameters(NOTEBOOKS / f"{name}.ipynb", params)
         return build_reports(Path(args.out), parts, args.fast, selected, parameters=params)
     except KeyboardInterrupt:  # before the build started: nothing was touched
-        _say(f"interrupted before the build started: {Path(args.out).name}/ is unchanged")
+        say(f"interrupted before the build started: {Path(args.out).name}/ is unchanged")
         return INTERRUPTED
     except ModelError as err:
-        _say(f"python -m nlgrd.studies.reports: error: {err}")
+        say(f"python -m nlgrd.studies.reports: error: {err}")
         return 2
 
 

@@ -9,11 +9,13 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-import pandas as pd
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.geared import GearedModel
+from nlgrd.nonlinear.harmonics import analyse
+from nlgrd.nonlinear.results import SweepResult, assemble_result
+from nlgrd.nonlinear.sweep import sweep_orders
 from nlgrd.timedomain.integrator import integrate_fe
 
 
@@ -26,12 +28,37 @@ def time_response(
     state0: tuple | None = None,
     store_dofs: bool = False,
 ):
-    """Direct time integration of the full FE model with the nonlinear mesh at mesh frequency ``omega``.
+    """Direct time integration of the full FE model with the nonlinear mesh at one frequency.
 
     The same equations as the harmonic balance (M, D(Ω) with c_m w wᵀ, K(Ω) without k_h,
-    static torques, LSTE), integrated by :func:`nlgrd.timedomain.integrator.integrate_fe` (HHT-α)
-    to a periodic steady state. Hysteretic damping has no time-domain form and must be
-    absent. Returns :class:`nlgrd.timedomain.integrator.FETimeResponse`.
+    static torques, LSTE), integrated by :func:`nlgrd.timedomain.integrator.integrate_fe`
+    (HHT-α) to a periodic steady state. Hysteretic damping has no time-domain form and
+    must be absent.
+
+    Parameters
+    ----------
+    model : GearedModel
+        The model (:func:`nlgrd.nonlinear.geared.build_geared_model`).
+    omega : float
+        Mesh frequency [rad/s].
+    steps_per_period : int
+        Time steps per mesh period [-].
+    tol : float
+        Relative period-to-period difference of δ taken as steady state [-].
+    state0 : tuple (q, q', q''), optional
+        Start state (the end of the previous frequency); default the static solution.
+    store_dofs : bool
+        Keep every DOF over the last period.
+
+    Returns
+    -------
+    FETimeResponse
+        See :class:`nlgrd.timedomain.integrator.FETimeResponse`.
+
+    Raises
+    ------
+    ModelError
+        ``loss_factor`` when the shafts have hysteretic damping.
     """
     lm = model.receptance.model
     if lm.hysteretic_parts:
@@ -56,46 +83,75 @@ def time_response(
 
 def time_sweep(
     model: GearedModel,
-    mesh_frequencies: NDArray,
+    omegas: NDArray,
     directions: str = "both",
     *,
     steps_per_period: int = 256,
     tol: float = 1e-4,
+    H: int = 15,
     progress: Callable[[int, int], None] | None = None,
-) -> pd.DataFrame:
+) -> SweepResult:
     """Time-domain up and/or down sweep of the full FE model, each point continuing from the last.
 
-    The independent reference for :func:`geared_sweep`: the same equations integrated
-    by HHT-α (:func:`time_response`) to a periodic steady state at every frequency,
-    starting from the final state of the previous frequency, so the sweep stays on its
-    branch and jumps where it must; the down sweep starts where the up sweep ended.
-    Returns a frame with "mesh_frequency [Hz]",
-    "direction", "converged", "periods", "dte_rms [um]", "dslr [-]",
-    "contact_loss_fraction [-]" and "back_contact".
+    The independent reference for :func:`nlgrd.nonlinear.geared.geared_sweep`: the same
+    equations integrated by HHT-α (:func:`time_response`) to a periodic steady state at
+    every frequency, starting from the final state of the previous frequency, so the
+    sweep stays on its branch and jumps where it must; the down sweep starts where the up
+    sweep ended.
+
+    Parameters
+    ----------
+    model : GearedModel
+        The model (:func:`nlgrd.nonlinear.geared.build_geared_model`).
+    omegas : array_like
+        Mesh frequencies [rad/s], sorted here.
+    directions : {"both", "up", "down"}
+        Sweep directions.
+    steps_per_period : int
+        Time steps per mesh period [-].
+    tol : float
+        Relative period-to-period difference of δ taken as steady state [-].
+    H : int
+        Harmonics of the DTE kept in ``harmonics`` and ``amplitudes`` (FFT of the last
+        period) [-].
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each point.
+
+    Returns
+    -------
+    SweepResult
+        ``source`` "time integration (FE, HHT-α)"; ``converged``: a periodic steady state
+        was reached; ``iterations``: periods simulated; ``residual``: the last period
+        difference (``residual_kind`` "period difference"); metrics from the sampled last
+        period; stability not computed (NA): only attracting orbits survive a time
+        integration.
     """
-    omegas = np.sort(np.asarray(mesh_frequencies, dtype=float))
-    runs = {"up": [omegas], "down": [omegas[::-1]], "both": [omegas, omegas[::-1]]}[directions]
-    names = {"up": ["up"], "down": ["down"], "both": ["up", "down"]}[directions]
-    rows = []
-    total = sum(len(r) for r in runs)
+    omegas = np.sort(np.asarray(omegas, dtype=float))
+    orders = sweep_orders(omegas, directions)
+    total = sum(len(o) for _, o in orders)
+    rows: dict[str, list] = {k: [] for k in "wdzcrim"}
     state = None
-    for name, order in zip(names, runs, strict=True):
+    for name, order in orders:
         for w in order:
-            tr = time_response(model, w, steps_per_period=steps_per_period, tol=tol, state0=state)
+            tr = time_response(model, float(w), steps_per_period=steps_per_period, tol=tol, state0=state)
             state = tr.state
-            met = tr.metrics(model.mesh)
-            rows.append(
-                {
-                    "mesh_frequency [Hz]": w / (2 * np.pi),
-                    "direction": name,
-                    "converged": bool(tr.converged),
-                    "periods": tr.periods,
-                    "dte_rms [um]": met.dte_rms * 1e6,
-                    "dslr [-]": met.dslr,
-                    "contact_loss_fraction [-]": met.contact_loss_fraction,
-                    "back_contact": bool(met.back_contact),
-                }
-            )
+            met = tr.metrics(model.mesh, H)
+            z = analyse(tr.history.delta, H)[None, :]
+            for k, v in zip(
+                "wdzcrim", (w, name, z, tr.converged, tr.difference, tr.periods, met), strict=True
+            ):
+                rows[k].append(v)
             if progress:
-                progress(len(rows), total)
-    return pd.DataFrame(rows)
+                progress(len(rows["w"]), total)
+    return assemble_result(
+        rows["w"],
+        rows["d"],
+        rows["z"],
+        rows["c"],
+        rows["r"],
+        rows["i"],
+        [np.nan] * len(rows["w"]),
+        rows["m"],
+        "time integration (FE, HHT-α)",
+        residual_kind="period difference",
+    )

@@ -84,7 +84,7 @@ def _csc(a) -> sp.csc_matrix:
     return sp.csc_matrix(a) if not sp.issparse(a) else a.tocsc()
 
 
-def static_solution(K, w: ArrayLike, mesh: BacklashMesh, static_force: ArrayLike, M=None) -> NDArray:
+def static_solution(K, projection: ArrayLike, mesh: BacklashMesh, static_force: ArrayLike, M=None) -> NDArray:
     """Static deflection with the mesh at k_h in drive-side contact (minimum norm).
 
     Solves (K + k_h w wᵀ) q = F0 + k_h w (e_0 + b) by a sparse LU of the system bordered
@@ -92,8 +92,26 @@ def static_solution(K, w: ArrayLike, mesh: BacklashMesh, static_force: ArrayLike
     :func:`nlgrd.rotor.rigid_body.rigid_body_modes`; M = I when not given) and the constraint
     Rᵀ q = 0: the minimum-norm solution. Raises ModelError when F0 has a net component
     on a rigid-body mode or the residual is not small.
+
+    Parameters
+    ----------
+    K : sparse or dense (N, N)
+        Stiffness without the mesh [N/m].
+    projection : array_like (N,)
+        The projection w onto the line of action, δ = wᵀ q [-].
+    mesh : BacklashMesh
+        k_h, b and the LSTE mean e_0.
+    static_force : array_like (N,)
+        F0, self-equilibrated static loads [N, N m].
+    M : sparse or dense (N, N), optional
+        Mass [kg], the metric of the rigid-body modes (identity when None).
+
+    Returns
+    -------
+    ndarray (N,)
+        The static displacements q [m, rad].
     """
-    w = np.asarray(w, dtype=float).reshape(-1)
+    w = np.asarray(projection, dtype=float).reshape(-1)
     F0 = np.asarray(static_force, dtype=float).reshape(-1)
     n = w.size
     Ks = (_csc(K) + mesh_matrix(w, [mesh.stiffness])).tocsc()
@@ -117,7 +135,7 @@ def integrate_fe(
     M,
     D,
     K,
-    w: ArrayLike,
+    projection: ArrayLike,
     mesh: BacklashMesh,
     static_force: ArrayLike,
     omega: float,
@@ -138,8 +156,8 @@ def integrate_fe(
         Mass [kg], velocity matrix incl. c_m w wᵀ and gyroscopic terms [N s/m], stiffness
         without the mesh [N/m] (e.g. from :class:`nlgrd.rotor.assembly.LinearModel` assembled
         with ``mesh_stiffness=False``).
-    w : array_like (N,)
-        Projection δ = wᵀ q onto the line of action.
+    projection : array_like (N,)
+        The projection w onto the line of action, δ = wᵀ q [-] (the paper's w).
     mesh : BacklashMesh
         k_h, b, the LSTE harmonics in θ = ω t and c_m (used for the e' forcing and W).
     static_force : array_like (N,)
@@ -160,15 +178,20 @@ def integrate_fe(
         at rest.
     store_dofs : bool
         Keep all DOFs over the last period.
+
+    Returns
+    -------
+    FETimeResponse
+        The last period, convergence and the end state.
     """
     if not -1 / 3 <= alpha <= 0:
         raise ModelError("alpha", f"HHT-α needs -1/3 <= alpha <= 0, got {alpha}")
     M, D, K = _csc(M), _csc(D), _csc(K)
     N = M.shape[0]
-    w = np.asarray(w, dtype=float).reshape(-1)
+    w = np.asarray(projection, dtype=float).reshape(-1)
     F0 = np.asarray(static_force, dtype=float).reshape(-1)
     if w.size != N or F0.size != N:
-        raise ModelError("w", f"projection and static force need {N} entries")
+        raise ModelError("projection", f"projection and static force need {N} entries")
     k_h, b, c_m = mesh.stiffness, mesh.half_backlash, mesh.damping
     ns = int(steps_per_period)
     T = 2 * np.pi / omega

@@ -133,6 +133,11 @@ def integrate(
         solve_ivp method.
     rtol : float
         solve_ivp relative tolerance (atol = rtol · 1e-2 in scaled units).
+
+    Returns
+    -------
+    TimeResponse
+        The last period, convergence and the end state.
     """
     k_h, m = model.mesh_stiffness, model.mass
     wn = np.sqrt(k_h / m)
@@ -233,13 +238,29 @@ def time_sweep(
 ) -> SweepResult:
     """Time-domain sweeps: each frequency starts from the final state of the previous one.
 
-    Returns a :class:`~nlgrd.nonlinear.sweep.SweepResult` whose metrics come from the sampled last
-    period (harmonics 0..H by FFT, ``iterations`` = periods simulated, ``residual`` =
-    last period-to-period difference, ``converged`` = steady state reached; stability
-    is not computed: only attracting solutions survive a time integration).
-    ``state0`` [δ, δ'] starts each direction (default: static deflection at rest, which
-    may be attracted to either branch inside a multivalued range); ``kwargs`` go to
-    :func:`integrate`.
+    Parameters
+    ----------
+    model : SDOFGearPair
+        The gear pair.
+    omegas : array_like
+        Mesh frequencies [rad/s].
+    directions : {"both", "up", "down"} or sequence of them
+        Sweep directions.
+    H : int
+        Harmonics of δ kept (FFT of the last period) [-].
+    state0 : array_like, optional
+        [δ, δ'] starting each direction [m, m/s] (default: static deflection at rest,
+        which may be attracted to either branch inside a multivalued range).
+    **kwargs
+        Passed to :func:`integrate`.
+
+    Returns
+    -------
+    SweepResult
+        Metrics from the sampled last period; ``iterations`` = periods simulated,
+        ``residual`` = last period difference (``residual_kind`` "period difference"),
+        ``converged`` = steady state reached; stability not computed (NA): only
+        attracting solutions survive a time integration.
     """
     mesh = model.mesh()
     rows: dict[str, list] = {k: [] for k in "wdzcrim"}
@@ -266,4 +287,5 @@ def time_sweep(
         [np.nan] * n,
         rows["m"],
         "time integration (SDOF)",
+        residual_kind="period difference",
     )

@@ -1,0 +1,139 @@
+"""Bearing displacements and forces of a geared sweep, recovered from the solved mesh
+harmonics (:func:`bearing_response`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from nlgrd.nonlinear.harmonics import real_to_complex
+from nlgrd.nonlinear.results import SweepResult
+
+if TYPE_CHECKING:  # pragma: no cover
+    from nlgrd.nonlinear.geared import GearedModel
+
+
+RECOVERY_RTOL = 1e-12
+
+
+@dataclass(frozen=True)
+class BearingResponse:
+    """Bearing displacements and forces per sweep point, arrays (n_points, n_bearings).
+
+    Displacement and force are radial magnitudes |(y, z)| over one period:
+    ``*_mean`` of the static part, ``*_rms`` of the alternating part, ``*_max`` overall;
+    ``force_amplitude`` is the amplitude of the first mesh harmonic (largest axis).
+    NaN at points that did not converge or have no stable response.
+
+    Attributes
+    ----------
+    displacement_mean, displacement_rms, displacement_max : ndarray
+        Radial displacement of each bearing node, (n_points, n_bearings) [m].
+    force_mean, force_rms, force_max : ndarray
+        Radial bearing force, (n_points, n_bearings) [N].
+    force_amplitude : ndarray
+        Amplitude of the first mesh harmonic of the bearing force, largest of y and z,
+        (n_points, n_bearings) [N].
+    """
+
+    displacement_mean: NDArray
+    displacement_rms: NDArray
+    displacement_max: NDArray
+    force_mean: NDArray
+    force_rms: NDArray
+    force_max: NDArray
+    force_amplitude: NDArray
+
+
+def _radial_maxima(X: NDArray) -> NDArray:
+    """Maximum over one period of |(x_y, x_z)| for complex harmonics X (n_points, H+1, 2 n_b).
+
+    Columns come in (y, z) pairs. The magnitude is sampled at 64 (H+1) points per period
+    and its maximum refined by a parabola through the largest sample and its two
+    neighbours (relative error below 1e-5 for H = 5; 2048 plain samples erred by up to
+    3e-5).
+    """
+    H = X.shape[1] - 1
+    n = 64 * (H + 1)
+    theta = 2 * np.pi * np.arange(n) / n
+    kt = np.outer(theta, np.arange(H + 1))  # (n, H+1)
+    x = np.cos(kt) @ X.real - np.sin(kt) @ X.imag  # Re Σ X_k e^{ikθ}: (p, n, m)
+    mag = np.hypot(x[..., 0::2], x[..., 1::2])  # (p, n, nb)
+    j = np.argmax(mag, axis=1)[:, None, :]
+    y0 = np.take_along_axis(mag, (j - 1) % n, axis=1)[:, 0]
+    y1 = np.take_along_axis(mag, j, axis=1)[:, 0]
+    y2 = np.take_along_axis(mag, (j + 1) % n, axis=1)[:, 0]
+    den = y0 - 2 * y1 + y2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        peak = np.where(den < 0, y1 - (y2 - y0) ** 2 / (8 * den), y1)
+    return np.maximum(peak, y1)
+
+
+def bearing_response(model: GearedModel, result: SweepResult) -> BearingResponse:
+    """Recover bearing displacements and forces for every converged point of ``result``.
+
+    At a converged point the mesh force harmonics are G_k = F_k - κ_k Y_k (the balance
+    the solver met, to its tolerance), so recovery needs only the receptances the sweep
+    already computed: Q_k = U_k (F_k - G_k), Q_0 from the mean terms.
+
+    Parameters
+    ----------
+    model : GearedModel
+        The model the sweep was solved on.
+    result : SweepResult
+        The mesh solutions (harmonics of δ per point).
+
+    Returns
+    -------
+    BearingResponse
+        Per point and bearing; NaN at points that did not converge or have no stable
+        response.
+    """
+    system, mr = model.system, model.receptance
+    nb = len(system.bearings)
+    n = len(result.omega)
+    out = {k: np.full((n, nb), np.nan) for k in BearingResponse.__dataclass_fields__}
+    pts = [i for i in range(n) if result.converged[i] and not result.no_stable[i]]
+    if not pts:
+        return BearingResponse(**out)
+    H = (result.harmonics[pts[0]].size - 1) // 2
+    k = np.arange(H + 1)
+    Qs = np.empty((len(pts), H + 1, 2 * nb), dtype=complex)
+    Fs = np.empty_like(Qs)
+    for row, i in enumerate(pts):
+        w = float(result.omega[i])
+        Y = real_to_complex(result.harmonics[i].reshape(-1))[:, None]
+        F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
+        kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, 1, 1)
+        G = F - kap[:, :, 0] * Y
+        Q = mr.recover(w, Y, G, F)
+        speed = mr.speed(w)
+        for j, b in enumerate(system.bearings):
+            s = system.shafts[b.shaft].speed_ratio * speed
+            q = Q[:, 2 * j : 2 * j + 2]
+            Fs[row, :, 2 * j : 2 * j + 2] = -(
+                q @ b.stiffness(s).T + (1j * k * w)[:, None] * (q @ b.damping(s).T)
+            )
+        Qs[row] = Q
+    rows = np.array(pts)
+    out["displacement_mean"][rows] = np.hypot(Qs[:, 0, 0::2].real, Qs[:, 0, 1::2].real)
+    out["displacement_rms"][rows] = np.sqrt(
+        np.sum(np.abs(Qs[:, 1:, 0::2]) ** 2 + np.abs(Qs[:, 1:, 1::2]) ** 2, axis=1) / 2
+    )
+    out["force_mean"][rows] = np.hypot(Fs[:, 0, 0::2].real, Fs[:, 0, 1::2].real)
+    out["force_rms"][rows] = np.sqrt(
+        np.sum(np.abs(Fs[:, 1:, 0::2]) ** 2 + np.abs(Fs[:, 1:, 1::2]) ** 2, axis=1) / 2
+    )
+    out["force_amplitude"][rows] = np.maximum(np.abs(Fs[:, 1, 0::2]), np.abs(Fs[:, 1, 1::2])) if H else 0.0
+    for a in range(0, len(pts), 200):
+        sl = slice(a, a + 200)
+        out["displacement_max"][rows[sl]] = _radial_maxima(Qs[sl])
+        out["force_max"][rows[sl]] = _radial_maxima(Fs[sl])
+    # A bearing the mesh does not load (a stub shaft coupled in torsion only) gets
+    # rounding, 1e-60 and below, which differs from machine to machine: written as 0.
+    for v in out.values():
+        v[np.abs(v) <= RECOVERY_RTOL * np.nanmax(np.abs(v))] = 0.0
+    return BearingResponse(**out)
