@@ -77,6 +77,7 @@ def test_time_integration_is_the_same_result_family_with_its_residual_named():
     f_td, f_hb = td.to_frame(), hb.to_frame()
     assert "period_difference [-]" in f_td and "residual [-]" not in f_td
     assert "residual [-]" in f_hb and "period_difference [-]" not in f_hb
+
     def named(frame, residual):  # the amplitude columns follow each result's H
         return {c for c in frame.columns if not c.startswith("dte_amp_")} - {residual}
 

@@ -1,0 +1,230 @@
+"""A rotor model with any number of nonlinear links: build, sweep, per-link outputs.
+
+:func:`build_link_model` reduces a :class:`~nlgrd.rotor.system.RotorSystem` onto the
+coordinates of its links (:mod:`nlgrd.nonlinear.link_reduction`) with unbalance and
+gravity as loads; :func:`link_sweep` runs the harmonic-balance sweep of
+:func:`nlgrd.nonlinear.sweep.sweep` on it, with Floquet stability, and writes every
+link's outputs in columns named ``<link>.<quantity>``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from nlgrd.errors import ModelError
+from nlgrd.nonlinear.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.link_reduction import FrequencyPlan, LinkReceptance
+from nlgrd.nonlinear.results import SweepResult
+from nlgrd.nonlinear.sweep import sweep
+from nlgrd.rotor.system import RotorSystem
+
+_UY, _UZ = 1, 2
+
+
+@dataclass(frozen=True)
+class Unbalance:
+    """A mass unbalance m e at a node, rotating with its shaft (forward, y towards z).
+
+    Parameters
+    ----------
+    shaft, node : int
+        Where it sits.
+    amount : float
+        m e [kg m].
+    phase : float
+        Angle of the unbalance at t = 0 from the y axis [rad].
+    """
+
+    shaft: int
+    node: int
+    amount: float
+    phase: float = 0.0
+
+
+@dataclass(frozen=True)
+class LinkModel:
+    """A reduced rotor model with nonlinear links.
+
+    Attributes
+    ----------
+    system : RotorSystem
+        The rotor.
+    links : tuple of NonlinearLink
+        The links, in the order of their coordinates.
+    receptance : LinkReceptance
+        The reduction.
+    reduced : ReducedModel
+        The harmonic-balance model on the link coordinates (base frequency ω [rad/s]).
+    """
+
+    system: RotorSystem
+    links: tuple
+    receptance: LinkReceptance
+    reduced: ReducedModel
+
+    def link_harmonics(self, harmonics: NDArray, name: str) -> NDArray:
+        """The rows of the link ``name`` in the harmonics (d_total, 2H+1) of a point [m].
+
+        Parameters
+        ----------
+        harmonics : ndarray (d_total, 2H+1)
+            Real harmonics of all link coordinates [m].
+        name : str
+            A link's name.
+
+        Returns
+        -------
+        ndarray (d, 2H+1)
+        """
+        for link, sl in zip(self.links, self.receptance.slices, strict=True):
+            if link.name == name:
+                return np.asarray(harmonics)[sl]
+        raise ModelError("link", f"no link {name!r} (links: {', '.join(lk.name for lk in self.links)})")
+
+
+def _gravity_force(system: RotorSystem, M, gravity) -> NDArray:
+    a = np.zeros(system.n_dofs)
+    gy, gz = gravity
+    for s, shaft in enumerate(system.shafts):
+        for n in range(shaft.n_nodes):
+            d = system.dofs.node_dofs(s, n)
+            a[d[_UY]], a[d[_UZ]] = gy, gz
+    return M @ a
+
+
+def build_link_model(
+    system: RotorSystem,
+    links: Sequence,
+    *,
+    plan: FrequencyPlan | None = None,
+    unbalance: Sequence[Unbalance] = (),
+    gravity: tuple[float, float] | None = None,
+) -> LinkModel:
+    """Reduce ``system`` onto its links' coordinates, with unbalance and gravity loads.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The rotor (bearings, disks, couplings: linear).
+    links : sequence of NonlinearLink
+        The links (names unique).
+    plan : FrequencyPlan, optional
+        Base frequency and speed; default: the base is the reference shaft speed.
+    unbalance : sequence of Unbalance
+        Unbalances; they need the base to be the shaft speed (harmonic 1).
+    gravity : tuple of float, optional
+        Acceleration of gravity (g_y, g_z) on every node [m/s^2], e.g. (-9.81, 0).
+
+    Returns
+    -------
+    LinkModel
+    """
+    links = tuple(links)
+    names = [lk.name for lk in links]
+    if len(set(names)) != len(names):
+        raise ModelError("links", f"link names must be unique, got {names}")
+    plan = plan or FrequencyPlan()
+    if unbalance and plan.name != "shaft":
+        raise ModelError("unbalance", "an unbalance needs the shaft speed as the base frequency")
+    n = system.n_dofs
+    unb = []
+    for u in unbalance:
+        if abs(system.shafts[u.shaft].speed_ratio) != 1.0:
+            raise ModelError(
+                "unbalance", "an unbalance on a shaft with speed ratio other than 1 is not a harmonic"
+            )
+        d = system.dofs.node_dofs(u.shaft, u.node)
+        unb.append(
+            (d[_UY], d[_UZ], float(u.amount), float(u.phase), float(system.shafts[u.shaft].speed_ratio))
+        )
+
+    def harmonic_force(omega: float, H: int) -> NDArray:
+        f = np.zeros((H + 1, n), dtype=complex)
+        if H >= 1:
+            speed = plan.speed(omega)
+            for iy, iz, me, ph, ratio in unb:
+                amp = me * speed**2 * np.exp(1j * ph)
+                f[1, iy] += amp
+                f[1, iz] += -1j * np.sign(ratio) * amp
+        return f
+
+    rec0 = LinkReceptance(system, links, plan)
+    static = np.zeros(n) if gravity is None else _gravity_force(system, rec0.model.M, gravity)
+    rec = LinkReceptance(system, links, plan, static_force=static, harmonic_force=harmonic_force)
+    laws = tuple(lk.law(tuple(range(sl.start, sl.stop))) for lk, sl in zip(links, rec.slices, strict=True))
+    reduced = ReducedModel(
+        kappa=lambda omega, H: rec.terms(omega, H)[0],
+        force=lambda omega, H: rec.terms(omega, H)[1],
+        nonlinearities=laws,
+        state_space_at=rec.state_space,
+    )
+    return LinkModel(system, links, rec, reduced)
+
+
+@dataclass(frozen=True)
+class LinkSweepResult:
+    """A sweep of a link model: the harmonic-balance points and every link's outputs.
+
+    Attributes
+    ----------
+    result : SweepResult
+        The points (harmonics of all link coordinates, convergence, stability).
+    links : pandas.DataFrame
+        One row per point: ``<link>.<quantity>`` columns; NaN where the point did not
+        converge or has no stable periodic response.
+    """
+
+    result: SweepResult
+    links: pd.DataFrame
+
+    def to_frame(self) -> pd.DataFrame:
+        """The sweep's table with the link columns appended.
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        frame = self.result.to_frame()
+        drop = [c for c in frame.columns if c.startswith(("dte_", "force_", "dslr", "contact_loss", "back_"))]
+        return pd.concat([frame.drop(columns=drop), self.links], axis=1)
+
+
+def link_sweep(model: LinkModel, omegas: NDArray, H: int = 9, **options) -> LinkSweepResult:
+    """Harmonic-balance sweep of a link model with the links' outputs.
+
+    Parameters
+    ----------
+    model : LinkModel
+        From :func:`build_link_model`.
+    omegas : array_like
+        Base frequencies [rad/s].
+    H : int
+        Number of harmonics [-].
+    **options
+        Passed to :func:`nlgrd.nonlinear.sweep.sweep` (``directions``, ``tol``,
+        ``stability`` (default True), ``jump``, ...).
+
+    Returns
+    -------
+    LinkSweepResult
+    """
+    options.setdefault("stability", True)
+    options.setdefault("jump", "auto")
+    res = sweep(model.reduced, np.asarray(omegas, dtype=float), H, mesh=None, **options)
+    rows = []
+    for i in range(len(res)):
+        row = {}
+        ok = bool(res.converged[i]) and not bool(res.no_stable[i])
+        for link, sl in zip(model.links, model.receptance.slices, strict=True):
+            if ok:
+                values = link.metrics(res.harmonics[i][sl], float(res.omega[i]))
+            else:
+                values = dict.fromkeys(link.metrics(np.zeros((link.n_coords, 2 * H + 1)), 1.0), np.nan)
+            row.update({f"{link.name}.{k}": v for k, v in values.items()})
+        rows.append(row)
+    return LinkSweepResult(res, pd.DataFrame(rows))

@@ -1,0 +1,327 @@
+"""Receptance reduction of a rotor model onto the coordinates of all its nonlinear links.
+
+With P = [P_1 ... P_m] the projections of the links (n x d, d = Σ d_j), Z_k the linear
+dynamic stiffness at the k-th harmonic of the base frequency ω (links' stiffness left
+out, their viscous damping kept) and f_k the harmonics of the external forces on the
+DOFs (unbalance, the links' own forcing P_j φ_j,k), the problem reduces to
+
+    κ_k Y_k + G_k = F_k,   κ_k = (Pᵀ Z_k⁻¹ P)⁻¹,   F_k = κ_k Pᵀ Z_k⁻¹ f_k      (k >= 1)
+
+on the link coordinates Y = Pᵀ q (Maliha, Doğruer & Özgüven 2004, Eq. 26-37, for one
+mesh; the same algebra for any number of links). The mean problem regularises with the
+links' linear stiffness K_L = P diag(k_j) Pᵀ: with K_r = Z_0 + K_L, κ_0 = (Pᵀ K_r⁻¹ P)⁻¹ -
+diag(k_j) and F_0 = (Pᵀ K_r⁻¹ P)⁻¹ Pᵀ K_r⁻¹ f_0 (static loads and gravity), exact for any
+k_j > 0; rigid-body modes of K_r (a drive line's rotation) are removed by a bordered solve.
+Any DOF follows as Q_k = Z_k⁻¹ (f_k - P G_k) (mean: K_r⁻¹ (f_0 - P (G_0 - diag(k_j) Y_0))).
+
+Z_k is factorised once per harmonic and frequency (exact: dense LU up to
+:data:`DENSE_LIMIT` DOFs, sparse LU above) and the factors are kept, bounded, for the
+recovery of the same point.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
+
+from nlgrd.cache import BoundedCache
+from nlgrd.errors import ModelError
+from nlgrd.nonlinear.harmonics import real_to_complex
+from nlgrd.nonlinear.state_space import LinearStateSpace
+from nlgrd.rotor.assembly import LinearModel, assemble
+from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
+from nlgrd.rotor.system import RotorSystem
+
+#: Largest model whose stability basis is the full (dense) state space.
+DENSE_STABILITY_LIMIT = 600
+#: Up to this many DOFs Z_k is factorised as a dense matrix (faster than sparse LU there).
+DENSE_LIMIT = 300
+
+
+@dataclass(frozen=True)
+class _DenseLU:
+    factors: tuple
+
+    def solve(self, rhs: NDArray) -> NDArray:
+        return sla.lu_solve(self.factors, rhs, check_finite=False)
+
+
+@dataclass(frozen=True)
+class FrequencyPlan:
+    """How the harmonic-balance base frequency ω relates to the shaft speed.
+
+    Parameters
+    ----------
+    speed_per_base : float
+        Reference shaft speed Ω per unit base frequency, Ω = ``speed_per_base`` ω [-]: 1
+        when the base is the shaft speed (unbalance at harmonic 1), 1 / (N_p s_p) when it
+        is the mesh frequency of a pinion with N_p teeth on a shaft of speed ratio s_p.
+    name : str
+        "shaft" or "mesh": what the base frequency is.
+    """
+
+    speed_per_base: float = 1.0
+    name: str = "shaft"
+
+    def speed(self, omega: float) -> float:
+        """Reference shaft speed [rad/s] at base frequency ``omega`` [rad/s].
+
+        Parameters
+        ----------
+        omega : float
+            Base frequency [rad/s].
+
+        Returns
+        -------
+        float
+        """
+        return float(omega) * self.speed_per_base
+
+
+class LinkReceptance:
+    """Receptances of all link coordinates of ``system`` at once (see the module docstring).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The linear model; gear pairs in it are linear unless they are links too.
+    links : sequence of NonlinearLink
+        The links, in the order of their coordinates.
+    plan : FrequencyPlan
+        Base frequency and shaft speed.
+    static_force : ndarray (n_dofs,), optional
+        Static loads on the DOFs (gravity, torques) [N, N m].
+    harmonic_force : callable (omega, H) -> (H+1, n_dofs) complex, optional
+        Harmonics of the external forces on the DOFs [N].
+    """
+
+    def __init__(
+        self,
+        system: RotorSystem,
+        links: Sequence,
+        plan: FrequencyPlan,
+        static_force: NDArray | None = None,
+        harmonic_force: Callable[[float, int], NDArray] | None = None,
+    ):
+        self.system, self.links, self.plan = system, tuple(links), plan
+        self.model: LinearModel = assemble(system, mesh_stiffness=False, mesh_damping=False)
+        n = self.model.n_dofs
+        self.P = (
+            np.hstack([link.projection(system) for link in self.links]) if self.links else np.zeros((n, 0))
+        )
+        self.k_link = sla.block_diag(*[link.linear_stiffness() for link in self.links])
+        c_link = sla.block_diag(*[link.linear_damping() for link in self.links])
+        self.C_link = sp.csc_matrix(self.P @ c_link @ self.P.T)
+        self.K_link = sp.csc_matrix(self.P @ self.k_link @ self.P.T)
+        self.static_force = np.zeros(n) if static_force is None else np.asarray(static_force, dtype=float)
+        self.harmonic_force = harmonic_force
+        self.slices = []
+        start = 0
+        for link in self.links:
+            self.slices.append(slice(start, start + link.n_coords))
+            start += link.n_coords
+        self._speed_dependent = bool(
+            self.model.tabulated_bearings or self.model.hysteretic_parts or self.model.Kc.nnz
+        )
+        self._dense = n <= DENSE_LIMIT and not self.model.tabulated_bearings
+        if self._dense:
+            m = self.model
+            self._mats = {
+                "K": m.K.toarray(),
+                "Kc": m.Kc.toarray(),
+                "M": m.M.toarray(),
+                "C": (m.C + m.Ci + self.C_link).toarray(),
+                "G": m.G.toarray(),
+            }
+        self._rigid = rigid_body_modes(self.model.K + self.K_link, self.model.M)
+        check_balanced(self._rigid, self.static_force, "static_force", "the static loads")
+        self._factors = BoundedCache(64)
+        self._terms = BoundedCache(4096)
+
+    @property
+    def n_coords(self) -> int:
+        """Number of link coordinates d."""
+        return self.P.shape[1]
+
+    def _Z(self, w: float, speed: float):
+        if self._dense and not self.model.hysteretic_parts:
+            a = self._mats
+            return a["K"] + speed * a["Kc"] - w * w * a["M"] + 1j * w * (a["C"] + speed * a["G"])
+        return (self.model.dynamic_stiffness(w, speed) + 1j * w * self.C_link).tocsc()
+
+    def forces(self, omega: float, H: int) -> NDArray:
+        """f_k on the DOFs, k = 0..H: the static, external and the links' own forces.
+
+        Parameters
+        ----------
+        omega : float
+            Base frequency [rad/s].
+        H : int
+            Number of harmonics [-].
+
+        Returns
+        -------
+        ndarray (H+1, n_dofs) of complex
+            [N, N m].
+        """
+        n = self.model.n_dofs
+        f = np.zeros((H + 1, n), dtype=complex)
+        f[0] = self.static_force
+        if self.harmonic_force is not None:
+            f += np.asarray(self.harmonic_force(omega, H), dtype=complex)
+        for link, sl in zip(self.links, self.slices, strict=True):
+            f += link.forcing(omega, H) @ self.P[:, sl].T
+        return f
+
+    def _mean_factor(self, speed: float):
+        key = ("mean", float(speed) if self._speed_dependent else 0.0)
+
+        def make():
+            Kr = (self.model.dynamic_stiffness(0.0, speed) + self.K_link).tocsc()
+            Kr = sp.csc_matrix((np.ascontiguousarray(Kr.data.real), Kr.indices, Kr.indptr), shape=Kr.shape)
+            R = self._rigid
+            if R.shape[1] == 0:
+                return spla.splu(Kr), 0
+            MR = sp.csc_matrix(self.model.M @ R)
+            return spla.splu(sp.bmat([[Kr, MR], [MR.T, None]], format="csc")), R.shape[1]
+
+        return self._factors.get(key, make)
+
+    def mean_solve(self, speed: float, rhs: NDArray) -> NDArray:
+        """x with (Z_0 + K_L) x = rhs, M-orthogonal to the rigid-body modes.
+
+        Parameters
+        ----------
+        speed : float
+            Reference shaft speed [rad/s].
+        rhs : ndarray (n_dofs, m)
+            Right-hand sides [N].
+
+        Returns
+        -------
+        ndarray (n_dofs, m)
+        """
+        lu, r = self._mean_factor(speed)
+        n = self.model.n_dofs
+        pad = np.zeros((r,) + rhs.shape[1:])
+        return lu.solve(np.concatenate([rhs, pad]))[:n]
+
+    def _factor(self, k: int, omega: float):
+        """A solver of Z_k at ``omega``: ``solve(rhs)``."""
+        speed = self.plan.speed(omega)
+
+        def make():
+            Z = self._Z(k * omega, speed)
+            if sp.issparse(Z):
+                return spla.splu(Z)
+            return _DenseLU(sla.lu_factor(Z, check_finite=False))
+
+        return self._factors.get(("k", k, float(omega)), make)
+
+    def terms(self, omega: float, H: int) -> tuple[NDArray, NDArray]:
+        """κ_k (H+1, d, d) [N/m] and F_k (H+1, d) [N], k = 0..H.
+
+        Parameters
+        ----------
+        omega : float
+            Base frequency [rad/s].
+        H : int
+            Number of harmonics [-].
+
+        Returns
+        -------
+        tuple of ndarray
+        """
+
+        def make():
+            d, speed = self.n_coords, self.plan.speed(omega)
+            f = self.forces(omega, H)
+            kap = np.empty((H + 1, d, d), dtype=complex)
+            frc = np.empty((H + 1, d), dtype=complex)
+            x = self.mean_solve(speed, np.column_stack([self.P, f[0].real]))
+            hr_inv = np.linalg.inv(self.P.T @ x[:, :d])
+            kap[0] = hr_inv - self.k_link
+            frc[0] = hr_inv @ (self.P.T @ x[:, d])
+            for k in range(1, H + 1):
+                u = self._factor(k, omega).solve(np.column_stack([self.P.astype(complex), f[k]]))
+                kap[k] = np.linalg.inv(self.P.T @ u[:, :d])
+                frc[k] = kap[k] @ (self.P.T @ u[:, d])
+            return kap, frc
+
+        return self._terms.get((float(omega), int(H)), make)
+
+    def recover(self, omega: float, H: int, harmonics: NDArray, forces: NDArray, dofs) -> NDArray:
+        """Real harmonics (len(dofs), 2H+1) of any DOFs at a solved point.
+
+        Parameters
+        ----------
+        omega : float
+            Base frequency [rad/s].
+        H : int
+            Number of harmonics [-].
+        harmonics : ndarray (d, 2H+1)
+            Real harmonics of the link coordinates Y [m].
+        forces : ndarray (d, 2H+1)
+            Real harmonics of the link forces G [N].
+        dofs : sequence of int
+            DOFs to recover.
+
+        Returns
+        -------
+        ndarray (len(dofs), 2H+1)
+            [m] or [rad].
+        """
+        dofs = np.asarray(dofs, dtype=int)
+        Y = real_to_complex(np.asarray(harmonics, dtype=float).reshape(self.n_coords, -1)).T  # (H+1, d)
+        G = real_to_complex(np.asarray(forces, dtype=float).reshape(self.n_coords, -1)).T
+        f = self.forces(omega, H)
+        out = np.empty((H + 1, dofs.size), dtype=complex)
+        speed = self.plan.speed(omega)
+        rhs0 = f[0].real - self.P @ (G[0].real - self.k_link @ Y[0].real)
+        out[0] = self.mean_solve(speed, rhs0[:, None])[dofs, 0]
+        for k in range(1, H + 1):
+            out[k] = self._factor(k, omega).solve(f[k] - self.P @ G[k])[dofs]
+        real = np.empty((dofs.size, 2 * H + 1))
+        real[:, 0] = out[0].real
+        real[:, 1::2], real[:, 2::2] = out[1:].real.T, -out[1:].imag.T
+        return real
+
+    def state_space(self, omega: float) -> LinearStateSpace | None:
+        """The linear part for Floquet stability at base frequency ``omega`` (dense, up to
+        :data:`DENSE_STABILITY_LIMIT` DOFs; None above it).
+
+        Parameters
+        ----------
+        omega : float
+            Base frequency [rad/s].
+
+        Returns
+        -------
+        LinearStateSpace or None
+        """
+        if self.model.n_dofs > DENSE_STABILITY_LIMIT:
+            return None
+        if self.model.hysteretic_parts:
+            raise ModelError("loss_factor", "hysteretic damping has no time-domain form for stability")
+        speed = self.plan.speed(omega)
+        M = self.model.M.toarray()
+        D = (self.model.damping(speed) + self.C_link).toarray()
+        K = self.model.stiffness(speed).toarray()
+        return LinearStateSpace(M, D, K, self.P)
+
+    def check(self, omega: float) -> None:
+        """Raise ModelError when Z_1 is singular at ``omega`` (a link-free rigid-body mode).
+
+        Parameters
+        ----------
+        omega : float
+            Base frequency [rad/s].
+        """
+        if not np.isfinite(omega) or omega <= 0:
+            raise ModelError("omega", f"must be a positive finite frequency, got {omega!r}")
