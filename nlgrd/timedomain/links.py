@@ -219,6 +219,38 @@ def link_time_response(
     )
 
 
+def start_from_harmonics(model: LinkModel, omega: float, H: int, harmonics: NDArray) -> tuple:
+    """The state (q, q') at t = 0 of a harmonic-balance solution, to start an integration on it.
+
+    Every DOF is recovered from the link harmonics (:meth:`LinkReceptance.recover`); the
+    integration then checks, independently, that the orbit is a periodic solution of the
+    full equations that attracts: a wrong or unstable orbit drifts away.
+
+    Parameters
+    ----------
+    model : LinkModel
+        The model.
+    omega : float
+        Base frequency [rad/s].
+    H : int
+        Number of harmonics of ``harmonics`` [-].
+    harmonics : ndarray (d, 2H+1)
+        Real harmonics of the link coordinates [m].
+
+    Returns
+    -------
+    tuple of ndarray
+        (q, q') at θ = 0 [m, m/s].
+    """
+    z = np.asarray(harmonics, dtype=float)
+    G = model.reduced.at(omega, H).nonlinear_forces(z.ravel(), jacobian=False)[0].reshape(z.shape)
+    q = model.receptance.recover(omega, H, z, G, np.arange(model.system.n_dofs))
+    k = np.arange(1, H + 1)
+    q0 = q[:, 0] + q[:, 1::2].sum(axis=1)
+    v0 = omega * (q[:, 2::2] @ k)  # d/dt of a_k cos kθ + b_k sin kθ at θ = 0
+    return q0, v0
+
+
 def link_time_sweep(
     model: LinkModel,
     omegas: NDArray,
