@@ -90,7 +90,8 @@ class LinkReceptance:
     Parameters
     ----------
     system : RotorSystem
-        The linear model; gear pairs in it are linear unless they are links too.
+        The linear model. Its gear meshes enter only as links (their stiffness is left out
+        of the assembly, like every link's).
     links : sequence of NonlinearLink
         The links, in the order of their coordinates.
     plan : FrequencyPlan
