@@ -84,6 +84,67 @@ def _csc(a) -> sp.csc_matrix:
     return sp.csc_matrix(a) if not sp.issparse(a) else a.tocsc()
 
 
+@dataclass(frozen=True)
+class HHTStep:
+    """The fixed matrices of an HHT-α step of size dt (Hilber, Hughes & Taylor 1977).
+
+    With β = (1 - α)²/4, γ = 1/2 - α, the step solves K_eff q_{n+1} = A [q_n; v_n; a_n] +
+    (forces), K_eff = a1 M + (1 + α)(b1 D + K), and updates a_{n+1} = a1 (q_{n+1} - q_n) -
+    a2 v_n - a3 a_n, v_{n+1} = b1 (q_{n+1} - q_n) + b2 v_n + b3 a_n.
+
+    Attributes
+    ----------
+    gamma : float
+        γ [-].
+    a1, a2, a3, b1, b2, b3 : float
+        The Newmark coefficients above [1/s², 1/s, -, 1/s, -, s].
+    ap : float
+        1 + α [-].
+    lu : scipy.sparse.linalg.SuperLU
+        The factors of K_eff.
+    A_all : scipy.sparse.csr_matrix (N, 3N)
+        A, acting on the state [q_n; v_n; a_n].
+    """
+
+    gamma: float
+    a1: float
+    a2: float
+    a3: float
+    b1: float
+    b2: float
+    b3: float
+    ap: float
+    lu: object
+    A_all: sp.csr_matrix
+
+
+def hht_step(M, D, K, dt: float, alpha: float) -> HHTStep:
+    """The matrices of an HHT-α step (shared by every time integrator of nlgrd).
+
+    Parameters
+    ----------
+    M, D, K : sparse (N, N)
+        Mass [kg], velocity [N s/m] and stiffness [N/m] matrices.
+    dt : float
+        Time step [s].
+    alpha : float
+        HHT-α parameter in [-1/3, 0] [-].
+
+    Returns
+    -------
+    HHTStep
+    """
+    gamma, beta = 0.5 - alpha, (1 - alpha) ** 2 / 4
+    a1, a2, a3 = 1 / (beta * dt * dt), 1 / (beta * dt), 1 / (2 * beta) - 1
+    b1, b2, b3 = gamma / (beta * dt), 1 - gamma / beta, dt * (1 - gamma / (2 * beta))
+    ap = 1 + alpha
+    lu = spla.splu((a1 * M + ap * (b1 * D + K)).tocsc())
+    A_all = sp.hstack(
+        [a1 * M + ap * b1 * D + alpha * K, a2 * M - ap * b2 * D + alpha * D, a3 * M - ap * b3 * D]
+    ).tocsr()
+    return HHTStep(gamma, a1, a2, a3, b1, b2, b3, ap, lu, A_all)
+
+
 def static_solution(K, projection: ArrayLike, mesh: BacklashMesh, static_force: ArrayLike, M=None) -> NDArray:
     """Static deflection with the mesh at k_h in drive-side contact (minimum norm).
 
@@ -196,18 +257,12 @@ def integrate_fe(
     ns = int(steps_per_period)
     T = 2 * np.pi / omega
     dt = T / ns
-    gamma, beta = 0.5 - alpha, (1 - alpha) ** 2 / 4
-    a1, a2, a3 = 1 / (beta * dt * dt), 1 / (beta * dt), 1 / (2 * beta) - 1
-    b1, b2, b3 = gamma / (beta * dt), 1 - gamma / beta, dt * (1 - gamma / (2 * beta))
-    ap = 1 + alpha
-    Keff = (a1 * M + ap * (b1 * D + K)).tocsc()
-    lu = spla.splu(Keff)
+    step = hht_step(M, D, K, dt, alpha)
+    a1, a2, a3, b1, b2, b3, ap = step.a1, step.a2, step.a3, step.b1, step.b2, step.b3, step.ap
+    lu, A_all = step.lu, step.A_all
     zvec = lu.solve(w)
     cw = float(w @ zvec)
     cc = ap * k_h * cw
-    A_all = sp.hstack(
-        [a1 * M + ap * b1 * D + alpha * K, a2 * M - ap * b2 * D + alpha * D, a3 * M - ap * b3 * D]
-    ).tocsr()
     e_s = sample(mesh.lste, ns)
     edot_s = omega * sample(differentiate(mesh.lste), ns)
     force_w = c_m * edot_s  # coefficient of w in F(t) - F0

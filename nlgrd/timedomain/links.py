@@ -20,7 +20,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
@@ -30,6 +29,7 @@ from nlgrd.nonlinear.link_model import LinkModel
 from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import SweepResult, assemble_result
 from nlgrd.nonlinear.sweep import sweep_orders
+from nlgrd.timedomain.integrator import hht_step
 
 
 @dataclass(frozen=True)
@@ -139,16 +139,11 @@ def link_time_response(
     N, d = P.shape
     ns = int(steps_per_period)
     dt = 2 * np.pi / omega / ns
-    gamma, beta = 0.5 - alpha, (1 - alpha) ** 2 / 4
-    a1, a2, a3 = 1 / (beta * dt * dt), 1 / (beta * dt), 1 / (2 * beta) - 1
-    b1, b2, b3 = gamma / (beta * dt), 1 - gamma / beta, dt * (1 - gamma / (2 * beta))
-    ap = 1 + alpha
-    lu = spla.splu((a1 * M + ap * (b1 * D + K)).tocsc())
+    step = hht_step(M, D, K, dt, alpha)
+    gamma, a1, a2, a3, ap = step.gamma, step.a1, step.a2, step.a3, step.ap
+    lu, A_all = step.lu, step.A_all
     Zp = lu.solve(P)  # K_eff⁻¹ P
     S = P.T @ Zp
-    A_all = sp.hstack(
-        [a1 * M + ap * b1 * D + alpha * K, a2 * M - ap * b2 * D + alpha * D, a3 * M - ap * b3 * D]
-    ).tocsr()
     F = _forcing_samples(model, omega, ns, forcing_harmonics)
     theta = 2 * np.pi * np.arange(ns) / ns
 
