@@ -21,6 +21,7 @@ from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.link_reduction import FrequencyPlan, LinkReceptance
 from nlgrd.nonlinear.results import SweepResult
 from nlgrd.nonlinear.sweep import sweep
+from nlgrd.rotor.assembly import assemble
 from nlgrd.rotor.system import RotorSystem
 
 _UY, _UZ = 1, 2
@@ -153,8 +154,7 @@ def build_link_model(
                 f[1, iz] += -1j * np.sign(ratio) * amp
         return f
 
-    rec0 = LinkReceptance(system, links, plan)
-    static = np.zeros(n) if gravity is None else _gravity_force(system, rec0.model.M, gravity)
+    static = np.zeros(n) if gravity is None else _gravity_force(system, assemble(system).M, gravity)
     rec = LinkReceptance(system, links, plan, static_force=static, harmonic_force=harmonic_force)
     laws = tuple(lk.law(tuple(range(sl.start, sl.stop))) for lk, sl in zip(links, rec.slices, strict=True))
     reduced = ReducedModel(
