@@ -355,7 +355,11 @@ def build_parser() -> argparse.ArgumentParser:
         "says how far it got and exits with status 1. Writes a CSV (mesh and bearing results "
         "per point, units in the column names) and a PNG.",
     )
-    sw.add_argument("model", help="model file (TOML) with one [[gear_pairs]] entry")
+    sw.add_argument(
+        "model",
+        help="model file (TOML); several [[gear_pairs]] or [[bearing_clearances]] make it a link "
+        "sweep (base frequency of the common period, columns <link>.<quantity>)",
+    )
     rng = sw.add_mutually_exclusive_group()
     rng.add_argument(
         "--rpm", help="pinion speed range START:STOP:COUNT [rpm]; with --continuation START:STOP[:COUNT]"
@@ -387,7 +391,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--quantity",
         default="dslr",
         help="plotted quantity: dte_mean, dte_rms, dte_p2p, force_max, force_min, dslr (default), "
-        "contact_loss_fraction or back_contact",
+        "contact_loss_fraction or back_contact; for a link sweep LINK.QUANTITY, e.g. mesh1.dslr or "
+        "B1.force_max",
     )
     sw.add_argument("--no-stability", action="store_true", help="skip the Floquet stability of each point")
     sw.add_argument("--out", default="sweep.csv", help="CSV file (default sweep.csv)")

@@ -88,7 +88,6 @@ def cmd_sweep(args) -> int:
     option, text = ("--rpm", args.rpm) if args.rpm is not None else ("--hz", args.hz)
     if args.harmonics is not None and not 1 <= args.harmonics <= 50:
         raise ModelError("--harmonics", f"must be between 1 and 50, got {args.harmonics}")
-    quantity = check_quantity(args.quantity)
     if args.continuation:
         start, stop, count = parse_span(text, option)
         values = np.array([start, stop])
@@ -101,10 +100,13 @@ def cmd_sweep(args) -> int:
     if png.resolve() == out.resolve():
         raise ModelError("--plot", f"the plot would overwrite the CSV {out}; give --out a .csv name")
     system = load_model(args.model)
-    if len(system.gear_pairs) != 1:
-        raise ModelError(
-            "gear_pairs", f"the sweep needs exactly one gear pair, got {len(system.gear_pairs)}", args.model
-        )
+    from nlgrd.cli_link_sweep import link_sweep_command, needs_links
+
+    if needs_links(system):
+        if not system.gear_pairs and not system.bearing_clearances:
+            raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
+        return link_sweep_command(args, system, values, out, png)
+    quantity = check_quantity(args.quantity)
     gp = system.gear_pairs[0]
     unit = _Unit(
         args.rpm is not None, gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)

@@ -281,6 +281,10 @@ def _check_support(system: RotorSystem) -> None:
                     sup[d].nodes.add((b.shaft, b.node))
                 else:
                     sup[d].zero.append(j)
+        for c in system.bearing_clearances:  # contact beyond the clearance holds the journal
+            if c.shaft in members and getattr(c, "other_node", None) is None:
+                for d in "yz":
+                    sup[d].nodes.add((c.shaft, c.node))
         where = _describe(system, group)
         loaded = [m for m in meshes if m[0] in members]
         floating = [d for d in "yz" if not sup[d].nodes]

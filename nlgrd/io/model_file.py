@@ -50,7 +50,15 @@ Format, version 1::
     c_torsion = 0.2
 
     [[gear_pairs]]                   # nlgrd.gear.mesh.GearMesh fields, nested tables as
-    ...                              # [gear_pairs.geometry] and so on
+    ...                              # [gear_pairs.geometry] and so on; any number of them
+
+    [[bearing_clearances]]           # nlgrd.nonlinear.links.BearingClearance fields
+    name = "B1"                      # a radial clearance, a nonlinear link
+    shaft = 0
+    node = 8
+    clearance = 20e-6
+    stiffness = 1.0e10
+    exponent = 1.5
 
 Rules:
 
@@ -109,6 +117,7 @@ MAX_COUNT = 100_000
 #: not exist yet: (owner, field) -> (module, class). Imported on first use.
 _LATE_TYPES: dict[tuple[type, str], tuple[str, str]] = {
     (RotorSystem, "gear_pairs"): ("nlgrd.gear.mesh", "GearMesh"),
+    (RotorSystem, "bearing_clearances"): ("nlgrd.nonlinear.links", "BearingClearance"),
 }
 
 #: Sequence fields whose entries may carry ``count = N``.

@@ -89,6 +89,36 @@ class RadialClearanceLaw:
         """
         return np.zeros((2, 2 * H + 1))
 
+    def guess_stiffness(self) -> float:
+        """The tangent at a penetration of one clearance (at least 10 µm): the stiffness
+        of the first linear guess [N/m].
+
+        Returns
+        -------
+        float
+        """
+        delta = max(self.clearance, 1e-5)
+        return float(self.exponent * self.stiffness * delta ** (self.exponent - 1.0))
+
+    def static_start(self, u: NDArray) -> NDArray:
+        """The start of the static solve from a linear guess ``u`` (2,): moved out radially
+        by one clearance, so that Newton starts in contact (inside the clearance the force
+        and its tangent are zero and a mechanism supported only by the contact gives
+        Newton no direction) [m].
+
+        Parameters
+        ----------
+        u : ndarray (2,)
+            Linear guess of the mean displacement [m].
+
+        Returns
+        -------
+        ndarray (2,)
+        """
+        u = np.asarray(u, dtype=float)
+        r = float(np.hypot(u[0], u[1]))
+        return u if r == 0 else u * (r + self.clearance) / r
+
     def force_at(self, u: NDArray) -> NDArray:
         """Contact force f(u) for displacement samples ``u`` (2, N) [m]; returns (2, N) [N].
 

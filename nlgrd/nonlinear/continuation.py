@@ -19,6 +19,7 @@ from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.metrics import MeshMetrics, metrics_from_harmonics
 from nlgrd.nonlinear.results import ContinuationResult, assemble_result
 from nlgrd.nonlinear.solvers import solve
+from nlgrd.threads import single_blas_thread
 
 
 def _turning(omega: NDArray, s: NDArray, tangents_w: NDArray) -> tuple[NDArray, NDArray]:
@@ -40,6 +41,7 @@ def _turning(omega: NDArray, s: NDArray, tangents_w: NDArray) -> tuple[NDArray, 
     return idx, np.asarray(omegas)
 
 
+@single_blas_thread
 def continuation(
     model: ReducedModel,
     omega_start: float,

@@ -27,6 +27,7 @@ from nlgrd.nonlinear.harmonics import (
     analyse,
     evaluate,
     n_harmonics,
+    real_to_complex,
     resize_harmonics,
     sample,
     toeplitz_jacobian,
@@ -127,6 +128,14 @@ class BacklashMesh:
     def offset(self, H: int) -> NDArray:
         """LSTE harmonics truncated/padded to H, shape (1, 2H+1) [m]."""
         return resize_harmonics(self.lste, H)[None, :]
+
+    def full_contact(self, H: int) -> tuple[float, NDArray]:
+        """The linear law k_h (δ - e - b) of drive-side contact throughout: its stiffness
+        k_h [N/m] and the forcing k_h (E_k + b δ_k0), (1, H+1) complex [N], that it moves to
+        the right-hand side (the first guess of :meth:`ReducedProblem.linear_solution`)."""
+        shift = self.stiffness * real_to_complex(self.offset(H)[0])
+        shift[0] += self.stiffness * self.half_backlash
+        return self.stiffness, shift[None, :]
 
     def relative(self, delta: NDArray) -> NDArray:
         """Real harmonics of x = δ - e with all LSTE harmonics kept."""

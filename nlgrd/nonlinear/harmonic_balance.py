@@ -243,28 +243,86 @@ class ReducedProblem:
         return max(np.max(np.abs(self._L @ z)), np.max(np.abs(BG)), np.max(np.abs(self._c)), 1e-300)
 
     def linear_solution(self, stiffness: Sequence[float] | None = None) -> NDArray:
-        """Solution with every nonlinearity replaced by its full-contact linear law.
+        """A linear first guess for Newton.
 
-        For :class:`BacklashMesh` this is k_h (δ - e - b) (drive-side contact throughout),
-        i.e. the linear frequency response; other nonlinearities use the tangent
-        ``stiffness[i]`` (default 0) about zero. Used as the first Newton guess.
+        A law with a full-contact linear form (``full_contact(H)``, e.g.
+        :class:`BacklashMesh`: k_h (δ - e - b), drive-side contact throughout) enters with
+        it: with only such laws this is the linear frequency response. When another law
+        is present (a clearance), the static problem (k = 0) is first solved with every
+        law nonlinear (damped Newton), and the dynamic part is the linear response about
+        that static state, each such law at its tangent there. ``stiffness[i]`` is the
+        start of law i in the static solve (default its ``guess_stiffness()``, or 0), and a
+        law's ``static_start`` moves that start into its contact.
+
+        Parameters
+        ----------
+        stiffness : sequence of float, optional
+            Tangent stiffness of each law without a full-contact form, for the start of the
+            static solve [N/m].
+
+        Returns
+        -------
+        ndarray (n_nl (2H+1),)
+            Real harmonics, flat [m].
         """
         H, n = self.H, self.n_coords
         kt = np.zeros((H + 1, n, n), dtype=complex)
         shift = np.zeros((H + 1, n), dtype=complex)
+        others = []
         for i, nl in enumerate(self.nonlinearities):
-            if isinstance(nl, BacklashMesh):
-                c = nl.coord
-                kt[:, c, c] += nl.stiffness
-                shift[:, c] += nl.stiffness * real_to_complex(nl.offset(H)[0])
-                shift[0, c] += nl.stiffness * nl.half_backlash
-            elif stiffness is not None:
+            full = getattr(nl, "full_contact", None)
+            if full is not None:
+                k, sh = full(H)
+                for j, c in enumerate(nl.coords):
+                    kt[:, c, c] += k
+                    shift[:, c] += sh[j]
+            else:
+                others.append(nl)
+                k = stiffness[i] if stiffness is not None else getattr(nl, "guess_stiffness", lambda: 0.0)()
                 for c in nl.coords:
-                    kt[:, c, c] += stiffness[i]
+                    kt[:, c, c] += k
         B = np.broadcast_to(np.eye(n), kt.shape) if self.nl_gain is None else self.nl_gain
         rhs = self.force + np.einsum("kij,kj->ki", B, shift)
         Y = np.linalg.solve(self.kappa + B @ kt, rhs[..., None])[..., 0]
+        if others:
+            y0 = Y[0].real.copy()
+            for nl in others:
+                if hasattr(nl, "static_start"):
+                    y0[list(nl.coords)] = nl.static_start(y0[list(nl.coords)])
+            Y0, T = self._static_state(y0)
+            if Y0 is not None:
+                Y[0] = Y0
+                for nl in others:
+                    idx = np.asarray(nl.coords)
+                    off = real_to_complex(np.asarray(nl.offset(H), dtype=float).reshape(len(idx), -1)).T
+                    kt[:, idx[:, None], idx[None, :]] = T[np.ix_(idx, idx)]
+                    shift[:, idx] = off @ T[np.ix_(idx, idx)].T
+                rhs = self.force + np.einsum("kij,kj->ki", B, shift)
+                Y[1:] = np.linalg.solve(self.kappa[1:] + B[1:] @ kt[1:], rhs[1:, :, None])[..., 0]
         return complex_to_real(Y.T).reshape(-1)
+
+    def _static_state(self, y0: NDArray, max_iter: int = 100) -> tuple[NDArray | None, NDArray | None]:
+        """Damped Newton on the mean problem (k = 0) with every law nonlinear, from ``y0``;
+        returns the static state and the laws' tangent there, or (None, None)."""
+        gain = None if self.nl_gain is None else self.nl_gain[:1].real
+        p0 = ReducedProblem(self.omega, self.kappa[:1].real, self.force[:1].real, self.nonlinearities, gain)
+        y = np.asarray(y0, dtype=float).copy()
+        R, J, scale = p0.residual_jacobian(y)
+        for _ in range(max_iter):
+            if np.max(np.abs(R)) <= 1e-12 * scale:
+                T = p0.nonlinear_forces(y)[1]
+                return y, T
+            step = np.linalg.lstsq(J, -R, rcond=None)[0]
+            t, norm = 1.0, np.linalg.norm(R)
+            while t > 1e-6:
+                R_new, J_new, scale_new = p0.residual_jacobian(y + t * step)
+                if np.linalg.norm(R_new) < norm:
+                    break
+                t /= 2
+            else:
+                return None, None
+            y, R, J, scale = y + t * step, R_new, J_new, scale_new
+        return None, None
 
 
 @dataclass(frozen=True)

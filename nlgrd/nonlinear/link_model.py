@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.link_reduction import FrequencyPlan, LinkReceptance
+from nlgrd.nonlinear.links import GearMeshLink
 from nlgrd.nonlinear.results import SweepResult
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.rotor.assembly import assemble
@@ -98,15 +99,42 @@ def _gravity_force(system: RotorSystem, M, gravity) -> NDArray:
     return M @ a
 
 
+def gear_links(system: RotorSystem, plan: FrequencyPlan) -> list[GearMeshLink]:
+    """The links of all gear pairs of ``system``, named ``mesh<i>``, each at its base harmonic.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    plan : FrequencyPlan
+        The base frequency.
+
+    Returns
+    -------
+    list of GearMeshLink
+    """
+    out = []
+    for i, g in enumerate(system.gear_pairs):
+        s_p = system.shafts[g.pinion_shaft].speed_ratio
+        m = plan.order(g.geometry.teeth_pinion * s_p, f"the mesh of gear_pairs[{i}]")
+        out.append(GearMeshLink.from_system(system, i, order=m))
+    return out
+
+
 def build_link_model(
     system: RotorSystem,
-    links: Sequence,
+    links: Sequence = (),
     *,
     plan: FrequencyPlan | None = None,
     unbalance: Sequence[Unbalance] = (),
     gravity: tuple[float, float] | None = None,
 ) -> LinkModel:
     """Reduce ``system`` onto its links' coordinates, with unbalance and gravity loads.
+
+    Every gear pair of ``system`` is a link: those not among ``links`` (a
+    :class:`GearMeshLink` with its ``index``) are added by :func:`gear_links`, after
+    ``links`` and the system's ``bearing_clearances``. The gear pairs' static torques
+    are loads of the mean problem.
 
     Parameters
     ----------
@@ -115,9 +143,10 @@ def build_link_model(
     links : sequence of NonlinearLink
         The links (names unique).
     plan : FrequencyPlan, optional
-        Base frequency and speed; default: the base is the reference shaft speed.
+        Base frequency and speed; default :meth:`FrequencyPlan.for_system` (the mesh
+        frequency for one mesh, the shaft speed for a rotor without gears).
     unbalance : sequence of Unbalance
-        Unbalances; they need the base to be the shaft speed (harmonic 1).
+        Unbalances, each at harmonic |s| Ω of its shaft (s its speed ratio).
     gravity : tuple of float, optional
         Acceleration of gravity (g_y, g_z) on every node [m/s^2], e.g. (-9.81, 0).
 
@@ -125,36 +154,36 @@ def build_link_model(
     -------
     LinkModel
     """
+    unb_orders = [abs(system.shafts[u.shaft].speed_ratio) for u in unbalance]
+    plan = plan or FrequencyPlan.for_system(system, unb_orders)
+    links = list(links) + list(system.bearing_clearances)
+    given = {lk.index for lk in links if isinstance(lk, GearMeshLink) and lk.index is not None}
+    links += [lk for lk in gear_links(system, plan) if lk.index not in given]
     links = tuple(links)
     names = [lk.name for lk in links]
     if len(set(names)) != len(names):
         raise ModelError("links", f"link names must be unique, got {names}")
-    plan = plan or FrequencyPlan()
-    if unbalance and plan.name != "shaft":
-        raise ModelError("unbalance", "an unbalance needs the shaft speed as the base frequency")
     n = system.n_dofs
     unb = []
-    for u in unbalance:
-        if abs(system.shafts[u.shaft].speed_ratio) != 1.0:
-            raise ModelError(
-                "unbalance", "an unbalance on a shaft with speed ratio other than 1 is not a harmonic"
-            )
+    for u, s in zip(unbalance, unb_orders, strict=True):
+        ratio = system.shafts[u.shaft].speed_ratio
+        m = plan.order(s, f"the unbalance on shaft {u.shaft}")
         d = system.dofs.node_dofs(u.shaft, u.node)
-        unb.append(
-            (d[_UY], d[_UZ], float(u.amount), float(u.phase), float(system.shafts[u.shaft].speed_ratio))
-        )
+        unb.append((d[_UY], d[_UZ], float(u.amount), float(u.phase), float(ratio), m))
 
     def harmonic_force(omega: float, H: int) -> NDArray:
         f = np.zeros((H + 1, n), dtype=complex)
-        if H >= 1:
-            speed = plan.speed(omega)
-            for iy, iz, me, ph, ratio in unb:
-                amp = me * speed**2 * np.exp(1j * ph)
-                f[1, iy] += amp
-                f[1, iz] += -1j * np.sign(ratio) * amp
+        speed = plan.speed(omega)
+        for iy, iz, me, ph, ratio, m in unb:
+            if m <= H:
+                amp = me * (ratio * speed) ** 2 * np.exp(1j * ph)
+                f[m, iy] += amp
+                f[m, iz] += -1j * np.sign(ratio * speed) * amp
         return f
 
     static = np.zeros(n) if gravity is None else _gravity_force(system, assemble(system).M, gravity)
+    for g in system.gear_pairs:
+        static = static + g.static_torques(system)
     rec = LinkReceptance(system, links, plan, static_force=static, harmonic_force=harmonic_force)
     laws = tuple(lk.law(tuple(range(sl.start, sl.stop))) for lk, sl in zip(links, rec.slices, strict=True))
     reduced = ReducedModel(
@@ -162,6 +191,8 @@ def build_link_model(
         force=lambda omega, H: rec.terms(omega, H)[1],
         nonlinearities=laws,
         state_space_at=rec.state_space,
+        kappa_derivative=(lambda omega, H: rec.derivatives(omega, H)[0]) if rec.has_derivatives else None,
+        force_derivative=(lambda omega, H: rec.derivatives(omega, H)[1]) if rec.has_derivatives else None,
     )
     return LinkModel(system, links, rec, reduced)
 
@@ -183,7 +214,7 @@ class LinkSweepResult:
     links: pd.DataFrame
 
     def to_frame(self) -> pd.DataFrame:
-        """The sweep's table with the link columns appended.
+        """The sweep's table (frequency column ``base_frequency [Hz]``) with the link columns.
 
         Returns
         -------
@@ -191,7 +222,8 @@ class LinkSweepResult:
         """
         frame = self.result.to_frame()
         drop = [c for c in frame.columns if c.startswith(("dte_", "force_", "dslr", "contact_loss", "back_"))]
-        return pd.concat([frame.drop(columns=drop), self.links], axis=1)
+        frame = frame.drop(columns=drop).rename(columns={"mesh_frequency [Hz]": "base_frequency [Hz]"})
+        return pd.concat([frame, self.links], axis=1)
 
 
 def link_sweep(model: LinkModel, omegas: NDArray, H: int = 9, **options) -> LinkSweepResult:

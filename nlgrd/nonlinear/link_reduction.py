@@ -21,8 +21,10 @@ recovery of the same point.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from fractions import Fraction
 
 import numpy as np
 import scipy.linalg as sla
@@ -56,14 +58,19 @@ class _DenseLU:
 class FrequencyPlan:
     """How the harmonic-balance base frequency ω relates to the shaft speed.
 
+    Every excitation sits at an integer harmonic of the base: an unbalance on a shaft of
+    speed ratio s at |s| Ω, the mesh of a pinion with N_p teeth on a shaft of ratio s_p at
+    N_p |s_p| Ω (Ω the reference shaft speed). :meth:`for_system` chooses the longest
+    base that makes all of them harmonics: the mesh frequency for one mesh or an idler
+    train, their greatest common divisor for a multi-stage train.
+
     Parameters
     ----------
     speed_per_base : float
         Reference shaft speed Ω per unit base frequency, Ω = ``speed_per_base`` ω [-]: 1
-        when the base is the shaft speed (unbalance at harmonic 1), 1 / (N_p s_p) when it
-        is the mesh frequency of a pinion with N_p teeth on a shaft of speed ratio s_p.
+        when the base is the shaft speed, 1 / (N_p |s_p|) when it is the mesh frequency.
     name : str
-        "shaft" or "mesh": what the base frequency is.
+        "shaft", "mesh" or "common" (a common divisor of several mesh frequencies).
     """
 
     speed_per_base: float = 1.0
@@ -82,6 +89,64 @@ class FrequencyPlan:
         float
         """
         return float(omega) * self.speed_per_base
+
+    def order(self, shaft_order: float, what: str = "excitation") -> int:
+        """The harmonic of the base at which an excitation of ``shaft_order`` Ω sits.
+
+        Parameters
+        ----------
+        shaft_order : float
+            Its frequency per unit reference shaft speed [-].
+        what : str
+            Named in the error when it is not a harmonic.
+
+        Returns
+        -------
+        int
+        """
+        m = abs(float(shaft_order) * self.speed_per_base)
+        r = round(m)
+        if r < 1 or abs(m - r) > 1e-9 * m:
+            raise ModelError(
+                "plan",
+                f"{what} at {abs(shaft_order):.6g} x the shaft speed is not a harmonic of the "
+                f"base frequency ({1 / abs(self.speed_per_base):.6g} x the shaft speed)",
+            )
+        return int(r)
+
+    @classmethod
+    def for_system(cls, system: RotorSystem, shaft_orders: Sequence[float] = ()) -> FrequencyPlan:
+        """The longest base making every mesh and every ``shaft_orders`` a harmonic.
+
+        Parameters
+        ----------
+        system : RotorSystem
+            Its gear pairs' mesh orders N_p |s_p| count.
+        shaft_orders : sequence of float
+            Further excitations, e.g. |s| of a shaft with unbalance [-].
+
+        Returns
+        -------
+        FrequencyPlan
+            "shaft" without meshes, "mesh" when all excitations sit at one mesh
+            frequency, else "common".
+        """
+        meshes = [
+            Fraction(g.geometry.teeth_pinion)
+            * Fraction(abs(system.shafts[g.pinion_shaft].speed_ratio)).limit_denominator(10**6)
+            for g in system.gear_pairs
+        ]
+        others = [Fraction(abs(float(o))).limit_denominator(10**6) for o in shaft_orders]
+        orders = meshes + others
+        if not orders:
+            return cls(1.0, "shaft")
+        den = math.lcm(*(q.denominator for q in orders))
+        base = Fraction(math.gcd(*(int(q * den) for q in orders)), den)
+        if not others and len(set(meshes)) == 1:
+            name = "mesh"
+        else:
+            name = "shaft" if base == 1 else "common"
+        return cls(1.0 / float(base), name)
 
 
 class LinkReceptance:
@@ -257,6 +322,65 @@ class LinkReceptance:
 
         return self._terms.get((float(omega), int(H)), make)
 
+    @property
+    def has_derivatives(self) -> bool:
+        """Whether :meth:`derivatives` is exact (no tabulated bearing or hysteretic part)."""
+        return not (self.model.tabulated_bearings or self.model.hysteretic_parts)
+
+    def derivatives(self, omega: float, H: int) -> tuple[NDArray, NDArray]:
+        """dκ_k/dω (H+1, d, d) [N s/m] and dF_k/dω (H+1, d) [N s], k = 0..H, analytic.
+
+        With h_k = Pᵀ Z_k⁻¹ P: dκ_k = κ_k Pᵀ Z_k⁻¹ Z_k' Z_k⁻¹ P κ_k and, with
+        u_k = Z_k⁻¹ f_k, dF_k = dκ_k Pᵀ u_k + κ_k Pᵀ Z_k⁻¹ (f_k' - Z_k' u_k), where
+        Z_k' = s K_c - 2 k² ω M + i k (C + Ω G) + i k ω s G (Ω = s ω the shaft speed).
+        It reuses the factors of :meth:`terms` (no new factorisation); f_k' by central
+        differences of the forces (no solve). κ_0 and F_0 do not depend on ω unless the
+        stiffness does on the speed (then by central differences).
+
+        Parameters
+        ----------
+        omega : float
+            Base frequency [rad/s].
+        H : int
+            Number of harmonics [-].
+
+        Returns
+        -------
+        tuple of ndarray
+        """
+
+        def make():
+            d, s_ = self.n_coords, self.plan.speed_per_base
+            speed = s_ * omega
+            kap, _ = self.terms(omega, H)
+            m = self.model
+            h = 1e-6 * max(abs(omega), 1.0)
+            df = (self.forces(omega + h, H) - self.forces(omega - h, H)) / (2 * h)
+            f = self.forces(omega, H)
+            dkap = np.zeros((H + 1, d, d), dtype=complex)
+            dfrc = np.zeros((H + 1, d), dtype=complex)
+            if self._speed_dependent:
+                (k1, f1), (k0, f0) = self.terms(omega + h, H), self.terms(omega - h, H)
+                dkap[0], dfrc[0] = (k1[0] - k0[0]) / (2 * h), (f1[0] - f0[0]) / (2 * h)
+            if self._dense:
+                a = self._mats
+                Kc, M, C, G = a["Kc"], a["M"], a["C"], a["G"]
+            else:
+                Kc, M, G = m.Kc, m.M, m.G
+                C = (m.C + m.Ci + self.C_link).tocsc()
+            A, B = -2 * omega * M, 1j * (C + speed * G) + 1j * omega * s_ * G
+            for k in range(1, H + 1):
+                dZ = s_ * Kc + (k * k) * A + k * B
+                lu = self._factor(k, omega)
+                u = lu.solve(np.column_stack([self.P.astype(complex), f[k]]))
+                up, uf = u[:, :d], u[:, d]
+                v = lu.solve(np.column_stack([dZ @ up, df[k] - dZ @ uf]))
+                dkap[k] = kap[k] @ (self.P.T @ v[:, :d]) @ kap[k]
+                dfrc[k] = dkap[k] @ (self.P.T @ uf) + kap[k] @ (self.P.T @ v[:, d])
+            return dkap, dfrc
+
+        return self._terms.get(("d", float(omega), int(H)), make)
+
     def recover(self, omega: float, H: int, harmonics: NDArray, forces: NDArray, dofs) -> NDArray:
         """Real harmonics (len(dofs), 2H+1) of any DOFs at a solved point.
 
@@ -292,6 +416,17 @@ class LinkReceptance:
         real[:, 0] = out[0].real
         real[:, 1::2], real[:, 2::2] = out[1:].real.T, -out[1:].imag.T
         return real
+
+    def linearised(self) -> LinearModel:
+        """The linear model with every link at its linear stiffness and damping (a gear
+        mesh at k_h and c_m, a clearance at its contact tangent): for modal analysis.
+
+        Returns
+        -------
+        LinearModel
+        """
+        m = self.model
+        return replace(m, K=(m.K + self.K_link).tocsc(), C=(m.C + self.C_link).tocsc(), meshes=())
 
     def state_space(self, omega: float) -> LinearStateSpace | None:
         """The linear part for Floquet stability at base frequency ``omega`` (dense, up to

@@ -286,19 +286,28 @@ class GearMeshLink:
     name : str
         The link's name, the prefix of its output columns.
     mesh : BacklashMesh
-        k_h, b, LSTE and c_m of the mesh.
+        k_h, b, c_m and the LSTE in harmonics of the base frequency: a mesh at harmonic
+        m of the base has its LSTE harmonic k at base harmonic m k.
     w : ndarray (n_dofs,)
         The projection vector: δ = wᵀ q along the line of action [-].
+    index : int, optional
+        Which gear pair of the system it is.
+    order : int
+        m, the base harmonic of the mesh frequency [-].
     """
 
     name: str
     mesh: BacklashMesh
     w: NDArray
+    index: int | None = None
+    order: int = 1
 
     n_coords = 1
 
     @classmethod
-    def from_system(cls, system: RotorSystem, index: int = 0, name: str | None = None) -> GearMeshLink:
+    def from_system(
+        cls, system: RotorSystem, index: int = 0, name: str | None = None, order: int = 1
+    ) -> GearMeshLink:
         """The link of gear pair ``index`` of ``system``.
 
         Parameters
@@ -309,6 +318,8 @@ class GearMeshLink:
             Which gear pair.
         name : str, optional
             Default ``mesh<index>``.
+        order : int
+            The base harmonic of its mesh frequency (:meth:`FrequencyPlan.order`) [-].
 
         Returns
         -------
@@ -318,14 +329,22 @@ class GearMeshLink:
 
         if not 0 <= index < len(system.gear_pairs):
             raise ModelError("gear_pairs", f"no gear pair {index} (the model has {len(system.gear_pairs)})")
+        if int(order) != order or order < 1:
+            raise ModelError("order", f"a positive integer, got {order!r}")
+        order = int(order)
         gp = system.gear_pairs[index]
         ex = gp.excitation(30)
-        lste = np.empty(2 * len(ex.a) + 1)
+        lste = np.zeros(2 * order * len(ex.a) + 1)
         lste[0] = ex.e0
-        lste[1::2], lste[2::2] = ex.a, ex.b
+        lste[2 * order - 1 :: 2 * order], lste[2 * order :: 2 * order] = ex.a, ex.b
         link = assemble(system).meshes[index]
         mesh = BacklashMesh(link.stiffness, gp.half_backlash, lste, link.damping, gp.static_load)
-        return cls(name or f"mesh{index}", mesh, np.asarray(link.w, dtype=float))
+        return cls(name or f"mesh{index}", mesh, np.asarray(link.w, dtype=float), index, order)
+
+    @property
+    def excitation_harmonics(self) -> int:
+        """The highest base harmonic of its LSTE [-]."""
+        return (self.mesh.lste.size - 1) // 2
 
     def projection(self, system: RotorSystem) -> NDArray:
         """P = w as one column, (n_dofs, 1).
@@ -367,7 +386,7 @@ class GearMeshLink:
         y : ndarray (1,)
             δ [m].
         theta : float
-            Mesh angle [rad].
+            Base angle ω t [rad].
 
         Returns
         -------
@@ -403,7 +422,7 @@ class GearMeshLink:
         Parameters
         ----------
         omega : float
-            Mesh frequency [rad/s].
+            Base frequency [rad/s].
         H : int
             Number of harmonics [-].
 
@@ -422,7 +441,7 @@ class GearMeshLink:
         harmonics : ndarray (1, 2H+1)
             Real harmonics of δ [m].
         omega : float
-            Mesh frequency [rad/s].
+            Base frequency [rad/s].
 
         Returns
         -------

@@ -145,6 +145,11 @@ class MeshReceptance:
     ):
         if not system.gear_pairs:
             raise ModelError("gear_pairs", "the model has no gear pair: nothing to reduce onto")
+        if system.bearing_clearances:
+            raise ModelError(
+                "bearing_clearances",
+                "the mesh receptance models no bearing clearance: use nlgrd.nonlinear.link_model",
+            )
         self.system = system
         self.model: LinearModel = assemble(system, mesh_stiffness=False, mesh_damping=True)
         self.W = np.column_stack([m.w for m in self.model.meshes])

@@ -29,6 +29,7 @@ from nlgrd.nonlinear.results import (
     instability_kind,
 )
 from nlgrd.nonlinear.solvers import solve
+from nlgrd.threads import single_blas_thread
 
 #: How a sweep lands on the other branch after a fold (see :func:`sweep`).
 JUMP_STRATEGIES = ("arclength", "restart", "auto", "none")
@@ -64,6 +65,7 @@ def sweep_orders(omegas: NDArray, directions: str | Sequence[str]) -> list[tuple
     return out
 
 
+@single_blas_thread
 def sweep(
     model: ReducedModel,
     omegas: ArrayLike,

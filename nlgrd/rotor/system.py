@@ -122,6 +122,10 @@ class RotorSystem:
         Attached parts; each names its shaft and node.
     gear_pairs : tuple
         Gear meshes (:class:`nlgrd.gear.mesh.GearMesh`).
+    bearing_clearances : tuple
+        Radial clearances of bearings (:class:`nlgrd.nonlinear.links.BearingClearance`),
+        nonlinear links: only the link analyses (:mod:`nlgrd.nonlinear.link_model`) model
+        them.
     name : str
         Label.
     """
@@ -131,21 +135,25 @@ class RotorSystem:
     bearings: tuple[Bearing, ...] = ()
     couplings: tuple[Coupling, ...] = ()
     gear_pairs: tuple[Any, ...] = field(default=())
+    bearing_clearances: tuple[Any, ...] = field(default=())
     name: str = ""
 
     def __post_init__(self):
-        for key in ("shafts", "disks", "bearings", "couplings", "gear_pairs"):
+        for key in ("shafts", "disks", "bearings", "couplings", "gear_pairs", "bearing_clearances"):
             object.__setattr__(self, key, tuple(getattr(self, key)))
         if not self.shafts:
             raise ModelError("shafts", "a system needs at least one shaft")
         dm = self.dofs
-        for group in ("disks", "bearings"):
+        for group in ("disks", "bearings", "bearing_clearances"):
             for i, part in enumerate(getattr(self, group)):
                 self._check_node(dm, f"{group}[{i}]", part.shaft, part.node)
         for i, c in enumerate(self.couplings):
             self._check_node(dm, f"couplings[{i}]", c.shaft_a, c.node_a, "_a")
             if not c.grounded:
                 self._check_node(dm, f"couplings[{i}]", c.shaft_b, c.node_b, "_b")
+        for i, c in enumerate(self.bearing_clearances):
+            if getattr(c, "other_node", None) is not None:
+                self._check_node(dm, f"bearing_clearances[{i}]", c.other_shaft, c.other_node, "", "other_")
         for i, g in enumerate(self.gear_pairs):
             self._check_node(dm, f"gear_pairs[{i}]", g.pinion_shaft, g.pinion_node, "", "pinion_")
             self._check_node(dm, f"gear_pairs[{i}]", g.gear_shaft, g.gear_node, "", "gear_")

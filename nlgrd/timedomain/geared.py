@@ -16,9 +16,11 @@ from nlgrd.nonlinear.geared import GearedModel
 from nlgrd.nonlinear.harmonics import analyse
 from nlgrd.nonlinear.results import SweepResult, assemble_result
 from nlgrd.nonlinear.sweep import sweep_orders
+from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.integrator import integrate_fe
 
 
+@single_blas_thread
 def time_response(
     model: GearedModel,
     omega: float,

@@ -29,6 +29,7 @@ from nlgrd.nonlinear.link_model import LinkModel
 from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import SweepResult, assemble_result
 from nlgrd.nonlinear.sweep import sweep_orders
+from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.integrator import hht_step
 
 
@@ -85,6 +86,7 @@ def _forcing_samples(model: LinkModel, omega: float, ns: int, H: int) -> NDArray
     return np.real(np.exp(1j * np.outer(theta, k)) @ f)
 
 
+@single_blas_thread
 def link_time_response(
     model: LinkModel,
     omega: float,
@@ -95,7 +97,7 @@ def link_time_response(
     max_periods: int = 4000,
     min_periods: int = 5,
     state0: tuple | None = None,
-    forcing_harmonics: int = 30,
+    forcing_harmonics: int | None = None,
     output_dofs=(),
 ) -> LinkTimeResponse:
     """Integrate a link model to a periodic steady state at base frequency ``omega``.
@@ -119,8 +121,9 @@ def link_time_response(
     state0 : tuple (q, q', q''), optional
         Start state; default at rest at the static position of the linear system with
         the links at their linear stiffness.
-    forcing_harmonics : int
-        Harmonics of the forcing kept (the links' own forcing may hold many) [-].
+    forcing_harmonics : int, optional
+        Harmonics of the forcing kept [-]; default all the links' excitation holds (at
+        least 30).
     output_dofs : sequence of int
         DOFs recorded over the last period.
 
@@ -144,6 +147,8 @@ def link_time_response(
     lu, A_all = step.lu, step.A_all
     Zp = lu.solve(P)  # K_eff⁻¹ P
     S = P.T @ Zp
+    if forcing_harmonics is None:
+        forcing_harmonics = max([30] + [getattr(lk, "excitation_harmonics", 0) for lk in model.links])
     F = _forcing_samples(model, omega, ns, forcing_harmonics)
     theta = 2 * np.pi * np.arange(ns) / ns
 

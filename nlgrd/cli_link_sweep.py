@@ -1,0 +1,122 @@
+"""``nlgrd sweep`` of a model with several gear meshes or bearing clearances: a link sweep
+(:func:`nlgrd.nonlinear.link_model.link_sweep`), every link's outputs in columns
+``<link>.<quantity>``, and a figure of one of them."""
+
+from __future__ import annotations
+
+import math
+
+from nlgrd.errors import ModelError
+from nlgrd.io.command_line import Outputs
+
+#: Harmonics of the base when --harmonics is not given: 9 of the highest mesh order.
+MESH_HARMONICS = 9
+
+
+def needs_links(system) -> bool:
+    """Whether ``system`` needs the link path (several meshes or a bearing clearance).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+
+    Returns
+    -------
+    bool
+    """
+    return len(system.gear_pairs) != 1 or bool(system.bearing_clearances)
+
+
+def _quantity(text: str, model) -> tuple[str, str]:
+    """``--quantity`` for a link model: ``LINK.QUANTITY`` or a bare quantity of the first
+    link that has it; returns (column, label)."""
+    from nlgrd.nonlinear.links import GearMeshLink
+
+    keys = {}
+    for lk in model.links:
+        H = 1
+        for k in lk.metrics(_zeros(lk, H), 1.0):
+            keys.setdefault(lk.name, []).append(k)
+    name, _, q = text.rpartition(".")
+    if not name:
+        meshes = [lk.name for lk in model.links if isinstance(lk, GearMeshLink)]
+        order = meshes + [lk.name for lk in model.links if lk.name not in meshes]
+        name = next((n for n in order if any(k.split(" ")[0] == q for k in keys[n])), "")
+    if name not in keys:
+        raise ModelError("--quantity", f"no link {name or text!r}; links: {', '.join(keys)}")
+    match = [k for k in keys[name] if k.split(" ")[0] == q]
+    if not match:
+        quantities = ", ".join(k.split(" ")[0] for k in keys[name])
+        raise ModelError("--quantity", f"link {name!r} has no {q!r}; it has {quantities}")
+    return f"{name}.{match[0]}", f"{name}: {match[0]}"
+
+
+def _zeros(link, H: int):
+    import numpy as np
+
+    return np.zeros((link.n_coords, 2 * H + 1))
+
+
+def link_sweep_command(args, system, values, out, png) -> int:
+    """Run ``nlgrd sweep`` on a link model; write the CSV and PNG; print a summary.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options of ``nlgrd sweep``.
+    system : RotorSystem
+        The model (several meshes or a bearing clearance).
+    values : ndarray
+        The range: shaft speeds [rpm] (``--rpm``) or base frequencies [Hz] (``--hz``).
+    out, png : Path
+        The output files.
+
+    Returns
+    -------
+    int
+        0.
+    """
+    import numpy as np
+
+    from nlgrd.io.command_line import pyplot
+    from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+
+    if args.continuation:
+        raise ModelError("--continuation", "not available yet for models with several meshes or clearances")
+    model = build_link_model(system)
+    plan = model.receptance.plan
+    if args.rpm is not None:
+        omegas = np.asarray(values, dtype=float) * math.pi / 30 / plan.speed_per_base
+    else:
+        omegas = 2 * math.pi * np.asarray(values, dtype=float)
+    orders = [getattr(lk, "order", 1) for lk in model.links if hasattr(lk, "order")] or [1]
+    H = args.harmonics or MESH_HARMONICS * max(orders)
+    column, label = _quantity(args.quantity, model)
+    res = link_sweep(model, omegas, H=H, directions=args.direction, stability=not args.no_stability)
+    frame = res.to_frame()
+    frame.insert(1, "shaft_speed [rpm]", frame["base_frequency [Hz]"] * plan.speed_per_base * 60)
+    x_col = "shaft_speed [rpm]" if args.rpm is not None else "base_frequency [Hz]"
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for direction, part in frame.groupby("direction", sort=False):
+        ax.plot(part[x_col], part[column], ".-", label=f"sweep {direction}")
+    ax.set_xlabel(x_col)
+    ax.set_ylabel(label)
+    ax.set_title(f"{system.name or 'model'}: base = {plan.name}, H = {H}")
+    ax.legend()
+    fig.tight_layout()
+    with Outputs() as files:
+        files.csv(frame, out)
+        files.figure(fig, png)
+        files.commit()
+    r = res.result
+    bad = int(np.sum(~r.converged))
+    lost = int(np.sum(np.asarray(r.no_stable, dtype=bool)))
+    print(
+        f"sweep: {len(r)} points ({args.direction}), links {', '.join(lk.name for lk in model.links)}, "
+        f"base frequency = {plan.name} ({1 / plan.speed_per_base:.6g} x the shaft speed), H = {H}, "
+        f"{bad} not converged, {lost} without a stable periodic response"
+    )
+    print(f"wrote {out} and {png}")
+    return 0
