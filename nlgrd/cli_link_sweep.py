@@ -103,7 +103,7 @@ def link_sweep_command(args, system, values, out, png) -> int:
         ax.plot(part[x_col], part[column], ".-", label=f"sweep {direction}")
     ax.set_xlabel(x_col)
     ax.set_ylabel(label)
-    ax.set_title(f"{system.name or 'model'}: base = {plan.name}, H = {H}")
+    ax.set_title(f"{(system.name or 'model')[:60]}\nbase frequency: {plan.name}, H = {H}", fontsize=9)
     ax.legend()
     fig.tight_layout()
     with Outputs() as files:

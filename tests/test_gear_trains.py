@@ -139,4 +139,3 @@ def test_analytic_frequency_derivatives_against_central_differences(train):
             for k in range(1, 5):
                 assert np.max(np.abs(got[k] - ref[k])) <= 1e-6 * np.max(np.abs(ref[k])), (i, k)
             assert not np.any(got[0])  # no speed-dependent stiffness: κ_0, F_0 fixed
-

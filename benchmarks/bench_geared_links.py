@@ -1,0 +1,89 @@
+"""Per-point cost of geared link models (issue 11): one mesh on the link path against the
+single-mesh mesh-receptance path, a mesh with a bearing clearance, two meshes.
+
+Run from the repository root::
+
+    .venv/bin/python benchmarks/bench_geared_links.py
+
+Up sweeps with Floquet stability, one BLAS thread, fixed H, the same grid for the two
+paths of the single mesh (data/models/two_shaft.toml, 132 DOFs, H = 9, mesh frequency
+1000-1700 Hz, 15 points): the mesh receptance (`nlgrd.nonlinear.geared.geared_sweep`)
+and the general link reduction (`nlgrd.nonlinear.link_model.link_sweep`) side by side;
+then two_shaft with the pinion's free-end bearing replaced by a 20 µm radial clearance
+with Hertzian contact (2 links, 3 coordinates), the idler train (2 meshes, 198 DOFs) and
+the two-stage reduction (2 meshes, base = 5 x the input speed, H = 45), each on its own
+grid. Figures and machine in benchmarks/README.md.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.geared import geared_sweep
+from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+from nlgrd.nonlinear.links import BearingClearance
+
+MODELS = Path(__file__).resolve().parents[1] / "data" / "models"
+
+
+def _timed(label: str, run, n: int) -> None:
+    t0 = time.perf_counter()
+    ok = run()
+    per = 1e3 * (time.perf_counter() - t0) / n
+    print(f"{label}: {per:.1f} ms per point ({ok}/{n} stable)", flush=True)
+
+
+def main() -> None:
+    two = load_model(MODELS / "two_shaft.toml")
+    grid = 2 * np.pi * np.linspace(1000.0, 1700.0, 15)
+    bearings = tuple(b for i, b in enumerate(two.bearings) if i != 1)
+    clear = dataclasses.replace(
+        two,
+        bearings=bearings,
+        bearing_clearances=(BearingClearance("B1", 0, 8, 20e-6, 1e10, exponent=1.5, damping=1e3),),
+    )
+    cases = [
+        ("two_shaft, 1 mesh, link path", build_link_model(two), grid, 9),
+        ("two_shaft, mesh + clearance (2 links)", build_link_model(clear), grid, 9),
+        ("idler_train, 2 meshes", build_link_model(load_model(MODELS / "idler_train.toml")), grid, 9),
+        (
+            "two_stage, 2 meshes, base 5 x shaft",
+            build_link_model(load_model(MODELS / "two_stage.toml")),
+            grid / 5,
+            45,
+        ),
+    ]
+    with threadpool_limits(1):
+        geared_sweep(two, omegas=grid[:2], H=9, directions="up")  # warm-up
+        res = {}
+
+        def mesh_path():
+            res["mesh"] = geared_sweep(two, omegas=grid, H=9, directions="up").mesh
+            return int(np.sum(res["mesh"].converged & res["mesh"].stable.astype(bool)))
+
+        _timed("two_shaft, 1 mesh, mesh-receptance path", mesh_path, grid.size)
+        for label, model, omegas, H in cases:
+            link_sweep(model, omegas[:2], H=H, directions="up")  # warm-up
+
+            def run(model=model, omegas=omegas, H=H, label=label):
+                r = link_sweep(model, omegas, H=H, directions="up").result
+                res[label] = r
+                return int(np.sum(r.converged & r.stable.astype(bool)))
+
+            _timed(label, run, omegas.size)
+    a, b = res["mesh"], res["two_shaft, 1 mesh, link path"]
+    both = a.converged & b.converged
+    diff = np.max(np.abs(a.harmonics[both][:, 0] - b.harmonics[both][:, 0])) / np.max(
+        np.abs(a.harmonics[both])
+    )
+    print(f"single mesh, the two paths' harmonics differ by {diff:.1e} of their largest", flush=True)
+
+
+if __name__ == "__main__":
+    main()
