@@ -31,13 +31,10 @@ def needs_links(system) -> bool:
 def _quantity(text: str, model) -> tuple[str, str]:
     """``--quantity`` for a link model: ``LINK.QUANTITY`` or a bare quantity of the first
     link that has it; returns (column, label)."""
+    from nlgrd.nonlinear.link_model import metric_names
     from nlgrd.nonlinear.links import GearMeshLink
 
-    keys = {}
-    for lk in model.links:
-        H = 1
-        for k in lk.metrics(_zeros(lk, H), 1.0):
-            keys.setdefault(lk.name, []).append(k)
+    keys = {lk.name: metric_names(lk) for lk in model.links}
     name, _, q = text.rpartition(".")
     if not name:
         meshes = [lk.name for lk in model.links if isinstance(lk, GearMeshLink)]
@@ -50,12 +47,6 @@ def _quantity(text: str, model) -> tuple[str, str]:
         quantities = ", ".join(k.split(" ")[0] for k in keys[name])
         raise ModelError("--quantity", f"link {name!r} has no {q!r}; it has {quantities}")
     return f"{name}.{match[0]}", f"{name}: {match[0]}"
-
-
-def _zeros(link, H: int):
-    import numpy as np
-
-    return np.zeros((link.n_coords, 2 * H + 1))
 
 
 def link_sweep_command(args, system, values, out, png) -> int:

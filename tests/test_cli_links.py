@@ -94,3 +94,14 @@ def test_unknown_link_quantity_is_one_line(tmp_path, capsys):
     assert main([*argv, "--quantity", "mesh7.dslr"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "mesh7" in err and "mesh0, mesh1" in err, err
+
+
+def test_clearance_entries_survive_a_write_and_read(tmp_path):
+    """save_model writes [[bearing_clearances]] and load_model reads back the same system."""
+    from nlgrd.io.model_file import load_model
+    from nlgrd.io.model_writer import save_model
+
+    system = load_model(clearance_model(tmp_path))
+    save_model(system, tmp_path / "again.toml")
+    again = load_model(tmp_path / "again.toml")
+    assert again == system and again.bearing_clearances[0].exponent == 1.5

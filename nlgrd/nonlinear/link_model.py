@@ -226,6 +226,21 @@ class LinkSweepResult:
         return pd.concat([frame, self.links], axis=1)
 
 
+def metric_names(link) -> list[str]:
+    """The names (with units) of a link's per-point outputs, in its ``metrics`` order.
+
+    Parameters
+    ----------
+    link : NonlinearLink
+        The link.
+
+    Returns
+    -------
+    list of str
+    """
+    return list(link.metrics(np.zeros((link.n_coords, 3)), 1.0))
+
+
 def link_sweep(model: LinkModel, omegas: NDArray, H: int = 9, **options) -> LinkSweepResult:
     """Harmonic-balance sweep of a link model with the links' outputs.
 
@@ -256,7 +271,7 @@ def link_sweep(model: LinkModel, omegas: NDArray, H: int = 9, **options) -> Link
             if ok:
                 values = link.metrics(res.harmonics[i][sl], float(res.omega[i]))
             else:
-                values = dict.fromkeys(link.metrics(np.zeros((link.n_coords, 2 * H + 1)), 1.0), np.nan)
+                values = dict.fromkeys(metric_names(link), np.nan)
             row.update({f"{link.name}.{k}": v for k, v in values.items()})
         rows.append(row)
     return LinkSweepResult(res, pd.DataFrame(rows))

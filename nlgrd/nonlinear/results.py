@@ -546,6 +546,12 @@ class ContinuationResult:
 def dominant_multiplier(mu: NDArray) -> tuple[float, complex]:
     """max |μ| and the multiplier that has it (the one with Im >= 0 of a pair).
 
+    Multipliers within ``STABLE_RTOL`` of the largest modulus count as tied (the
+    monodromy's rounding moves a modulus near 1 by ~1e-9: an exact neutral μ = 1 of a
+    rigid-body mode and a pair of an undamped mode at 1 - 2e-9 swapped places between
+    OpenBLAS kernels with a 1e-12 window); of the tied ones the one with the largest
+    imaginary part is reported, the same on every machine.
+
     Parameters
     ----------
     mu : ndarray of complex
@@ -558,5 +564,5 @@ def dominant_multiplier(mu: NDArray) -> tuple[float, complex]:
     """
     mu = np.asarray(mu, dtype=complex)
     top = float(np.max(np.abs(mu)))
-    cand = mu[np.abs(mu) >= top * (1 - 1e-12)]
+    cand = mu[np.abs(mu) >= top * (1 - STABLE_RTOL)]
     return top, complex(cand[np.argmax(cand.imag)])
