@@ -12,7 +12,10 @@ and the general link reduction (`nlgrd.nonlinear.link_model.link_sweep`) side by
 then two_shaft with the pinion's free-end bearing replaced by a 20 µm radial clearance
 with Hertzian contact (2 links, 3 coordinates), the idler train (2 meshes, 198 DOFs) and
 the two-stage reduction (2 meshes, base = 5 x the input speed, H = 45), each on its own
-grid. Figures and machine in benchmarks/README.md.
+grid. The link path runs with the pole-residue reduction (the default) and, for the
+trains, also with a direct LU of Z_k per point (``method="direct"``); the pole-residue
+set-up (one eigendecomposition per harmonic) is timed apart, in the warm-up on two
+points. Figures and machine in benchmarks/README.md.
 """
 
 from __future__ import annotations
@@ -48,16 +51,15 @@ def main() -> None:
         bearings=bearings,
         bearing_clearances=(BearingClearance("B1", 0, 8, 20e-6, 1e10, exponent=1.5, damping=1e3),),
     )
+    idler, stage = load_model(MODELS / "idler_train.toml"), load_model(MODELS / "two_stage.toml")
     cases = [
         ("two_shaft, 1 mesh, link path", build_link_model(two), grid, 9),
+        ("two_shaft, 1 mesh, link path, direct LU", build_link_model(two, method="direct"), grid, 9),
         ("two_shaft, mesh + clearance (2 links)", build_link_model(clear), grid, 9),
-        ("idler_train, 2 meshes", build_link_model(load_model(MODELS / "idler_train.toml")), grid, 9),
-        (
-            "two_stage, 2 meshes, base 5 x shaft",
-            build_link_model(load_model(MODELS / "two_stage.toml")),
-            grid / 5,
-            45,
-        ),
+        ("idler_train, 2 meshes", build_link_model(idler), grid, 9),
+        ("idler_train, 2 meshes, direct LU", build_link_model(idler, method="direct"), grid, 9),
+        ("two_stage, 2 meshes, base 5 x shaft", build_link_model(stage), grid / 5, 45),
+        ("two_stage, 2 meshes, direct LU", build_link_model(stage, method="direct"), grid / 5, 45),
     ]
     with threadpool_limits(1):
         geared_sweep(two, omegas=grid[:2], H=9, directions="up")  # warm-up
@@ -69,7 +71,9 @@ def main() -> None:
 
         _timed("two_shaft, 1 mesh, mesh-receptance path", mesh_path, grid.size)
         for label, model, omegas, H in cases:
-            link_sweep(model, omegas[:2], H=H, directions="up")  # warm-up
+            t0 = time.perf_counter()
+            link_sweep(model, omegas[:2], H=H, directions="up")  # warm-up, pole-residue set-up
+            print(f"{label}: warm-up on 2 points {time.perf_counter() - t0:.2f} s", flush=True)
 
             def run(model=model, omegas=omegas, H=H, label=label):
                 r = link_sweep(model, omegas, H=H, directions="up").result

@@ -76,6 +76,20 @@ def test_law_force_and_tangent_against_finite_differences():
     )
 
 
+def test_pointwise_force_equals_the_law():
+    """The link's one-instant force and tangent (the time integration's, scalar code) equal
+    the law's sampled force_at / tangent_at to rounding (1e-14), in and out of contact."""
+    rng = np.random.default_rng(0)
+    for c, p in [(20e-6, 1.5), (20e-6, 1.0), (0.0, 1.0), (0.0, 1.5)]:
+        link = BearingClearance("B", 0, 0, clearance=c, stiffness=1e10, exponent=p)
+        law = RadialClearanceLaw(1e10, c, p)
+        for u in rng.standard_normal((100, 2)) * 3e-5:
+            g, T = link.pointwise(u, 0.0)
+            g0, T0 = law.force_at(u[:, None])[:, 0], law.tangent_at(u[:, None])[0]
+            assert np.max(np.abs(g - g0)) <= 1e-14 * max(np.max(np.abs(g0)), 1.0)
+            assert np.max(np.abs(T - T0)) <= 1e-14 * max(np.max(np.abs(T0)), 1.0)
+
+
 def test_aft_jacobian_against_finite_differences():
     """The AFT Jacobian dG/dy (Toeplitz of the tangent's discrete spectrum: the exact
     derivative of the sampled map) equals central differences of the AFT harmonics, on an

@@ -9,10 +9,8 @@ solved at their common period, base 5 Ω), against independent calculations:
   of the assembled model (one sparse LU per harmonic, no reduction);
 - the reduction's analytic frequency derivatives against finite differences.
 
-Not yet here: the harmonic balance against time integration with both meshes losing
-contact (the integration started on the harmonic-balance orbit of the idler train at
-1000 Hz still changes by 3.5e-4 per period after 600 periods: modes with damping ratios
-below 1e-3 decay over hundreds of mesh periods).
+The harmonic balance against time integration with both meshes losing contact is in
+tests/test_link_time_domain.py.
 """
 
 from __future__ import annotations

@@ -128,6 +128,7 @@ def build_link_model(
     plan: FrequencyPlan | None = None,
     unbalance: Sequence[Unbalance] = (),
     gravity: tuple[float, float] | None = None,
+    method: str = "auto",
 ) -> LinkModel:
     """Reduce ``system`` onto its links' coordinates, with unbalance and gravity loads.
 
@@ -149,6 +150,8 @@ def build_link_model(
         Unbalances, each at harmonic |s| Ω of its shaft (s its speed ratio).
     gravity : tuple of float, optional
         Acceleration of gravity (g_y, g_z) on every node [m/s^2], e.g. (-9.81, 0).
+    method : {"auto", "poles", "direct"}
+        How the reduction solves Z_k (:class:`LinkReceptance`).
 
     Returns
     -------
@@ -184,7 +187,9 @@ def build_link_model(
     static = np.zeros(n) if gravity is None else _gravity_force(system, assemble(system).M, gravity)
     for g in system.gear_pairs:
         static = static + g.static_torques(system)
-    rec = LinkReceptance(system, links, plan, static_force=static, harmonic_force=harmonic_force)
+    rec = LinkReceptance(
+        system, links, plan, static_force=static, harmonic_force=harmonic_force, method=method
+    )
     laws = tuple(lk.law(tuple(range(sl.start, sl.stop))) for lk, sl in zip(links, rec.slices, strict=True))
     reduced = ReducedModel(
         kappa=lambda omega, H: rec.terms(omega, H)[0],

@@ -14,9 +14,16 @@ diag(k_j) and F_0 = (Pᵀ K_r⁻¹ P)⁻¹ Pᵀ K_r⁻¹ f_0 (static loads and g
 k_j > 0; rigid-body modes of K_r (a drive line's rotation) are removed by a bordered solve.
 Any DOF follows as Q_k = Z_k⁻¹ (f_k - P G_k) (mean: K_r⁻¹ (f_0 - P (G_0 - diag(k_j) Y_0))).
 
-Z_k is factorised once per harmonic and frequency (exact: dense LU up to
-:data:`DENSE_LIMIT` DOFs, sparse LU above) and the factors are kept, bounded, for the
-recovery of the same point.
+Two ways to solve with Z_k (``method``):
+
+- ``"poles"`` (the default up to :data:`DENSE_LIMIT` DOFs without tabulated bearings or
+  hysteretic damping): Z_k(ω) is a quadratic polynomial in ω, so one eigendecomposition
+  per harmonic gives its pole-residue form (:mod:`nlgrd.nonlinear.pole_residue`) and a
+  point costs a few matrix-vector products; each harmonic is checked against a direct
+  solve at five frequencies and solved directly when the check fails;
+- ``"direct"``: Z_k factorised once per harmonic and frequency (dense LU up to
+  :data:`DENSE_LIMIT` DOFs, sparse LU above), the factors kept, bounded, for the
+  recovery of the same point.
 """
 
 from __future__ import annotations
@@ -35,6 +42,7 @@ from numpy.typing import NDArray
 from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.harmonics import real_to_complex
+from nlgrd.nonlinear.pole_residue import POLE_CHECK_RTOL, PoleResidue
 from nlgrd.nonlinear.state_space import LinearStateSpace
 from nlgrd.rotor.assembly import LinearModel, assemble
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
@@ -164,7 +172,16 @@ class LinkReceptance:
     static_force : ndarray (n_dofs,), optional
         Static loads on the DOFs (gravity, torques) [N, N m].
     harmonic_force : callable (omega, H) -> (H+1, n_dofs) complex, optional
-        Harmonics of the external forces on the DOFs [N].
+        Harmonics of the external forces on the DOFs [N]: a polynomial of degree <= 2 in
+        ω (an unbalance's m e Ω²), for the frequency derivatives.
+    method : {"auto", "poles", "direct"}
+        How Z_k is solved (module docstring); "auto" is "poles" where it applies.
+
+    Attributes
+    ----------
+    pole_check : dict
+        Per harmonic k, the relative difference of the pole-residue receptance from a
+        direct solve (harmonics above :data:`POLE_CHECK_RTOL` are solved directly).
     """
 
     def __init__(
@@ -174,6 +191,7 @@ class LinkReceptance:
         plan: FrequencyPlan,
         static_force: NDArray | None = None,
         harmonic_force: Callable[[float, int], NDArray] | None = None,
+        method: str = "auto",
     ):
         self.system, self.links, self.plan = system, tuple(links), plan
         self.model: LinearModel = assemble(system, mesh_stiffness=False, mesh_damping=False)
@@ -209,6 +227,18 @@ class LinkReceptance:
         check_balanced(self._rigid, self.static_force, "static_force", "the static loads")
         self._factors = BoundedCache(64)
         self._terms = BoundedCache(4096)
+        poles_apply = self._dense and self.has_derivatives
+        if method not in ("auto", "poles", "direct"):
+            raise ModelError("method", f"must be 'auto', 'poles' or 'direct', got {method!r}")
+        if method == "poles" and not poles_apply:
+            raise ModelError(
+                "method", f"'poles' needs at most {DENSE_LIMIT} DOFs, no tabulated bearing or loss factor"
+            )
+        self.method = (
+            "poles" if method == "auto" and poles_apply else ("direct" if method == "auto" else method)
+        )
+        self._poles = BoundedCache(256)
+        self.pole_check: dict[int, float] = {}
 
     @property
     def n_coords(self) -> int:
@@ -236,14 +266,31 @@ class LinkReceptance:
         ndarray (H+1, n_dofs) of complex
             [N, N m].
         """
-        n = self.model.n_dofs
-        f = np.zeros((H + 1, n), dtype=complex)
-        f[0] = self.static_force
+        ext, phi = self._force_parts(omega, H)
+        return ext + phi @ self.P.T
+
+    def _force_parts(self, omega: float, H: int) -> tuple[NDArray, NDArray]:
+        """The forces on the DOFs (static, external) (H+1, n) and the links' own (H+1, d)."""
+        ext = np.zeros((H + 1, self.model.n_dofs), dtype=complex)
+        ext[0] = self.static_force
         if self.harmonic_force is not None:
-            f += np.asarray(self.harmonic_force(omega, H), dtype=complex)
+            ext += np.asarray(self.harmonic_force(omega, H), dtype=complex)
+        phi = np.zeros((H + 1, self.n_coords), dtype=complex)
         for link, sl in zip(self.links, self.slices, strict=True):
-            f += link.forcing(omega, H) @ self.P[:, sl].T
-        return f
+            phi[:, sl] = link.forcing(omega, H)
+        return ext, phi
+
+    def _pole_forces(self, omega: float, H: int) -> NDArray:
+        """L_k f_k (H+1, 2n) for the pole-residue harmonics (row 0 unused): the links' own
+        forces through L_k P, the external ones through the columns of L_k they load."""
+        ext, phi = self._force_parts(omega, H)
+        nz = np.flatnonzero(np.any(ext[1:] != 0, axis=0))
+        out = np.zeros((H + 1, 2 * self.model.n_dofs), dtype=complex)
+        for k in range(1, H + 1):
+            pf = self._pole_form(k)
+            if pf is not None:
+                out[k] = pf[2] @ phi[k] + pf[0].L[:, nz] @ ext[k, nz]
+        return out
 
     def _mean_factor(self, speed: float):
         key = ("mean", float(speed) if self._speed_dependent else 0.0)
@@ -290,6 +337,26 @@ class LinkReceptance:
 
         return self._factors.get(("k", k, float(omega)), make)
 
+    def _pole_form(self, k: int):
+        """(PoleResidue, Pᵀ X_top, L P) of harmonic k, or None (solve directly)."""
+
+        def make():
+            a, s_ = self._mats, self.plan.speed_per_base
+            A = (a["K"], s_ * a["Kc"] + 1j * k * a["C"], -(k * k) * a["M"] + 1j * k * s_ * a["G"])
+            pr = PoleResidue.of(*A)
+            # check across the poles' range: five frequencies log-spaced between the 5th and
+            # the 95th percentile of |λ| (fixed by the model, not by the sweep's order)
+            lo, hi = np.percentile(np.abs(pr.poles[np.abs(pr.poles) > 0]), [5, 95])
+            err = pr.check(*A, self.P, np.geomspace(lo, hi, 5))
+            self.pole_check[k] = err
+            if not err <= POLE_CHECK_RTOL:
+                return None
+            return pr, self.P.T @ pr.X_top, pr.L @ self.P
+
+        if self.method != "poles":
+            return None
+        return self._poles.get(("poles", k), make)
+
     def terms(self, omega: float, H: int) -> tuple[NDArray, NDArray]:
         """κ_k (H+1, d, d) [N/m] and F_k (H+1, d) [N], k = 0..H.
 
@@ -314,7 +381,15 @@ class LinkReceptance:
             hr_inv = np.linalg.inv(self.P.T @ x[:, :d])
             kap[0] = hr_inv - self.k_link
             frc[0] = hr_inv @ (self.P.T @ x[:, d])
+            Lf = self._pole_forces(omega, H) if self.method == "poles" else None
             for k in range(1, H + 1):
+                pf = self._pole_form(k)
+                if pf is not None:
+                    pr, CP, LP = pf
+                    w = pr.weights(omega)
+                    kap[k] = np.linalg.inv(CP @ (w[:, None] * LP))
+                    frc[k] = kap[k] @ (CP @ (w * Lf[k]))
+                    continue
                 u = self._factor(k, omega).solve(np.column_stack([self.P.astype(complex), f[k]]))
                 kap[k] = np.linalg.inv(self.P.T @ u[:, :d])
                 frc[k] = kap[k] @ (self.P.T @ u[:, d])
@@ -333,9 +408,10 @@ class LinkReceptance:
         With h_k = Pᵀ Z_k⁻¹ P: dκ_k = κ_k Pᵀ Z_k⁻¹ Z_k' Z_k⁻¹ P κ_k and, with
         u_k = Z_k⁻¹ f_k, dF_k = dκ_k Pᵀ u_k + κ_k Pᵀ Z_k⁻¹ (f_k' - Z_k' u_k), where
         Z_k' = s K_c - 2 k² ω M + i k (C + Ω G) + i k ω s G (Ω = s ω the shaft speed).
-        It reuses the factors of :meth:`terms` (no new factorisation); f_k' by central
-        differences of the forces (no solve). κ_0 and F_0 do not depend on ω unless the
-        stiffness does on the speed (then by central differences).
+        It reuses the factors of :meth:`terms` (no new factorisation), or differentiates
+        the pole-residue form; f_k' by a central difference of the forces (exact for their
+        degree <= 2 in ω). κ_0 and F_0 do not depend on ω unless the stiffness does on the
+        speed (then by central differences).
 
         Parameters
         ----------
@@ -355,8 +431,16 @@ class LinkReceptance:
             kap, _ = self.terms(omega, H)
             m = self.model
             h = 1e-6 * max(abs(omega), 1.0)
-            df = (self.forces(omega + h, H) - self.forces(omega - h, H)) / (2 * h)
-            f = self.forces(omega, H)
+            # the forces are polynomials of degree <= 2 in ω (the links' own ∝ ω, unbalance
+            # ∝ ω²): a central difference with a wide step is exact but for rounding
+            hf = 1e-3 * max(abs(omega), 1.0)
+            poles = self.method == "poles"
+            if poles:
+                Lf_all = self._pole_forces(omega, H)
+                dLf_all = (self._pole_forces(omega + hf, H) - self._pole_forces(omega - hf, H)) / (2 * hf)
+            if not poles or any(self._pole_form(k) is None for k in range(1, H + 1)):
+                df = (self.forces(omega + hf, H) - self.forces(omega - hf, H)) / (2 * hf)
+                f = self.forces(omega, H)
             dkap = np.zeros((H + 1, d, d), dtype=complex)
             dfrc = np.zeros((H + 1, d), dtype=complex)
             if self._speed_dependent:
@@ -368,8 +452,19 @@ class LinkReceptance:
             else:
                 Kc, M, G = m.Kc, m.M, m.G
                 C = (m.C + m.Ci + self.C_link).tocsc()
-            A, B = -2 * omega * M, 1j * (C + speed * G) + 1j * omega * s_ * G
+            A = B = None
             for k in range(1, H + 1):
+                pf = self._pole_form(k)
+                if pf is not None:  # d/dω of 1 / (ω - λ) is -1 / (ω - λ)²
+                    pr, CP, LP = pf
+                    w = pr.weights(omega)
+                    Lf = Lf_all[k]
+                    dkap[k] = kap[k] @ (CP @ ((w * w)[:, None] * LP)) @ kap[k]
+                    du = CP @ (w * dLf_all[k] - w * w * Lf)
+                    dfrc[k] = dkap[k] @ (CP @ (w * Lf)) + kap[k] @ du
+                    continue
+                if A is None:
+                    A, B = -2 * omega * M, 1j * (C + speed * G) + 1j * omega * s_ * G
                 dZ = s_ * Kc + (k * k) * A + k * B
                 lu = self._factor(k, omega)
                 u = lu.solve(np.column_stack([self.P.astype(complex), f[k]]))
@@ -411,7 +506,11 @@ class LinkReceptance:
         rhs0 = f[0].real - self.P @ (G[0].real - self.k_link @ Y[0].real)
         out[0] = self.mean_solve(speed, rhs0[:, None])[dofs, 0]
         for k in range(1, H + 1):
-            out[k] = self._factor(k, omega).solve(f[k] - self.P @ G[k])[dofs]
+            pf = self._pole_form(k)
+            rhs = f[k] - self.P @ G[k]
+            out[k] = (
+                pf[0].solve(omega, rhs, dofs) if pf is not None else self._factor(k, omega).solve(rhs)[dofs]
+            )
         real = np.empty((dofs.size, 2 * H + 1))
         real[:, 0] = out[0].real
         real[:, 1::2], real[:, 2::2] = out[1:].real.T, -out[1:].imag.T

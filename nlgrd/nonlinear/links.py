@@ -23,6 +23,7 @@ The gear mesh with backlash (:class:`GearMeshLink`) and the bearing with radial 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Protocol, runtime_checkable
@@ -30,9 +31,9 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
+from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError, check_positive
 from nlgrd.nonlinear.clearance import RadialClearanceLaw
-from nlgrd.nonlinear.describing_functions import deadzone
 from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonics import evaluate, real_to_complex, sample
 from nlgrd.nonlinear.metrics import metrics_from_harmonics
@@ -195,8 +196,18 @@ class BearingClearance:
         tuple of ndarray
             g (2,) [N] and ∂g/∂y (2, 2) [N/m].
         """
-        u = np.asarray(y, dtype=float).reshape(2, 1)
-        return self._law.force_at(u)[:, 0], self._law.tangent_at(u)[0]
+        uy, uz = (float(v) for v in np.asarray(y, dtype=float).reshape(2))
+        k, c, p = self.stiffness, self.clearance, self.exponent
+        if c == 0 and p == 1.0:
+            return np.array([k * uy, k * uz]), k * np.eye(2)
+        r = math.hypot(uy, uz)
+        if r <= c:  # inside the clearance (the laws' force_at and tangent_at, one sample)
+            return np.zeros(2), np.zeros((2, 2))
+        pen = r - c
+        ny, nz = uy / r, uz / r
+        radial, hoop = k * p * pen ** (p - 1.0), k * pen**p / r
+        nn = np.array([[ny * ny, ny * nz], [ny * nz, nz * nz]])
+        return np.array([hoop * uy, hoop * uz]), radial * nn + hoop * (np.eye(2) - nn)
 
     def linear_stiffness(self) -> NDArray:
         """k I for a linear contact; for Hertz the tangent at a penetration of one clearance
@@ -393,10 +404,16 @@ class GearMeshLink:
         tuple of ndarray
             g (1,) [N] and ∂g/∂δ (1, 1) [N/m].
         """
-        x = float(np.asarray(y).reshape(-1)[0]) - float(evaluate(self.mesh.lste, np.array([theta]))[0])
-        b = self.mesh.half_backlash
-        g = self.mesh.stiffness * float(deadzone(np.array([x]), b)[0])
-        return np.array([g]), np.array([[self.mesh.stiffness * float(abs(x) > b)]])
+        e = self._lste_at.get((float(theta),), lambda: float(evaluate(self.mesh.lste, np.array([theta]))[0]))
+        x = float(np.asarray(y).reshape(-1)[0]) - e
+        b, k = self.mesh.half_backlash, self.mesh.stiffness
+        g = k * (x - b) if x > b else (k * (x + b) if x < -b else 0.0)  # the dead zone
+        return np.array([g]), np.array([[k if abs(x) > b else 0.0]])
+
+    @cached_property
+    def _lste_at(self) -> BoundedCache:
+        """e(θ) at the angles of a time integration's steps (they repeat every period)."""
+        return BoundedCache(16384)
 
     def linear_stiffness(self) -> NDArray:
         """k_h, (1, 1) [N/m].

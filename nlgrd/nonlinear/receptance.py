@@ -54,6 +54,7 @@ from numpy.typing import NDArray
 from scipy.sparse.csgraph import connected_components
 
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.pole_residue import POLE_CHECK_RTOL, PoleResidue
 from nlgrd.rotor.assembly import LinearModel, assemble, mesh_matrix
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
 from nlgrd.rotor.system import RotorSystem
@@ -64,8 +65,8 @@ DIRECT_LIMIT = 3000
 MODE_CAP = 400
 STABILITY_MODE_CAP = 300
 #: Pole-residue receptances are checked against a direct solve of the reduced Z_k at one
-#: frequency per harmonic; above this relative difference the harmonic falls back to it.
-POLE_CHECK_RTOL = 1e-8
+#: frequency per harmonic; above POLE_CHECK_RTOL (nlgrd.nonlinear.pole_residue) the
+#: harmonic falls back to it.
 
 
 class ModeCapWarning(UserWarning):
@@ -359,9 +360,9 @@ class MeshReceptance:
     def _pole_residues(self, k: int) -> tuple[NDArray, NDArray, NDArray, NDArray] | None:
         """Poles λ_j and residue factors of harmonic k in the modal basis (see module docstring).
 
-        Returns (λ (2m,), Wᵀ X (n_nl, 2m), X at the output DOFs (n_out, 2m), X⁻¹ b (2m, n_nl)),
-        X the eigenvectors of the companion matrix [[0, I], [-A_2⁻¹A_0, -A_2⁻¹A_1]] and
-        b = [0; A_2⁻¹ Wᵣ], so that Z_k(ω)⁻¹ Wᵣ = X_top diag(1 / (ω - λ)) X⁻¹ b. None when
+        Returns (λ (2m,), Wᵀ X_top (n_nl, 2m), X_top at the output DOFs (n_out, 2m),
+        L Wᵣ (2m, n_nl)) of :class:`~nlgrd.nonlinear.pole_residue.PoleResidue`, so that
+        Z_k(ω)⁻¹ Wᵣ = X_top diag(1 / (ω - λ)) L Wᵣ. None when
         the a-posteriori check against a direct solve fails (relative difference in
         :attr:`pole_check` above :data:`POLE_CHECK_RTOL`): the caller then solves directly.
         """
@@ -375,21 +376,9 @@ class MeshReceptance:
             A0 = A0 + 1j * (s1 - s2) / 2 * Kb - (s1 + s2) / 2 * Kx
         A1 = s * r["Kc"] + 1j * k * r["C"]
         A2 = -(k**2) * r["M"] + 1j * k * s * r["G"]
-        # scaled frequency ω = γ μ balances the companion matrix (Fan, Lin & Van Dooren 2004,
-        # SIAM J. Matrix Anal. Appl. 26:252): the eigenvectors are ~1e3x better conditioned here
-        g = np.sqrt(np.linalg.norm(A0) / np.linalg.norm(A2))
-        A1, A2 = g * A1, g * g * A2
-        m = A0.shape[0]
-        lu = sla.lu_factor(A2)
-        comp = np.zeros((2 * m, 2 * m), dtype=complex)
-        comp[:m, m:] = np.eye(m)
-        comp[m:, :m] = -sla.lu_solve(lu, A0)
-        comp[m:, m:] = -sla.lu_solve(lu, A1)
-        mu, X = sla.eig(comp, overwrite_a=True, check_finite=False)
-        b = np.zeros((2 * m, self.n_coords), dtype=complex)
-        b[m:] = sla.lu_solve(lu, self._W_red.astype(complex))
-        Y = g * sla.solve(X, b)  # 1 / (μ - μ_j) = γ / (ω - γ μ_j)
-        out = (g * mu, self._W_red.T @ X[:m], self.basis[self.output_dofs] @ X[:m], Y)
+        pr = PoleResidue.of(A0, A1, A2)  # the companion eigenproblem, scaled
+        Xt = pr.X_top
+        out = (pr.poles, self._W_red.T @ Xt, self.basis[self.output_dofs] @ Xt, pr.L @ self._W_red)
         # a posteriori: against a direct solve at one frequency (kω at 0.618 of the basis range)
         wc = 0.6180339887 * self.max_frequency / k
         h_pr = out[1] @ (out[3] / (wc - out[0])[:, None])
