@@ -1,9 +1,9 @@
 """Per-point cost of geared link models (issue 11): one mesh on the link path against the
 single-mesh mesh-receptance path, a mesh with a bearing clearance, two meshes.
 
-Run from the repository root::
+Run from the repository root (``--evaluations``: only the per-evaluation timing)::
 
-    .venv/bin/python benchmarks/bench_geared_links.py
+    .venv/bin/python benchmarks/bench_geared_links.py [--evaluations]
 
 Up sweeps with Floquet stability, one BLAS thread, fixed H, the same grid for the two
 paths of the single mesh (data/models/two_shaft.toml, 132 DOFs, H = 9, mesh frequency
@@ -40,6 +40,35 @@ def _timed(label: str, run, n: int) -> None:
     ok = run()
     per = 1e3 * (time.perf_counter() - t0) / n
     print(f"{label}: {per:.1f} ms per point ({ok}/{n} stable)", flush=True)
+
+
+def evaluations() -> None:
+    """Per evaluation of κ_k, F_k and their ω-derivatives, pole-residue against direct LU."""
+    from nlgrd.nonlinear.link_reduction import LinkReceptance
+
+    for name, H in (("idler_train", 9), ("two_stage", 45)):
+        system = load_model(MODELS / f"{name}.toml")
+        rec = build_link_model(system).receptance
+        direct = LinkReceptance(
+            system, rec.links, rec.plan, rec.static_force, rec.harmonic_force, method="direct"
+        )
+        t0 = time.perf_counter()
+        rec.terms(2 * np.pi * 100.0, H)
+        setup = time.perf_counter() - t0
+        times = {"poles": [], "direct": []}
+        for f in (200.0, 777.0, 1000.0, 1500.0, 3000.0):
+            w = 2 * np.pi * f / (5 if name == "two_stage" else 1)
+            for label, r in (("poles", rec), ("direct", direct)):
+                t0 = time.perf_counter()
+                r.terms(w, H)
+                r.derivatives(w, H)
+                times[label].append(1e3 * (time.perf_counter() - t0))
+        print(
+            f"{name}, H = {H}: set-up {setup:.1f} s; per evaluation poles "
+            f"{min(times['poles']):.1f}-{max(times['poles']):.1f} ms, direct "
+            f"{min(times['direct']):.1f}-{max(times['direct']):.1f} ms",
+            flush=True,
+        )
 
 
 def main() -> None:
@@ -90,4 +119,9 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    with threadpool_limits(1):
+        evaluations()
+    if "--evaluations" not in sys.argv:
+        main()
