@@ -112,6 +112,35 @@ class PoleResidue:
         y = self.L @ rhs
         return Xt @ (w[:, None] * y if y.ndim == 2 else w * y)
 
+    def check_frequencies(self, count: int = 5) -> NDArray:
+        """Frequencies for :meth:`check` across the poles' range, each midway (in log)
+        between the two pole moduli around it: ``count`` targets log-spaced from the 5th to
+        the 95th percentile of |λ|, moved off the poles (an undamped pole on the real axis
+        makes Z singular there). Fixed by the model, not by the order of a sweep.
+
+        Parameters
+        ----------
+        count : int
+            Number of targets [-].
+
+        Returns
+        -------
+        ndarray
+            Distinct frequencies [rad/s].
+        """
+        mods = np.sort(np.abs(self.poles))
+        mods = mods[mods > 1e-12 * mods[-1]]
+        distinct = [mods[0]]
+        for v in mods[1:]:  # ±λ of an undamped pair share a modulus
+            if v > distinct[-1] * (1 + 1e-6):
+                distinct.append(v)
+        d = np.array(distinct)
+        if d.size < 2:
+            return np.array([2.0 * d[0]])
+        targets = np.geomspace(*np.percentile(d, [5, 95]), count)
+        i = np.clip(np.searchsorted(d, targets), 1, d.size - 1)
+        return np.unique(np.sqrt(d[i - 1] * d[i]))
+
     def check(self, A0: NDArray, A1: NDArray, A2: NDArray, P: NDArray, omegas) -> float:
         """Largest relative difference of Pᵀ Z⁻¹ P from a direct solve at ``omegas``.
 
@@ -132,6 +161,9 @@ class PoleResidue:
         LP, CP = self.L @ P, P.T @ self.X_top
         for w in omegas:
             h = CP @ (self.weights(w)[:, None] * LP)
-            hd = P.T @ np.linalg.solve(A0 + w * A1 + w * w * A2, P.astype(complex))
+            try:
+                hd = P.T @ np.linalg.solve(A0 + w * A1 + w * w * A2, P.astype(complex))
+            except np.linalg.LinAlgError:
+                return np.inf
             err = max(err, float(np.linalg.norm(h - hd) / np.linalg.norm(hd)))
         return err
