@@ -17,7 +17,10 @@ FIRST = (
     "test_geared_time_domain",
     "test_reports",
     "test_geared_time_domain_regimes",
+    "test_two_stage_time_domain",
+    "test_geared_clearance_time_domain",
     "test_outputs",
+    "test_link_time_domain",
 )
 
 
