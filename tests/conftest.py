@@ -14,13 +14,13 @@ signal.signal(signal.SIGINT, signal.default_int_handler)
 #: in after them, instead of two long files ending the run on their own.
 FIRST = (
     "test_notebooks",
+    "test_two_stage_time_domain",
     "test_geared_time_domain",
+    "test_geared_clearance_time_domain",
     "test_reports",
     "test_geared_time_domain_regimes",
-    "test_two_stage_time_domain",
-    "test_geared_clearance_time_domain",
-    "test_outputs",
     "test_link_time_domain",
+    "test_outputs",
 )
 
 
