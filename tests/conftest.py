@@ -21,6 +21,7 @@ FIRST = (
     "test_geared_time_domain_regimes",
     "test_link_time_domain",
     "test_outputs",
+    "test_jeffcott_jumps",
 )
 
 
