@@ -118,10 +118,61 @@ def main() -> None:
     print(f"single mesh, the two paths' harmonics differ by {diff:.1e} of their largest", flush=True)
 
 
+def _clearance_model(system):
+    """``system`` with the pinion's free-end bearing replaced by a 20 µm Hertzian clearance."""
+    node = system.bearings[1].node
+    return dataclasses.replace(
+        system,
+        bearings=tuple(b for i, b in enumerate(system.bearings) if i != 1),
+        bearing_clearances=(BearingClearance("B1", 0, node, 20e-6, 1e10, exponent=1.5, damping=1e3),),
+    )
+
+
+def scaling(factors=(1, 8, 25, 83)) -> None:
+    """Per-point cost against model size: two_shaft.toml with every element split in
+    ``factors`` (132 to 9 972 DOFs), one mesh (with and without stability) and mesh +
+    clearance, the default method (pole-residue up to 300 DOFs, modal basis above) and,
+    at the smallest size, the modal basis too. Set-up (basis, pole-residue forms, mean
+    factor, two warm-up points) timed apart."""
+    from nlgrd.rotor.system import refined
+
+    two = load_model(MODELS / "two_shaft.toml")
+    grid = 2 * np.pi * np.linspace(1000.0, 1700.0, 15)
+    H = 9
+    cases = (("1 mesh", two, True), ("1 mesh", two, False), ("mesh + clearance", _clearance_model(two), True))
+    for factor in factors:
+        for label, base, stability in cases:
+            system = refined(base, factor)
+            for method in ("auto", "modal") if system.n_dofs <= 300 else ("auto",):
+                t0 = time.perf_counter()
+                model = build_link_model(system, method=method, max_frequency=H * grid[-1])
+                link_sweep(model, grid[:2], H=H, directions="up", stability=stability)
+                setup = time.perf_counter() - t0
+                t0 = time.perf_counter()
+                r = link_sweep(model, grid, H=H, directions="up", stability=stability).result
+                per = 1e3 * (time.perf_counter() - t0) / grid.size
+                rec = model.receptance
+                basis = (
+                    ""
+                    if rec.basis is None
+                    else f", basis {rec.basis.shape[1]} / {rec._stability[1].shape[0]}"
+                )
+                ok = int(np.sum(r.converged & (r.stable.astype(bool) | (not stability))))
+                print(
+                    f"{system.n_dofs} DOFs, {label}, stability {stability}, {method} ({rec.method}{basis}): "
+                    f"set-up {setup:.2f} s, {per:.1f} ms per point ({ok}/{grid.size} converged"
+                    f"{' and stable' if stability else ''})",
+                    flush=True,
+                )
+
+
 if __name__ == "__main__":
     import sys
 
     with threadpool_limits(1):
-        evaluations()
-    if "--evaluations" not in sys.argv:
-        main()
+        if "--scaling" in sys.argv:
+            scaling()
+        else:
+            evaluations()
+            if "--evaluations" not in sys.argv:
+                main()

@@ -72,6 +72,7 @@ import nlgrd.nonlinear.sweep as nl_sweep
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode, geared_sweep
 from nlgrd.nonlinear.state_space import LinearStateSpace
+from nlgrd.rotor.system import refined
 from nlgrd.timedomain.geared import time_response
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -176,41 +177,14 @@ BLAS = _Blas()
 
 
 def refine(system, factor: int, damping_ratio: float | None = None):
-    """``system`` with every shaft element split into ``factor`` equal elements.
-
-    Node indices of disks, bearings, couplings and gear pairs are mapped n -> factor n,
-    so every part stays where it was; the gear pair is kept (its mesh damping ratio
-    replaced when ``damping_ratio`` is given).
-    """
-    f = int(factor)
-    rep = dataclasses.replace
-
-    def node(n):
-        return None if n is None else n * f
-
-    shafts = tuple(
-        rep(s, elements=tuple(rep(e, length=e.length / f) for e in s.elements for _ in range(f)))
-        for s in system.shafts
-    )
-    gears = []
-    for g in system.gear_pairs:
-        kw = {
-            "pinion_node": node(g.pinion_node),
-            "gear_node": node(g.gear_node),
-            "input_node": node(g.input_node),
-            "output_node": node(g.output_node),
-        }
-        if damping_ratio is not None:
-            kw["damping_ratio"] = float(damping_ratio)
-        gears.append(rep(g, **kw))
-    return rep(
-        system,
-        shafts=shafts,
-        disks=tuple(rep(d, node=node(d.node)) for d in system.disks),
-        bearings=tuple(rep(b, node=node(b.node)) for b in system.bearings),
-        couplings=tuple(rep(c, node_a=node(c.node_a), node_b=node(c.node_b)) for c in system.couplings),
-        gear_pairs=tuple(gears),
-    )
+    """``system`` with every shaft element split into ``factor`` equal elements
+    (:func:`nlgrd.rotor.system.refined`), the gear pairs' mesh damping ratio replaced
+    when ``damping_ratio`` is given."""
+    out = refined(system, factor)
+    if damping_ratio is None:
+        return out
+    gears = tuple(dataclasses.replace(g, damping_ratio=float(damping_ratio)) for g in out.gear_pairs)
+    return dataclasses.replace(out, gear_pairs=gears)
 
 
 # --------------------------------------------------------------------------------------

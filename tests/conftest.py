@@ -20,6 +20,7 @@ FIRST = (
     "test_reports",
     "test_geared_time_domain_regimes",
     "test_link_time_domain",
+    "test_link_modal",
     "test_outputs",
     "test_jeffcott_jumps",
 )

@@ -42,6 +42,7 @@ import numpy as np
 from nlgrd import Bearing, Disk, Material, RotorSystem, Shaft
 from nlgrd.io.model_file import load_model
 from nlgrd.rotor.modal import modal_analysis
+from nlgrd.rotor.system import refined
 
 ROOT = Path(__file__).resolve().parents[1]
 STEEL = Material("steel", density=7850.0, young_modulus=2.1e11, poisson_ratio=0.3)
@@ -56,44 +57,16 @@ RESOLVED = 1e-7
 
 
 def refine(system: RotorSystem, factor: int, mass_matrix: str | None = None) -> RotorSystem:
-    """``system`` with every shaft element split into ``factor`` equal elements.
-
-    As ``benchmarks/bench_nonlinear.py`` ``refine``: node n -> factor n for disks,
-    bearings, couplings and gear pairs. ``mass_matrix`` sets every element's formulation.
-    """
-    f = int(factor)
+    """``system`` with every shaft element split into ``factor`` equal elements
+    (:func:`nlgrd.rotor.system.refined`); ``mass_matrix`` sets every element's formulation."""
+    out = refined(system, factor)
+    if mass_matrix is None:
+        return out
     rep = dataclasses.replace
-
-    def node(n):
-        return None if n is None else n * f
-
-    def element(e):
-        kw = {"length": e.length / f}
-        if mass_matrix is not None:
-            kw["mass_matrix"] = mass_matrix
-        return rep(e, **kw)
-
     shafts = tuple(
-        rep(s, elements=tuple(element(e) for e in s.elements for _ in range(f))) for s in system.shafts
+        rep(s, elements=tuple(rep(e, mass_matrix=mass_matrix) for e in s.elements)) for s in out.shafts
     )
-    gears = tuple(
-        rep(
-            g,
-            pinion_node=node(g.pinion_node),
-            gear_node=node(g.gear_node),
-            input_node=node(g.input_node),
-            output_node=node(g.output_node),
-        )
-        for g in system.gear_pairs
-    )
-    return rep(
-        system,
-        shafts=shafts,
-        disks=tuple(rep(d, node=node(d.node)) for d in system.disks),
-        bearings=tuple(rep(b, node=node(b.node)) for b in system.bearings),
-        couplings=tuple(rep(c, node_a=node(c.node_a), node_b=node(c.node_b)) for c in system.couplings),
-        gear_pairs=gears,
-    )
+    return rep(out, shafts=shafts)
 
 
 # --------------------------------------------------------------------------------------

@@ -208,7 +208,8 @@ def test_link_reduction_of_a_gear_mesh_equals_the_mesh_receptance():
     from pathlib import Path
 
     from nlgrd.io.model_file import load_model
-    from nlgrd.nonlinear.link_reduction import FrequencyPlan, LinkReceptance
+    from nlgrd.nonlinear.frequency_plan import FrequencyPlan
+    from nlgrd.nonlinear.link_reduction import LinkReceptance
     from nlgrd.nonlinear.links import GearMeshLink
     from nlgrd.nonlinear.receptance import MeshReceptance
 

@@ -22,7 +22,8 @@ from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.continuation import continuation
 from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode, geared_sweep
-from nlgrd.nonlinear.receptance import MeshReceptance, ModeCapWarning, _lowest_modes
+from nlgrd.nonlinear.modal_basis import ModeCapWarning, lowest_modes
+from nlgrd.nonlinear.receptance import MeshReceptance
 from nlgrd.nonlinear.sdof import SDOFGearPair
 from nlgrd.nonlinear.sweep import sweep
 
@@ -175,7 +176,7 @@ def test_mode_basis_cap_is_reported():
 
     K, M = sp.csc_matrix(k), sp.identity(n, format="csc")
     with pytest.warns(ModeCapWarning, match="cap 8"):
-        lam, _ = _lowest_modes(K, M, cutoff=1e9, start=4, cap=8, what="test basis")
+        lam, _ = lowest_modes(K, M, cutoff=1e9, start=4, cap=8, what="test basis")
     assert lam.size >= 8
 
 

@@ -14,10 +14,11 @@ stiffness is
 
     ∂f/∂u = k [ p (r - c)^(p-1) r̂ r̂ᵀ + ((r - c)^p / r) (I - r̂ r̂ᵀ) ],   r̂ = u / r,
 
-continuous at r = c for p >= 1. The law is smooth inside each contact state but not
-piecewise linear, so its harmonics and their Jacobian come from alternating
-frequency-time sampling (AFT, Cameron & Griffin 1989, J. Appl. Mech. 56:149): sample u
-on ``n_samples`` points of the period, evaluate f and ∂f/∂u, transform back.
+continuous at r = c for p > 1 (for p = 1 the radial tangent steps from 0 to k there).
+The law is smooth inside each contact state but not piecewise linear, so its harmonics
+and their Jacobian come from alternating frequency-time sampling (AFT, Cameron &
+Griffin 1989, J. Appl. Mech. 56:149): sample u on ``n_samples`` points of the period,
+evaluate f and ∂f/∂u, transform back.
 """
 
 from __future__ import annotations

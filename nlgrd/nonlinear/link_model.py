@@ -17,8 +17,9 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
-from nlgrd.nonlinear.link_reduction import FrequencyPlan, LinkReceptance
+from nlgrd.nonlinear.link_reduction import LinkReceptance
 from nlgrd.nonlinear.links import GearMeshLink
 from nlgrd.nonlinear.results import SweepResult
 from nlgrd.nonlinear.sweep import sweep
@@ -129,6 +130,7 @@ def build_link_model(
     unbalance: Sequence[Unbalance] = (),
     gravity: tuple[float, float] | None = None,
     method: str = "auto",
+    max_frequency: float | None = None,
 ) -> LinkModel:
     """Reduce ``system`` onto its links' coordinates, with unbalance and gravity loads.
 
@@ -150,8 +152,11 @@ def build_link_model(
         Unbalances, each at harmonic |s| Ω of its shaft (s its speed ratio).
     gravity : tuple of float, optional
         Acceleration of gravity (g_y, g_z) on every node [m/s^2], e.g. (-9.81, 0).
-    method : {"auto", "poles", "direct"}
+    method : {"auto", "poles", "direct", "modal"}
         How the reduction solves Z_k (:class:`LinkReceptance`).
+    max_frequency : float, optional
+        Highest excitation frequency for a modal basis [rad/s]; by default
+        :func:`link_sweep` sets it from its frequencies and H.
 
     Returns
     -------
@@ -188,7 +193,14 @@ def build_link_model(
     for g in system.gear_pairs:
         static = static + g.static_torques(system)
     rec = LinkReceptance(
-        system, links, plan, static_force=static, harmonic_force=harmonic_force, method=method
+        system,
+        links,
+        plan,
+        static_force=static,
+        harmonic_force=harmonic_force,
+        method=method,
+        max_frequency=max_frequency,
+        force_dofs=[i for iy, iz, *_ in unb for i in (iy, iz)],
     )
     laws = tuple(lk.law(tuple(range(sl.start, sl.stop))) for lk, sl in zip(links, rec.slices, strict=True))
     reduced = ReducedModel(
@@ -230,6 +242,31 @@ class LinkSweepResult:
         frame = frame.drop(columns=drop).rename(columns={"mesh_frequency [Hz]": "base_frequency [Hz]"})
         return pd.concat([frame, self.links], axis=1)
 
+    def jumps(self, quantities: str | Sequence[str] | None = None, rtol: float = 0.1, ratio: float = 3.0):
+        """Jumps of each sweep direction in the links' outputs (:meth:`SweepResult.jumps`
+        on the columns of :attr:`links`).
+
+        Parameters
+        ----------
+        quantities : str or sequence of str, optional
+            ``<link>.<quantity>`` columns; default every column.
+        rtol, ratio : float
+            As :func:`nlgrd.nonlinear.results.find_jumps` [-].
+
+        Returns
+        -------
+        list of Jump
+        """
+        if quantities is None:
+            quantities = list(self.links.columns)
+        qs = [quantities] if isinstance(quantities, str) else list(quantities)
+        for q in qs:
+            if q not in self.links.columns:
+                raise ModelError(
+                    "quantities", f"no link output {q!r}; the columns are {list(self.links.columns)}"
+                )
+        return self.result.jumps_of({q: self.links[q].to_numpy() for q in qs}, rtol, ratio)
+
 
 def metric_names(link) -> list[str]:
     """The names (with units) of a link's per-point outputs, in its ``metrics`` order.
@@ -267,6 +304,9 @@ def link_sweep(model: LinkModel, omegas: NDArray, H: int = 9, **options) -> Link
     """
     options.setdefault("stability", True)
     options.setdefault("jump", "auto")
+    omegas = np.asarray(omegas, dtype=float)
+    if omegas.size:  # a modal basis (large models) serves H x the highest frequency
+        model.receptance.prepare(H * float(np.max(np.abs(omegas))))
     res = sweep(model.reduced, np.asarray(omegas, dtype=float), H, mesh=None, **options)
     rows = []
     for i in range(len(res)):

@@ -14,13 +14,17 @@ diag(k_j) and F_0 = (Pᵀ K_r⁻¹ P)⁻¹ Pᵀ K_r⁻¹ f_0 (static loads and g
 k_j > 0; rigid-body modes of K_r (a drive line's rotation) are removed by a bordered solve.
 Any DOF follows as Q_k = Z_k⁻¹ (f_k - P G_k) (mean: K_r⁻¹ (f_0 - P (G_0 - diag(k_j) Y_0))).
 
-Two ways to solve with Z_k (``method``):
+Three ways to solve with Z_k (``method``):
 
 - ``"poles"`` (the default up to :data:`DENSE_LIMIT` DOFs without tabulated bearings or
   hysteretic damping): Z_k(ω) is a quadratic polynomial in ω, so one eigendecomposition
   per harmonic gives its pole-residue form (:mod:`nlgrd.nonlinear.pole_residue`) and a
   point costs a few matrix-vector products; each harmonic is checked against a direct
   solve at five frequencies and solved directly when the check fails;
+- ``"modal"`` (the default above it): the same on a Galerkin basis of modes and static
+  and dynamic attachment vectors (:mod:`nlgrd.nonlinear.modal_basis`), M-orthonormal,
+  checked against full sparse solves (:data:`MODAL_CHECK_RTOL`): a point's cost does
+  not grow with the model; the mean problem stays exact;
 - ``"direct"``: Z_k factorised once per harmonic and frequency (dense LU up to
   :data:`DENSE_LIMIT` DOFs, sparse LU above), the factors kept, bounded, for the
   recovery of the same point.
@@ -28,11 +32,9 @@ Two ways to solve with Z_k (``method``):
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from fractions import Fraction
 
 import numpy as np
 import scipy.linalg as sla
@@ -42,7 +44,9 @@ from numpy.typing import NDArray
 
 from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.harmonics import real_to_complex
+from nlgrd.nonlinear.modal_basis import ModeCapWarning, attachment_basis, m_orthonormal, rigid_decoupled
 from nlgrd.nonlinear.pole_residue import POLE_CHECK_RTOL, PoleResidue
 from nlgrd.nonlinear.state_space import LinearStateSpace
 from nlgrd.rotor.assembly import LinearModel, assemble
@@ -53,6 +57,12 @@ from nlgrd.rotor.system import RotorSystem
 DENSE_STABILITY_LIMIT = 600
 #: Up to this many DOFs Z_k is factorised as a dense matrix (faster than sparse LU there).
 DENSE_LIMIT = 300
+#: Dynamic attachment vectors of the modal basis: at j / ATTACHMENT_POINTS of the highest
+#: excitation frequency, j = 1.. (a rational Krylov space: the receptance error falls from
+#: 1e-2 with 3 points to 1e-7 with 32 on two_shaft.toml at 492 DOFs).
+ATTACHMENT_POINTS = 32
+#: A modal basis whose receptances differ from direct solves by more than this warns.
+MODAL_CHECK_RTOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -61,101 +71,6 @@ class _DenseLU:
 
     def solve(self, rhs: NDArray) -> NDArray:
         return sla.lu_solve(self.factors, rhs, check_finite=False)
-
-
-@dataclass(frozen=True)
-class FrequencyPlan:
-    """How the harmonic-balance base frequency ω relates to the shaft speed.
-
-    Every excitation sits at an integer harmonic of the base: an unbalance on a shaft of
-    speed ratio s at |s| Ω, the mesh of a pinion with N_p teeth on a shaft of ratio s_p at
-    N_p |s_p| Ω (Ω the reference shaft speed). :meth:`for_system` chooses the longest
-    base that makes all of them harmonics: the mesh frequency for one mesh or an idler
-    train, their greatest common divisor for a multi-stage train.
-
-    Parameters
-    ----------
-    speed_per_base : float
-        Reference shaft speed Ω per unit base frequency, Ω = ``speed_per_base`` ω [-]: 1
-        when the base is the shaft speed, 1 / (N_p |s_p|) when it is the mesh frequency.
-    name : str
-        "shaft", "mesh" or "common" (a common divisor of several mesh frequencies).
-    """
-
-    speed_per_base: float = 1.0
-    name: str = "shaft"
-
-    def speed(self, omega: float) -> float:
-        """Reference shaft speed [rad/s] at base frequency ``omega`` [rad/s].
-
-        Parameters
-        ----------
-        omega : float
-            Base frequency [rad/s].
-
-        Returns
-        -------
-        float
-        """
-        return float(omega) * self.speed_per_base
-
-    def order(self, shaft_order: float, what: str = "excitation") -> int:
-        """The harmonic of the base at which an excitation of ``shaft_order`` Ω sits.
-
-        Parameters
-        ----------
-        shaft_order : float
-            Its frequency per unit reference shaft speed [-].
-        what : str
-            Named in the error when it is not a harmonic.
-
-        Returns
-        -------
-        int
-        """
-        m = abs(float(shaft_order) * self.speed_per_base)
-        r = round(m)
-        if r < 1 or abs(m - r) > 1e-9 * m:
-            raise ModelError(
-                "plan",
-                f"{what} at {abs(shaft_order):.6g} x the shaft speed is not a harmonic of the "
-                f"base frequency ({1 / abs(self.speed_per_base):.6g} x the shaft speed)",
-            )
-        return int(r)
-
-    @classmethod
-    def for_system(cls, system: RotorSystem, shaft_orders: Sequence[float] = ()) -> FrequencyPlan:
-        """The longest base making every mesh and every ``shaft_orders`` a harmonic.
-
-        Parameters
-        ----------
-        system : RotorSystem
-            Its gear pairs' mesh orders N_p |s_p| count.
-        shaft_orders : sequence of float
-            Further excitations, e.g. |s| of a shaft with unbalance [-].
-
-        Returns
-        -------
-        FrequencyPlan
-            "shaft" without meshes, "mesh" when all excitations sit at one mesh
-            frequency, else "common".
-        """
-        meshes = [
-            Fraction(g.geometry.teeth_pinion)
-            * Fraction(abs(system.shafts[g.pinion_shaft].speed_ratio)).limit_denominator(10**6)
-            for g in system.gear_pairs
-        ]
-        others = [Fraction(abs(float(o))).limit_denominator(10**6) for o in shaft_orders]
-        orders = meshes + others
-        if not orders:
-            return cls(1.0, "shaft")
-        den = math.lcm(*(q.denominator for q in orders))
-        base = Fraction(math.gcd(*(int(q * den) for q in orders)), den)
-        if not others and len(set(meshes)) == 1:
-            name = "mesh"
-        else:
-            name = "shaft" if base == 1 else "common"
-        return cls(1.0 / float(base), name)
 
 
 class LinkReceptance:
@@ -175,14 +90,27 @@ class LinkReceptance:
     harmonic_force : callable (omega, H) -> (H+1, n_dofs) complex, optional
         Harmonics of the external forces on the DOFs [N]: a polynomial of degree <= 2 in
         ω (an unbalance's m e Ω²), for the frequency derivatives.
-    method : {"auto", "poles", "direct"}
-        How Z_k is solved (module docstring); "auto" is "poles" where it applies.
+    method : {"auto", "poles", "direct", "modal"}
+        How Z_k is solved (module docstring); "auto" is "poles" up to
+        :data:`DENSE_LIMIT` DOFs and "modal" above (once :meth:`prepare` knows the
+        highest frequency; "direct" until then and with tabulated bearings or a loss
+        factor).
+    max_frequency : float, optional
+        Highest excitation frequency the modal basis must serve [rad/s] (H times the
+        highest base frequency); needed by "modal", else given to :meth:`prepare`.
+    force_dofs : sequence of int, optional
+        DOFs the harmonic forces load (the modal basis holds their attachment vectors);
+        needed by "modal" with ``harmonic_force``.
+    cutoff_factor : float
+        Modal basis: modes up to ``cutoff_factor * max_frequency`` [-].
 
     Attributes
     ----------
     pole_check : dict
         Per harmonic k, the relative difference of the pole-residue receptance from a
         direct solve (harmonics above :data:`POLE_CHECK_RTOL` are solved directly).
+    basis : ndarray (n_dofs, m) or None
+        The modal basis ("modal": :mod:`nlgrd.nonlinear.modal_basis`), VᵀV = I.
     """
 
     def __init__(
@@ -193,6 +121,9 @@ class LinkReceptance:
         static_force: NDArray | None = None,
         harmonic_force: Callable[[float, int], NDArray] | None = None,
         method: str = "auto",
+        max_frequency: float | None = None,
+        force_dofs: Sequence[int] | None = None,
+        cutoff_factor: float = 3.0,
     ):
         self.system, self.links, self.plan = system, tuple(links), plan
         self.model: LinearModel = assemble(system, mesh_stiffness=False, mesh_damping=False)
@@ -215,31 +146,123 @@ class LinkReceptance:
             self.model.tabulated_bearings or self.model.hysteretic_parts or self.model.Kc.nnz
         )
         self._dense = n <= DENSE_LIMIT and not self.model.tabulated_bearings
-        if self._dense:
-            m = self.model
-            self._mats = {
-                "K": m.K.toarray(),
-                "Kc": m.Kc.toarray(),
-                "M": m.M.toarray(),
-                "C": (m.C + m.Ci + self.C_link).toarray(),
-                "G": m.G.toarray(),
-            }
+        self._mats = self._dense_matrices(lambda A: A.toarray()) if self._dense else None
+        self.basis, self.max_frequency, self.cutoff_factor = None, None, float(cutoff_factor)
+        self._Ps = self.P  # P in the coordinates the harmonics are solved in (DOFs or basis)
+        self.force_dofs = np.zeros(0, dtype=int) if force_dofs is None else np.asarray(force_dofs, dtype=int)
         self._rigid = rigid_body_modes(self.model.K + self.K_link, self.model.M)
         check_balanced(self._rigid, self.static_force, "static_force", "the static loads")
         self._factors = BoundedCache(64)
         self._terms = BoundedCache(4096)
         poles_apply = self._dense and self.has_derivatives
-        if method not in ("auto", "poles", "direct"):
-            raise ModelError("method", f"must be 'auto', 'poles' or 'direct', got {method!r}")
+        if method not in ("auto", "poles", "direct", "modal"):
+            raise ModelError("method", f"must be 'auto', 'poles', 'direct' or 'modal', got {method!r}")
         if method == "poles" and not poles_apply:
             raise ModelError(
                 "method", f"'poles' needs at most {DENSE_LIMIT} DOFs, no tabulated bearing or loss factor"
             )
+        if method == "modal" and not self.has_derivatives:
+            raise ModelError("method", "'modal' needs a model without tabulated bearings or loss factor")
+        if method == "modal" and harmonic_force is not None and force_dofs is None:
+            raise ModelError("force_dofs", "the modal basis needs the DOFs the harmonic forces load")
+        self._auto_modal = method == "auto" and not self._dense and self.has_derivatives
+        self._auto_modal &= harmonic_force is None or force_dofs is not None
         self.method = (
             "poles" if method == "auto" and poles_apply else ("direct" if method == "auto" else method)
         )
         self._poles = BoundedCache(256)
         self.pole_check: dict[int, float] = {}
+        if method == "modal" and max_frequency is None:
+            raise ModelError("max_frequency", "the modal method needs the highest excitation frequency")
+        if max_frequency is not None:
+            self.prepare(max_frequency)
+
+    def _dense_matrices(self, dense: Callable) -> dict[str, NDArray]:
+        m = self.model
+        return {
+            "K": dense(m.K),
+            "Kc": dense(m.Kc),
+            "M": dense(m.M),
+            "C": dense(m.C + m.Ci + self.C_link),
+            "G": dense(m.G),
+        }
+
+    def prepare(self, max_frequency: float) -> None:
+        """Build the modal basis for excitations up to ``max_frequency`` [rad/s] ("modal",
+        or "auto" above :data:`DENSE_LIMIT` DOFs; otherwise nothing to do). A basis that
+        already serves it is kept; a higher frequency rebuilds it (and empties the caches).
+
+        Parameters
+        ----------
+        max_frequency : float
+            Highest excitation frequency, H times the highest base frequency [rad/s].
+        """
+        top = float(max_frequency)
+        if not (np.isfinite(top) and top > 0):
+            raise ModelError("max_frequency", f"must be a positive finite frequency, got {max_frequency!r}")
+        if not (self.method == "modal" or self._auto_modal):
+            return
+        if self.basis is not None and self.max_frequency >= top:
+            return
+        m = self.model
+        n = m.n_dofs
+        E = np.zeros((n, self.force_dofs.size))
+        E[self.force_dofs, np.arange(self.force_dofs.size)] = 1.0
+        R = self._rigid
+        couplings = [m.C + m.Ci + self.C_link, m.G, m.Kc]
+        Kr = (m.K + self.K_link).tocsc()
+        V, modes = attachment_basis(
+            Kr,
+            m.M,
+            np.hstack([self.P, E]),
+            lambda w: self.model.dynamic_stiffness(w, self.plan.speed(w)) + 1j * w * self.C_link,
+            top,
+            self.cutoff_factor,
+            rigid=R if R.shape[1] > 0 and rigid_decoupled(R, couplings) else None,
+            fractions=np.arange(1, ATTACHMENT_POINTS + 1) / ATTACHMENT_POINTS,
+        )
+        # stability: the modes and the static attachment vectors, a smaller basis (as
+        # MeshReceptance.state_space); M-orthonormal, so the reduced mass is I
+        S = np.column_stack([modes, spla.splu((Kr + m.M).tocsc()).solve(self.P)])
+        try:
+            V, S = m_orthonormal(V, m.M), m_orthonormal(S, m.M)
+        except np.linalg.LinAlgError:  # massless DOFs: no pole form anyway
+            pass
+        self.basis, self.max_frequency, self.method, self.n_modes = V, top, "modal", modes.shape[1]
+        self._Ps = V.T @ self.P
+        self._mats = self._dense_matrices(lambda A: V.T @ (A @ V))
+        self._stability = (self._dense_matrices(lambda A: S.T @ (A @ S)), S.T @ self.P)
+        self._factors, self._terms, self._poles = BoundedCache(64), BoundedCache(4096), BoundedCache(256)
+        self.pole_check = {}
+        self.modal_check = self._check_basis()
+        if not self.modal_check <= MODAL_CHECK_RTOL:
+            warnings.warn(
+                f"modal basis of {V.shape[1]} vectors: receptances differ from direct solves by "
+                f"{self.modal_check:.2g} (more than {MODAL_CHECK_RTOL:g}); use method='direct'",
+                ModeCapWarning,
+                stacklevel=2,
+            )
+
+    def _check_basis(self) -> float:
+        """Largest relative difference of the basis's Pᵀ Z⁻¹ P from full sparse solves, at
+        three frequencies between attachment points and the speeds of harmonics 1 and 4."""
+        a, err = self._mats, 0.0
+        for frac in (3.5, 15.5, 31.5):
+            w = frac / ATTACHMENT_POINTS * self.max_frequency
+            for k in (1, 4):
+                speed = self.plan.speed(w / k)
+                Z = (self.model.dynamic_stiffness(w, speed) + 1j * w * self.C_link).tocsc()
+                h = self.P.T @ spla.splu(Z).solve(self.P.astype(complex))
+                Zr = a["K"] + speed * a["Kc"] - w * w * a["M"] + 1j * w * (a["C"] + speed * a["G"])
+                hr = self._Ps.T @ np.linalg.solve(Zr, self._Ps.astype(complex))
+                err = max(err, float(np.linalg.norm(hr - h) / np.linalg.norm(h)))
+        return err
+
+    def _proj(self, f: NDArray) -> NDArray:
+        """Forces on the DOFs (..., n) in the solve coordinates."""
+        if self.basis is None:
+            return f
+        return f.real @ self.basis + 1j * (f.imag @ self.basis) if np.iscomplexobj(f) else f @ self.basis
 
     @property
     def n_coords(self) -> int:
@@ -247,7 +270,7 @@ class LinkReceptance:
         return self.P.shape[1]
 
     def _Z(self, w: float, speed: float):
-        if self._dense and not self.model.hysteretic_parts:
+        if self._mats is not None and not self.model.hysteretic_parts:
             a = self._mats
             return a["K"] + speed * a["Kc"] - w * w * a["M"] + 1j * w * (a["C"] + speed * a["G"])
         return (self.model.dynamic_stiffness(w, speed) + 1j * w * self.C_link).tocsc()
@@ -286,11 +309,13 @@ class LinkReceptance:
         forces through L_k P, the external ones through the columns of L_k they load."""
         ext, phi = self._force_parts(omega, H)
         nz = np.flatnonzero(np.any(ext[1:] != 0, axis=0))
-        out = np.zeros((H + 1, 2 * self.model.n_dofs), dtype=complex)
+        V = self.basis
+        out = np.zeros((H + 1, 2 * (self.model.n_dofs if V is None else V.shape[1])), dtype=complex)
         for k in range(1, H + 1):
             pf = self._pole_form(k)
             if pf is not None:
-                out[k] = pf[2] @ phi[k] + pf[0].L[:, nz] @ ext[k, nz]
+                ek = pf[0].L[:, nz] @ ext[k, nz] if V is None else pf[0].L @ (V[nz].T @ ext[k, nz])
+                out[k] = pf[2] @ phi[k] + ek
         return out
 
     def _mean_factor(self, speed: float):
@@ -354,13 +379,15 @@ class LinkReceptance:
             if not np.all(np.isfinite(pr.poles)):
                 self.pole_check[k] = np.inf
                 return None
-            err = pr.check(*A, self.P, pr.check_frequencies())
+            Ps = self._Ps
+            err = pr.check(*A, Ps, pr.check_frequencies())
             self.pole_check[k] = err
-            if not err <= POLE_CHECK_RTOL:
+            # on a modal basis: a tenth of the basis's own tolerance (its truncation error)
+            if not err <= (POLE_CHECK_RTOL if self.basis is None else MODAL_CHECK_RTOL / 10):
                 return None
-            return pr, self.P.T @ pr.X_top, pr.L @ self.P
+            return pr, Ps.T @ pr.X_top, pr.L @ Ps
 
-        if self.method != "poles":
+        if self.method not in ("poles", "modal"):
             return None
         return self._poles.get(("poles", k), make)
 
@@ -388,7 +415,8 @@ class LinkReceptance:
             hr_inv = np.linalg.inv(self.P.T @ x[:, :d])
             kap[0] = hr_inv - self.k_link
             frc[0] = hr_inv @ (self.P.T @ x[:, d])
-            Lf = self._pole_forces(omega, H) if self.method == "poles" else None
+            Lf = self._pole_forces(omega, H) if self.method in ("poles", "modal") else None
+            Ps = self._Ps
             for k in range(1, H + 1):
                 pf = self._pole_form(k)
                 if pf is not None:
@@ -397,9 +425,9 @@ class LinkReceptance:
                     kap[k] = np.linalg.inv(CP @ (w[:, None] * LP))
                     frc[k] = kap[k] @ (CP @ (w * Lf[k]))
                     continue
-                u = self._factor(k, omega).solve(np.column_stack([self.P.astype(complex), f[k]]))
-                kap[k] = np.linalg.inv(self.P.T @ u[:, :d])
-                frc[k] = kap[k] @ (self.P.T @ u[:, d])
+                u = self._factor(k, omega).solve(np.column_stack([Ps.astype(complex), self._proj(f[k])]))
+                kap[k] = np.linalg.inv(Ps.T @ u[:, :d])
+                frc[k] = kap[k] @ (Ps.T @ u[:, d])
             return kap, frc
 
         return self._terms.get((float(omega), int(H)), make)
@@ -441,19 +469,20 @@ class LinkReceptance:
             # the forces are polynomials of degree <= 2 in ω (the links' own ∝ ω, unbalance
             # ∝ ω²): a central difference with a wide step is exact but for rounding
             hf = 1e-3 * max(abs(omega), 1.0)
-            poles = self.method == "poles"
+            poles = self.method in ("poles", "modal")
+            Ps = self._Ps
             if poles:
                 Lf_all = self._pole_forces(omega, H)
                 dLf_all = (self._pole_forces(omega + hf, H) - self._pole_forces(omega - hf, H)) / (2 * hf)
             if not poles or any(self._pole_form(k) is None for k in range(1, H + 1)):
-                df = (self.forces(omega + hf, H) - self.forces(omega - hf, H)) / (2 * hf)
-                f = self.forces(omega, H)
+                df = self._proj((self.forces(omega + hf, H) - self.forces(omega - hf, H)) / (2 * hf))
+                f = self._proj(self.forces(omega, H))
             dkap = np.zeros((H + 1, d, d), dtype=complex)
             dfrc = np.zeros((H + 1, d), dtype=complex)
             if self._speed_dependent:
                 (k1, f1), (k0, f0) = self.terms(omega + h, H), self.terms(omega - h, H)
                 dkap[0], dfrc[0] = (k1[0] - k0[0]) / (2 * h), (f1[0] - f0[0]) / (2 * h)
-            if self._dense:
+            if self._mats is not None:
                 a = self._mats
                 Kc, M, C, G = a["Kc"], a["M"], a["C"], a["G"]
             else:
@@ -474,11 +503,11 @@ class LinkReceptance:
                     A, B = -2 * omega * M, 1j * (C + speed * G) + 1j * omega * s_ * G
                 dZ = s_ * Kc + (k * k) * A + k * B
                 lu = self._factor(k, omega)
-                u = lu.solve(np.column_stack([self.P.astype(complex), f[k]]))
+                u = lu.solve(np.column_stack([Ps.astype(complex), f[k]]))
                 up, uf = u[:, :d], u[:, d]
                 v = lu.solve(np.column_stack([dZ @ up, df[k] - dZ @ uf]))
-                dkap[k] = kap[k] @ (self.P.T @ v[:, :d]) @ kap[k]
-                dfrc[k] = dkap[k] @ (self.P.T @ uf) + kap[k] @ (self.P.T @ v[:, d])
+                dkap[k] = kap[k] @ (Ps.T @ v[:, :d]) @ kap[k]
+                dfrc[k] = dkap[k] @ (Ps.T @ uf) + kap[k] @ (Ps.T @ v[:, d])
             return dkap, dfrc
 
         return self._terms.get(("d", float(omega), int(H)), make)
@@ -512,12 +541,16 @@ class LinkReceptance:
         speed = self.plan.speed(omega)
         rhs0 = f[0].real - self.P @ (G[0].real - self.k_link @ Y[0].real)
         out[0] = self.mean_solve(speed, rhs0[:, None])[dofs, 0]
+        V = self.basis
         for k in range(1, H + 1):
             pf = self._pole_form(k)
             rhs = f[k] - self.P @ G[k]
-            out[k] = (
-                pf[0].solve(omega, rhs, dofs) if pf is not None else self._factor(k, omega).solve(rhs)[dofs]
-            )
+            if V is None:
+                solved = pf[0].solve(omega, rhs, dofs) if pf is not None else None
+                out[k] = solved if pf is not None else self._factor(k, omega).solve(rhs)[dofs]
+                continue
+            x = pf[0].solve(omega, V.T @ rhs) if pf is not None else self._factor(k, omega).solve(V.T @ rhs)
+            out[k] = V[dofs] @ x
         real = np.empty((dofs.size, 2 * H + 1))
         real[:, 0] = out[0].real
         real[:, 1::2], real[:, 2::2] = out[1:].real.T, -out[1:].imag.T
@@ -535,8 +568,9 @@ class LinkReceptance:
         return replace(m, K=(m.K + self.K_link).tocsc(), C=(m.C + self.C_link).tocsc(), meshes=())
 
     def state_space(self, omega: float) -> LinearStateSpace | None:
-        """The linear part for Floquet stability at base frequency ``omega`` (dense, up to
-        :data:`DENSE_STABILITY_LIMIT` DOFs; None above it).
+        """The linear part for Floquet stability at base frequency ``omega``: on the modes
+        and static attachment vectors of the modal basis when there is one, else dense up
+        to :data:`DENSE_STABILITY_LIMIT` DOFs (None above it).
 
         Parameters
         ----------
@@ -547,15 +581,16 @@ class LinkReceptance:
         -------
         LinearStateSpace or None
         """
-        if self.model.n_dofs > DENSE_STABILITY_LIMIT:
+        if self.model.n_dofs > DENSE_STABILITY_LIMIT and self.basis is None:
             return None
         if self.model.hysteretic_parts:
             raise ModelError("loss_factor", "hysteretic damping has no time-domain form for stability")
         speed = self.plan.speed(omega)
-        M = self.model.M.toarray()
-        D = (self.model.damping(speed) + self.C_link).toarray()
-        K = self.model.stiffness(speed).toarray()
-        return LinearStateSpace(M, D, K, self.P)
+        if self.basis is not None:  # on the stability basis
+            a, Ps = self._stability
+            return LinearStateSpace(a["M"], a["C"] + speed * a["G"], a["K"] + speed * a["Kc"], Ps)
+        mats = (self.model.M, self.model.damping(speed) + self.C_link, self.model.stiffness(speed))
+        return LinearStateSpace(*(A.toarray() for A in mats), self.P)
 
     def check(self, omega: float) -> None:
         """Raise ModelError when Z_1 is singular at ``omega`` (a link-free rigid-body mode).

@@ -43,7 +43,6 @@ dense per-frequency solve.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,6 +53,7 @@ from numpy.typing import NDArray
 from scipy.sparse.csgraph import connected_components
 
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.modal_basis import STABILITY_MODE_CAP, attachment_basis, lowest_modes, rigid_decoupled
 from nlgrd.nonlinear.pole_residue import POLE_CHECK_RTOL, PoleResidue
 from nlgrd.rotor.assembly import LinearModel, assemble, mesh_matrix
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
@@ -61,40 +61,9 @@ from nlgrd.rotor.system import RotorSystem
 
 #: Above this many DOFs ``method="auto"`` uses the modal basis.
 DIRECT_LIMIT = 3000
-#: Mode counts at which the bases stop doubling (the last doubling may pass them).
-MODE_CAP = 400
-STABILITY_MODE_CAP = 300
 #: Pole-residue receptances are checked against a direct solve of the reduced Z_k at one
 #: frequency per harmonic; above POLE_CHECK_RTOL (nlgrd.nonlinear.pole_residue) the
 #: harmonic falls back to it.
-
-
-class ModeCapWarning(UserWarning):
-    """A modal basis reached its cap before its cut-off frequency."""
-
-
-def _lowest_modes(K, M, cutoff: float, start: int, cap: int, what: str) -> tuple[NDArray, NDArray]:
-    """Lowest eigenpairs of K φ = λ M φ up to λ = cutoff² (at least), doubling the count.
-
-    Shift-invert about -1 (rigid-body modes are fine); fixed start vector (reruns are
-    byte-identical). Warns when the cap stops it short of the cut-off."""
-    n = K.shape[0]
-    v0 = np.full(n, 1.0 / np.sqrt(n))
-    k = min(n - 2, start)
-    while True:
-        lam, vec = spla.eigsh(K, k=k, M=M, sigma=-1.0, v0=v0)
-        if np.max(lam) >= cutoff**2 or k >= n - 2:
-            return lam, vec
-        if k >= cap:
-            warnings.warn(
-                f"{what}: {k} modes reach {np.sqrt(max(np.max(lam), 0)) / (2 * np.pi):.4g} Hz, short of the "
-                f"cut-off {cutoff / (2 * np.pi):.4g} Hz (cap {cap}); higher modes enter only through "
-                "the attachment vectors",
-                ModeCapWarning,
-                stacklevel=3,
-            )
-            return lam, vec
-        k = min(n - 2, 2 * k)
 
 
 @dataclass(frozen=True)
@@ -240,36 +209,17 @@ class MeshReceptance:
     def _build_basis(self, max_frequency: float, cutoff_factor: float) -> None:
         m = self.model
         Kr = (m.K + self._mesh_stiffness()).tocsc()
-        cutoff = cutoff_factor * max_frequency
-        # lowest modes of the linear system with meshes, shift-invert about -1 (rigid modes ok)
-        lam, vec = _lowest_modes(Kr, m.M, cutoff, start=40, cap=MODE_CAP, what="receptance basis")
-        keep = lam <= cutoff**2
-        vectors = [vec[:, keep]]
-        lu = spla.splu((Kr + m.M).tocsc())
-        vectors.append(lu.solve(self.W))
-        for frac in (0.25, 0.5, 1.0):
-            w = frac * max_frequency
-            z = spla.splu(m.dynamic_stiffness(w, self.speed(w))).solve(self.W.astype(complex))
-            vectors += [z.real, z.imag]
-        B = np.column_stack(vectors)
-        B = B[:, np.linalg.norm(B, axis=0) > 0]  # e.g. Im Z⁻¹W of an undamped model
         R = self._rigid
-        deflate = R.shape[1] > 0 and self._rigid_decoupled()
-        if deflate:
-            MR = m.M @ R
-
-            def off_rigid(X):  # the part of X M-orthogonal to R
-                return X - R @ np.linalg.solve(R.T @ MR, MR.T @ X)
-
-            n0 = np.linalg.norm(B, axis=0)
-            B = off_rigid(B)
-            B = B[:, np.linalg.norm(B, axis=0) > 1e-8 * n0]  # drop the rigid modes themselves
-        V, s, _ = np.linalg.svd(B / np.linalg.norm(B, axis=0), full_matrices=False)
-        V = V[:, s > 1e-10 * s[0]]
-        if deflate:  # once more, against what the SVD's rounding brought back
-            V = np.linalg.qr(off_rigid(V))[0]
-        self.basis = V
-        self.n_modes = int(np.sum(keep))
+        V, modes = attachment_basis(
+            Kr,
+            m.M,
+            self.W,
+            lambda w: m.dynamic_stiffness(w, self.speed(w)),
+            max_frequency,
+            cutoff_factor,
+            rigid=R if R.shape[1] > 0 and self._rigid_decoupled() else None,
+        )
+        self.basis, self.n_modes = V, modes.shape[1]
         P = lambda A: V.T @ (A @ V)  # noqa: E731
         self._red = {"M": P(m.M), "K": P(m.K), "C": P(m.C + m.Ci), "G": P(m.G), "Kc": P(m.Kc)}
         self._red_hyst = [(h.speed_ratio, P(h.Kb), P(h.Kx)) for h in m.hysteretic_parts]
@@ -281,14 +231,11 @@ class MeshReceptance:
         """True when the rigid-body modes R (which move no mesh) are free of damping,
         gyroscopic, circulatory and hysteretic coupling: then Z_k⁻¹ W is M-orthogonal to
         R and R can leave the basis."""
-        m, R = self.model, self._rigid
+        m = self.model
         if m.tabulated_bearings:
             return False
         mats = [m.C + m.Ci, m.G, m.Kc] + [A for h in m.hysteretic_parts for A in (h.Kb, h.Kx)]
-        for A in mats:
-            if A.nnz and np.linalg.norm(A @ R) > 1e-9 * spla.norm(A) * np.linalg.norm(R):
-                return False
-        return True
+        return rigid_decoupled(self._rigid, mats)
 
     def _reduced_Z(self, w: float, speed: float) -> NDArray:
         r = self._red
@@ -527,9 +474,7 @@ class MeshReceptance:
             m = self.model
             Kr = (m.K + self._mesh_stiffness()).tocsc()
             cutoff = 3.0 * key
-            lam, vec = _lowest_modes(
-                Kr, m.M, cutoff, start=30, cap=STABILITY_MODE_CAP, what="stability basis"
-            )
+            lam, vec = lowest_modes(Kr, m.M, cutoff, start=30, cap=STABILITY_MODE_CAP, what="stability basis")
             att = spla.splu((Kr + m.M).tocsc()).solve(self.W)
             V, _ = np.linalg.qr(np.column_stack([vec[:, lam <= cutoff**2], att]))
             if len(self._stability_basis) >= 8:

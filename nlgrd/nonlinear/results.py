@@ -338,15 +338,33 @@ class SweepResult:
         are those of the first quantity.
         """
         qs = (quantities,) if isinstance(quantities, str) else tuple(quantities)
+        return self.jumps_of({q: self.metrics[q] for q in qs}, rtol, ratio)
+
+    def jumps_of(self, values: dict[str, NDArray], rtol: float = 0.1, ratio: float = 3.0) -> list[Jump]:
+        """:meth:`jumps` of quantities given per point (``values``: name -> one value per
+        point, in the order of the points; e.g. a link's outputs).
+
+        Parameters
+        ----------
+        values : dict of str to ndarray
+            The quantities; the reported values are those of the first.
+        rtol, ratio : float
+            As :func:`find_jumps` [-].
+
+        Returns
+        -------
+        list of Jump
+        """
         out = []
         for d in dict.fromkeys(self.direction.tolist()):
+            keep = self.direction == d
             part = self.select(d)
             steps: set[int] = set(np.nonzero(part.branch_switch[1:])[0].tolist())
             steps |= set(np.nonzero(np.diff(part.no_stable.astype(int)) != 0)[0].tolist())
-            for q in qs:
-                for j in find_jumps(part.omega, part.metrics[q], d, rtol, ratio):
+            for q in values:
+                for j in find_jumps(part.omega, np.asarray(values[q])[keep], d, rtol, ratio):
                     steps.add(int(np.nonzero(part.omega == j.omega_from)[0][0]))
-            v = part.metrics[qs[0]]
+            v = np.asarray(next(iter(values.values())))[keep]
             for i in sorted(steps):
                 if i + 1 < part.omega.size:
                     out.append(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -190,3 +191,57 @@ class RotorSystem:
     def n_dofs(self) -> int:
         """Number of DOFs."""
         return self.dofs.n_dofs
+
+
+def refined(system: RotorSystem, factor: int) -> RotorSystem:
+    """``system`` with every shaft element split into ``factor`` equal elements.
+
+    Every part stays where it was: node n becomes node ``factor`` n for disks, bearings,
+    couplings, gear pairs (and their input and output nodes) and bearing clearances
+    (and their housings). For mesh-convergence studies and model-size scaling.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    factor : int
+        Elements per original element [-], >= 1.
+
+    Returns
+    -------
+    RotorSystem
+    """
+    f = int(factor)
+    if f < 1 or f != factor:
+        raise ModelError("factor", f"must be a whole number >= 1, got {factor!r}")
+    rep = dataclasses.replace
+
+    def node(n):
+        return None if n is None else n * f
+
+    shafts = tuple(
+        rep(s, elements=tuple(rep(e, length=e.length / f) for e in s.elements for _ in range(f)))
+        for s in system.shafts
+    )
+    gears = tuple(
+        rep(
+            g,
+            pinion_node=node(g.pinion_node),
+            gear_node=node(g.gear_node),
+            input_node=node(g.input_node),
+            output_node=node(g.output_node),
+        )
+        for g in system.gear_pairs
+    )
+    clearances = tuple(
+        rep(c, node=node(c.node), other_node=node(c.other_node)) for c in system.bearing_clearances
+    )
+    return rep(
+        system,
+        shafts=shafts,
+        disks=tuple(rep(d, node=node(d.node)) for d in system.disks),
+        bearings=tuple(rep(b, node=node(b.node)) for b in system.bearings),
+        couplings=tuple(rep(c, node_a=node(c.node_a), node_b=node(c.node_b)) for c in system.couplings),
+        gear_pairs=gears,
+        bearing_clearances=clearances,
+    )

@@ -1,0 +1,108 @@
+"""The frequency plan of a harmonic-balance model: how its base frequency relates to the
+shaft speed and at which harmonic of the base each excitation sits (issue 11, item 5).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+
+from nlgrd.errors import ModelError
+from nlgrd.rotor.system import RotorSystem
+
+
+@dataclass(frozen=True)
+class FrequencyPlan:
+    """How the harmonic-balance base frequency ω relates to the shaft speed.
+
+    Every excitation sits at an integer harmonic of the base: an unbalance on a shaft of
+    speed ratio s at |s| Ω, the mesh of a pinion with N_p teeth on a shaft of ratio s_p at
+    N_p |s_p| Ω (Ω the reference shaft speed). :meth:`for_system` chooses the longest
+    base that makes all of them harmonics: the mesh frequency for one mesh or an idler
+    train, their greatest common divisor for a multi-stage train.
+
+    Parameters
+    ----------
+    speed_per_base : float
+        Reference shaft speed Ω per unit base frequency, Ω = ``speed_per_base`` ω [-]: 1
+        when the base is the shaft speed, 1 / (N_p |s_p|) when it is the mesh frequency.
+    name : str
+        "shaft", "mesh" or "common" (a common divisor of several mesh frequencies).
+    """
+
+    speed_per_base: float = 1.0
+    name: str = "shaft"
+
+    def speed(self, omega: float) -> float:
+        """Reference shaft speed [rad/s] at base frequency ``omega`` [rad/s].
+
+        Parameters
+        ----------
+        omega : float
+            Base frequency [rad/s].
+
+        Returns
+        -------
+        float
+        """
+        return float(omega) * self.speed_per_base
+
+    def order(self, shaft_order: float, what: str = "excitation") -> int:
+        """The harmonic of the base at which an excitation of ``shaft_order`` Ω sits.
+
+        Parameters
+        ----------
+        shaft_order : float
+            Its frequency per unit reference shaft speed [-].
+        what : str
+            Named in the error when it is not a harmonic.
+
+        Returns
+        -------
+        int
+        """
+        m = abs(float(shaft_order) * self.speed_per_base)
+        r = round(m)
+        if r < 1 or abs(m - r) > 1e-9 * m:
+            raise ModelError(
+                "plan",
+                f"{what} at {abs(shaft_order):.6g} x the shaft speed is not a harmonic of the "
+                f"base frequency ({1 / abs(self.speed_per_base):.6g} x the shaft speed)",
+            )
+        return int(r)
+
+    @classmethod
+    def for_system(cls, system: RotorSystem, shaft_orders: Sequence[float] = ()) -> FrequencyPlan:
+        """The longest base making every mesh and every ``shaft_orders`` a harmonic.
+
+        Parameters
+        ----------
+        system : RotorSystem
+            Its gear pairs' mesh orders N_p |s_p| count.
+        shaft_orders : sequence of float
+            Further excitations, e.g. |s| of a shaft with unbalance [-].
+
+        Returns
+        -------
+        FrequencyPlan
+            "shaft" without meshes, "mesh" when all excitations sit at one mesh
+            frequency, else "common".
+        """
+        meshes = [
+            Fraction(g.geometry.teeth_pinion)
+            * Fraction(abs(system.shafts[g.pinion_shaft].speed_ratio)).limit_denominator(10**6)
+            for g in system.gear_pairs
+        ]
+        others = [Fraction(abs(float(o))).limit_denominator(10**6) for o in shaft_orders]
+        orders = meshes + others
+        if not orders:
+            return cls(1.0, "shaft")
+        den = math.lcm(*(q.denominator for q in orders))
+        base = Fraction(math.gcd(*(int(q * den) for q in orders)), den)
+        if not others and len(set(meshes)) == 1:
+            name = "mesh"
+        else:
+            name = "shaft" if base == 1 else "common"
+        return cls(1.0 / float(base), name)
