@@ -123,6 +123,8 @@ def attachment_basis(
         Modes up to ``cutoff_factor * max_frequency`` [-].
     rigid : ndarray (n, r), optional
         Rigid-body modes to leave out (only when :func:`rigid_decoupled`).
+    fractions : sequence of float
+        Frequencies of the dynamic attachment vectors, as fractions of ``max_frequency`` [-].
 
     Returns
     -------
