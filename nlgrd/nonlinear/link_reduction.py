@@ -18,8 +18,8 @@ Three ways to solve with Z_k (``method``):
 
 - ``"poles"`` (the default up to :data:`DENSE_LIMIT` DOFs without tabulated bearings or
   hysteretic damping): Z_k(ω) is a quadratic polynomial in ω, so one eigendecomposition
-  per harmonic gives its pole-residue form (:mod:`nlgrd.nonlinear.pole_residue`) and a
-  point costs a few matrix-vector products; each harmonic is checked against a direct
+  per harmonic gives its pole-residue form (of Z_k + K_L, :mod:`nlgrd.nonlinear.link_poles`)
+  and a point costs a few matrix-vector products; each harmonic is checked against a direct
   solve at five frequencies and solved directly when the check fails;
 - ``"modal"`` (the default above it): the same on an M-orthonormal basis of modes and
   attachment vectors (:mod:`nlgrd.nonlinear.modal_basis`), checked against full sparse
@@ -45,6 +45,7 @@ from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.harmonics import real_to_complex
+from nlgrd.nonlinear.link_poles import LinkPoleForm
 from nlgrd.nonlinear.modal_basis import ModeCapWarning, attachment_basis, m_orthonormal, rigid_decoupled
 from nlgrd.nonlinear.pole_residue import POLE_CHECK_RTOL, PoleResidue
 from nlgrd.nonlinear.state_space import LinearStateSpace
@@ -182,6 +183,7 @@ class LinkReceptance:
             "M": dense(m.M),
             "C": dense(m.C + m.Ci + self.C_link),
             "G": dense(m.G),
+            "KL": dense(self.K_link),
         }
 
     def prepare(self, max_frequency: float) -> None:
@@ -309,8 +311,9 @@ class LinkReceptance:
         for k in range(1, H + 1):
             pf = self._pole_form(k)
             if pf is not None:
-                ek = pf[0].L[:, nz] @ ext[k, nz] if V is None else pf[0].L @ (V[nz].T @ ext[k, nz])
-                out[k] = pf[2] @ phi[k] + ek
+                L = pf.pr.L
+                ek = L[:, nz] @ ext[k, nz] if V is None else L @ (V[nz].T @ ext[k, nz])
+                out[k] = pf.LP @ phi[k] + ek
         return out
 
     def _mean_factor(self, speed: float):
@@ -358,12 +361,13 @@ class LinkReceptance:
 
         return self._factors.get(("k", k, float(omega)), make)
 
-    def _pole_form(self, k: int):
-        """(PoleResidue, Pᵀ X_top, L P) of harmonic k, or None (solve directly)."""
+    def _pole_form(self, k: int) -> LinkPoleForm | None:
+        """The shifted pole-residue form of harmonic k (:mod:`nlgrd.nonlinear.link_poles`),
+        or None (solve directly)."""
 
         def make():
             a, s_ = self._mats, self.plan.speed_per_base
-            A = (a["K"], s_ * a["Kc"] + 1j * k * a["C"], -(k * k) * a["M"] + 1j * k * s_ * a["G"])
+            A = (a["K"] + a["KL"], s_ * a["Kc"] + 1j * k * a["C"], -(k * k) * a["M"] + 1j * k * s_ * a["G"])
             try:  # a singular mass matrix (massless DOFs) has no companion form: solve directly
                 with warnings.catch_warnings():
                     warnings.simplefilter("error", sla.LinAlgWarning)
@@ -380,7 +384,7 @@ class LinkReceptance:
             # on a modal basis: a tenth of the basis's own tolerance (its truncation error)
             if not err <= (POLE_CHECK_RTOL if self.basis is None else MODAL_CHECK_RTOL / 10):
                 return None
-            return pr, Ps.T @ pr.X_top, pr.L @ Ps
+            return LinkPoleForm(pr, Ps.T @ pr.X_top, pr.L @ Ps, self.k_link)
 
         if self.method not in ("poles", "modal"):
             return None
@@ -415,10 +419,7 @@ class LinkReceptance:
             for k in range(1, H + 1):
                 pf = self._pole_form(k)
                 if pf is not None:
-                    pr, CP, LP = pf
-                    w = pr.weights(omega)
-                    kap[k] = np.linalg.inv(CP @ (w[:, None] * LP))
-                    frc[k] = kap[k] @ (CP @ (w * Lf[k]))
+                    kap[k], frc[k] = pf.terms(omega, Lf[k])
                     continue
                 u = self._factor(k, omega).solve(np.column_stack([Ps.astype(complex), self._proj(f[k])]))
                 kap[k] = np.linalg.inv(Ps.T @ u[:, :d])
@@ -486,13 +487,8 @@ class LinkReceptance:
             A = B = None
             for k in range(1, H + 1):
                 pf = self._pole_form(k)
-                if pf is not None:  # d/dω of 1 / (ω - λ) is -1 / (ω - λ)²
-                    pr, CP, LP = pf
-                    w = pr.weights(omega)
-                    Lf = Lf_all[k]
-                    dkap[k] = kap[k] @ (CP @ ((w * w)[:, None] * LP)) @ kap[k]
-                    du = CP @ (w * dLf_all[k] - w * w * Lf)
-                    dfrc[k] = dkap[k] @ (CP @ (w * Lf)) + kap[k] @ du
+                if pf is not None:
+                    dkap[k], dfrc[k] = pf.derivatives(omega, Lf_all[k], dLf_all[k])
                     continue
                 if A is None:
                     A, B = -2 * omega * M, 1j * (C + speed * G) + 1j * omega * s_ * G
@@ -541,10 +537,10 @@ class LinkReceptance:
             pf = self._pole_form(k)
             rhs = f[k] - self.P @ G[k]
             if V is None:
-                solved = pf[0].solve(omega, rhs, dofs) if pf is not None else None
+                solved = pf.solve(omega, rhs, dofs) if pf is not None else None
                 out[k] = solved if pf is not None else self._factor(k, omega).solve(rhs)[dofs]
                 continue
-            x = pf[0].solve(omega, V.T @ rhs) if pf is not None else self._factor(k, omega).solve(V.T @ rhs)
+            x = pf.solve(omega, V.T @ rhs) if pf is not None else self._factor(k, omega).solve(V.T @ rhs)
             out[k] = V[dofs] @ x
         real = np.empty((dofs.size, 2 * H + 1))
         real[:, 0] = out[0].real
