@@ -89,8 +89,12 @@ def test_modal_reduction_equals_direct_solves(pair):
                 err = np.max(np.abs(a[k] - b[k])) / scale if scale > 0 else np.max(np.abs(a[k]))
                 worst[name] = max(worst.get(name, 0.0), float(err))
         assert np.array_equal(rm.terms(w, H)[0][0], rd.terms(w, H)[0][0])  # the same exact mean
-    print("modal against direct:", {k: f"{v:.1e}" for k, v in worst.items()}, f"basis {rm.basis.shape[1]}",
-          f"pole check {max(rm.pole_check.values()):.1e}")
+    print(
+        "modal against direct:",
+        {k: f"{v:.1e}" for k, v in worst.items()},
+        f"basis {rm.basis.shape[1]}",
+        f"pole check {max(rm.pole_check.values()):.1e}",
+    )
     assert max(v for k, v in worst.items() if k != "recovery") <= MODAL_CHECK_RTOL
     assert worst["recovery"] <= 1e-4
     assert all(v <= MODAL_CHECK_RTOL / 10 for v in rm.pole_check.values())

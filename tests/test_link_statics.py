@@ -81,3 +81,38 @@ def test_static_position_on_the_clearance_equals_the_full_static_solve(exponent,
     )
     assert r > 20e-6
     assert np.max(np.abs(z[:, 0] - ref)) <= 1e-9 * r, (z[:, 0], ref)
+
+
+def test_a_mean_external_force_enters_like_a_static_load():
+    """The reduction keeps Pᵀ K_r⁻¹ P and Pᵀ K_r⁻¹ f_s per speed and adds the links' own and
+    the external mean forces by linearity: a constant force given as the mean harmonic of
+    the external forces gives the same F_0 as the same force among the static loads, and
+    both equal (Pᵀ K_r⁻¹ P)⁻¹ Pᵀ K_r⁻¹ f_0 from one bordered solve of the whole f_0
+    (1e-10: the same factorisation, d = 3 coordinates)."""
+    from nlgrd.nonlinear.link_reduction import LinkReceptance
+
+    system = clearance_system(1.5)
+    rec = build_link_model(system, gravity=(-9.81, 0.0)).receptance
+    extra = np.zeros(system.n_dofs)
+    extra[system.dofs.index(0, 4, "uy")] = -150.0
+    extra[system.dofs.index(1, 3, "uz")] = 80.0
+    H, w = 3, 2 * np.pi * 1000.0
+
+    def mean_only(omega, H):
+        f = np.zeros((H + 1, system.n_dofs), dtype=complex)
+        f[0] = extra
+        return f
+
+    as_static = LinkReceptance(system, rec.links, rec.plan, rec.static_force + extra)
+    as_mean = LinkReceptance(system, rec.links, rec.plan, rec.static_force, mean_only)
+    kap, F = as_static.terms(w, H)
+    kap2, F2 = as_mean.terms(w, H)
+    d = rec.n_coords
+    f0 = as_static.forces(w, H)[0].real
+    x = as_static.mean_solve(0.0, np.column_stack([rec.P, f0]))
+    ref = np.linalg.solve(rec.P.T @ x[:, :d], rec.P.T @ x[:, d])
+    scale = np.max(np.abs(ref))
+    assert np.max(np.abs(F[0] - ref)) <= 1e-10 * scale
+    assert np.max(np.abs(F2[0] - ref)) <= 1e-10 * scale
+    assert np.array_equal(kap[0], kap2[0])
+    assert np.max(np.abs(F[0] - rec.terms(w, H)[1][0])) > 1e-3 * scale  # the load matters

@@ -197,7 +197,7 @@ def build_link_model(
         links,
         plan,
         static_force=static,
-        harmonic_force=harmonic_force,
+        harmonic_force=harmonic_force if unb else None,
         method=method,
         max_frequency=max_frequency,
         force_dofs=[i for iy, iz, *_ in unb for i in (iy, iz)],

@@ -104,7 +104,8 @@ class LinkPoleForm:
         """
         w = self.pr.weights(omega)
         wy = w * (self.pr.L @ rhs)
-        y = np.linalg.solve(np.eye(self.k_link.shape[0]) - self.CP @ (w[:, None] * self.LP) @ self.k_link,
-                            self.CP @ wy)
+        y = np.linalg.solve(
+            np.eye(self.k_link.shape[0]) - self.CP @ (w[:, None] * self.LP) @ self.k_link, self.CP @ wy
+        )
         Xt = self.pr.X_top if rows is None else self.pr.X_top[rows]
         return Xt @ (wy + w * (self.LP @ (self.k_link @ y)))

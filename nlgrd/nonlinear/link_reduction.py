@@ -151,6 +151,7 @@ class LinkReceptance:
         self._rigid = rigid_body_modes(self.model.K + self.K_link, self.model.M)
         check_balanced(self._rigid, self.static_force, "static_force", "the static loads")
         self._factors = BoundedCache(64)
+        self._mean = BoundedCache(16)  # the mean problem's factor and terms, per speed
         self._terms = BoundedCache(4096)
         poles_apply = self._dense and self.has_derivatives
         if method not in ("auto", "poles", "direct", "modal"):
@@ -305,15 +306,16 @@ class LinkReceptance:
         """L_k f_k (H+1, 2n) for the pole-residue harmonics (row 0 unused): the links' own
         forces through L_k P, the external ones through the columns of L_k they load."""
         ext, phi = self._force_parts(omega, H)
-        nz = np.flatnonzero(np.any(ext[1:] != 0, axis=0))
+        nz = self.force_dofs if self.basis is not None else np.flatnonzero(np.any(ext[1:] != 0, axis=0))
         V = self.basis
         out = np.zeros((H + 1, 2 * (self.model.n_dofs if V is None else V.shape[1])), dtype=complex)
         for k in range(1, H + 1):
             pf = self._pole_form(k)
             if pf is not None:
-                L = pf.pr.L
-                ek = L[:, nz] @ ext[k, nz] if V is None else L @ (V[nz].T @ ext[k, nz])
-                out[k] = pf.LP @ phi[k] + ek
+                out[k] = pf.LP @ phi[k]
+                if nz.size:
+                    L = pf.pr.L
+                    out[k] += L[:, nz] @ ext[k, nz] if V is None else L @ (V[nz].T @ ext[k, nz])
         return out
 
     def _mean_factor(self, speed: float):
@@ -328,7 +330,20 @@ class LinkReceptance:
             MR = sp.csc_matrix(self.model.M @ R)
             return spla.splu(sp.bmat([[Kr, MR], [MR.T, None]], format="csc")), R.shape[1]
 
-        return self._factors.get(key, make)
+        return self._mean.get(key, make)
+
+    def _mean_terms(self, speed: float) -> tuple[NDArray, NDArray, NDArray]:
+        """h_0 = Pᵀ K_r⁻¹ P, its inverse and Pᵀ K_r⁻¹ f_s (f_s the static loads), kept per
+        speed: the mean problem then costs O(d²) per point, whatever the model's size."""
+        key = ("mean terms", float(speed) if self._speed_dependent else 0.0)
+
+        def make():
+            d = self.n_coords
+            x = self.mean_solve(speed, np.column_stack([self.P, self.static_force]))
+            h0 = self.P.T @ x[:, :d]
+            return h0, np.linalg.inv(h0), self.P.T @ x[:, d]
+
+        return self._mean.get(key, make)
 
     def mean_solve(self, speed: float, rhs: NDArray) -> NDArray:
         """x with (Z_0 + K_L) x = rhs, M-orthogonal to the rigid-body modes.
@@ -407,20 +422,24 @@ class LinkReceptance:
 
         def make():
             d, speed = self.n_coords, self.plan.speed(omega)
-            f = self.forces(omega, H)
+            ext, phi = self._force_parts(omega, H)
             kap = np.empty((H + 1, d, d), dtype=complex)
             frc = np.empty((H + 1, d), dtype=complex)
-            x = self.mean_solve(speed, np.column_stack([self.P, f[0].real]))
-            hr_inv = np.linalg.inv(self.P.T @ x[:, :d])
+            # the mean: f_0 = f_s + ext_0 + P φ_0, by linearity from the kept solves
+            h0, hr_inv, ps = self._mean_terms(speed)
+            ph = ps + h0 @ phi[0].real
+            if np.any(ext[0].real != self.static_force):
+                ph = ph + self.P.T @ self.mean_solve(speed, (ext[0].real - self.static_force)[:, None])[:, 0]
             kap[0] = hr_inv - self.k_link
-            frc[0] = hr_inv @ (self.P.T @ x[:, d])
+            frc[0] = hr_inv @ ph
             Lf = self._pole_forces(omega, H) if self.method in ("poles", "modal") else None
-            Ps = self._Ps
+            Ps, f = self._Ps, None
             for k in range(1, H + 1):
                 pf = self._pole_form(k)
                 if pf is not None:
                     kap[k], frc[k] = pf.terms(omega, Lf[k])
                     continue
+                f = ext + phi @ self.P.T if f is None else f
                 u = self._factor(k, omega).solve(np.column_stack([Ps.astype(complex), self._proj(f[k])]))
                 kap[k] = np.linalg.inv(Ps.T @ u[:, :d])
                 frc[k] = kap[k] @ (Ps.T @ u[:, d])

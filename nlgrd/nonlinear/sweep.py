@@ -191,7 +191,14 @@ def sweep(
         for i in np.nonzero(result.no_stable & fold)[0]
         for d, _ in pool.get(float(result.omega[i]), ())
     )
-    if nearer_landing or missed:
+    # or a point that did not converge where another direction has a stable orbit (a
+    # branch ending at a non-smooth grazing, where neither arc length nor restarts land)
+    failed = any(
+        d != result.direction[i]
+        for i in np.nonzero(~result.converged)[0]
+        for d, _ in pool.get(float(result.omega[i]), ())
+    )
+    if nearer_landing or missed or failed:
         return _sweep_pass(model, omegas, H, directions, pool=pool, **kw)[0]
     return result
 
@@ -285,6 +292,11 @@ def _sweep_pass(
                     sol = landing.nearest_landing(sol, z, others())
                 else:  # Newton from the previous point without giving up early, then hybr
                     sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback)
+            if not sol.converged and auto and pool:  # the branch ended: another direction's orbit
+                cands = others()
+                if cands:
+                    sol = min(cands, key=lambda c: 0.0 if z is None else landing.distance(c, z))
+                    switched = z is not None
             fmax, dom, lost = np.nan, complex(np.nan, np.nan), False
             if sol.converged:
                 z, last_w = sol.harmonics, float(w)
