@@ -128,7 +128,7 @@ def _clearance_model(system):
     )
 
 
-def scaling(factors=(1, 8, 25, 83)) -> None:
+def scaling(factors=(1, 8, 25, 83), only: str | None = None) -> None:
     """Per-point cost against model size: two_shaft.toml with every element split in
     ``factors`` (132 to 9 972 DOFs), one mesh (with and without stability) and mesh +
     clearance, the default method (pole-residue up to 300 DOFs, modal basis above) and,
@@ -140,6 +140,7 @@ def scaling(factors=(1, 8, 25, 83)) -> None:
     grid = 2 * np.pi * np.linspace(1000.0, 1700.0, 15)
     H = 9
     cases = (("1 mesh", two, True), ("1 mesh", two, False), ("mesh + clearance", _clearance_model(two), True))
+    cases = tuple(c for c in cases if only is None or c[0] == only)
     for factor in factors:
         for label, base, stability in cases:
             system = refined(base, factor)
@@ -172,6 +173,8 @@ if __name__ == "__main__":
     with threadpool_limits(1):
         if "--scaling" in sys.argv:
             scaling()
+        elif "--scaling-clearance" in sys.argv:  # the mesh + clearance rows alone
+            scaling(only="mesh + clearance")
         else:
             evaluations()
             if "--evaluations" not in sys.argv:

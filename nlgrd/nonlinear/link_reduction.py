@@ -45,8 +45,15 @@ from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.harmonics import real_to_complex
+from nlgrd.nonlinear.link_mean import MeanProblem
 from nlgrd.nonlinear.link_poles import LinkPoleForm
-from nlgrd.nonlinear.modal_basis import ModeCapWarning, attachment_basis, m_orthonormal, rigid_decoupled
+from nlgrd.nonlinear.modal_basis import (
+    ModeCapWarning,
+    attachment_basis,
+    m_orthonormal,
+    modes_then_attachments,
+    rigid_decoupled,
+)
 from nlgrd.nonlinear.pole_residue import POLE_CHECK_RTOL, PoleResidue
 from nlgrd.nonlinear.state_space import LinearStateSpace
 from nlgrd.rotor.assembly import LinearModel, assemble
@@ -109,6 +116,8 @@ class LinkReceptance:
         direct solve (harmonics above :data:`POLE_CHECK_RTOL` are solved directly).
     basis : ndarray (n_dofs, m) or None
         The modal basis ("modal": :mod:`nlgrd.nonlinear.modal_basis`), VᵀV = I.
+    mean : MeanProblem
+        The mean problem (:mod:`nlgrd.nonlinear.link_mean`), exact on the DOFs.
     """
 
     def __init__(
@@ -150,8 +159,10 @@ class LinkReceptance:
         self.force_dofs = np.zeros(0, dtype=int) if force_dofs is None else np.asarray(force_dofs, dtype=int)
         self._rigid = rigid_body_modes(self.model.K + self.K_link, self.model.M)
         check_balanced(self._rigid, self.static_force, "static_force", "the static loads")
+        self.mean = MeanProblem(
+            self.model, self.K_link, self.P, self.static_force, self._rigid, self._speed_dependent
+        )
         self._factors = BoundedCache(64)
-        self._mean = BoundedCache(16)  # the mean problem's factor and terms, per speed
         self._terms = BoundedCache(4096)
         poles_apply = self._dense and self.has_derivatives
         if method not in ("auto", "poles", "direct", "modal"):
@@ -223,7 +234,8 @@ class LinkReceptance:
         )
         S = np.column_stack([modes, spla.splu((Kr + m.M).tocsc()).solve(self.P)])
         try:
-            V, S = m_orthonormal(V, m.M), m_orthonormal(S, m.M)
+            V = m_orthonormal(V, m.M)
+            S = modes_then_attachments(modes, S[:, modes.shape[1] :], m.M)
         except np.linalg.LinAlgError:  # massless DOFs: no pole form anyway
             pass
         self.basis, self.max_frequency, self.method, self.n_modes = V, top, "modal", modes.shape[1]
@@ -318,33 +330,6 @@ class LinkReceptance:
                     out[k] += L[:, nz] @ ext[k, nz] if V is None else L @ (V[nz].T @ ext[k, nz])
         return out
 
-    def _mean_factor(self, speed: float):
-        key = ("mean", float(speed) if self._speed_dependent else 0.0)
-
-        def make():
-            Kr = (self.model.dynamic_stiffness(0.0, speed) + self.K_link).tocsc()
-            Kr = sp.csc_matrix((np.ascontiguousarray(Kr.data.real), Kr.indices, Kr.indptr), shape=Kr.shape)
-            R = self._rigid
-            if R.shape[1] == 0:
-                return spla.splu(Kr), 0
-            MR = sp.csc_matrix(self.model.M @ R)
-            return spla.splu(sp.bmat([[Kr, MR], [MR.T, None]], format="csc")), R.shape[1]
-
-        return self._mean.get(key, make)
-
-    def _mean_terms(self, speed: float) -> tuple[NDArray, NDArray, NDArray]:
-        """h_0 = Pᵀ K_r⁻¹ P, its inverse and Pᵀ K_r⁻¹ f_s (f_s the static loads), kept per
-        speed: the mean problem then costs O(d²) per point, whatever the model's size."""
-        key = ("mean terms", float(speed) if self._speed_dependent else 0.0)
-
-        def make():
-            d = self.n_coords
-            x = self.mean_solve(speed, np.column_stack([self.P, self.static_force]))
-            h0 = self.P.T @ x[:, :d]
-            return h0, np.linalg.inv(h0), self.P.T @ x[:, d]
-
-        return self._mean.get(key, make)
-
     def mean_solve(self, speed: float, rhs: NDArray) -> NDArray:
         """x with (Z_0 + K_L) x = rhs, M-orthogonal to the rigid-body modes.
 
@@ -359,10 +344,7 @@ class LinkReceptance:
         -------
         ndarray (n_dofs, m)
         """
-        lu, r = self._mean_factor(speed)
-        n = self.model.n_dofs
-        pad = np.zeros((r,) + rhs.shape[1:])
-        return lu.solve(np.concatenate([rhs, pad]))[:n]
+        return self.mean.solve(speed, rhs)
 
     def _factor(self, k: int, omega: float):
         """A solver of Z_k at ``omega``: ``solve(rhs)``."""
@@ -426,7 +408,7 @@ class LinkReceptance:
             kap = np.empty((H + 1, d, d), dtype=complex)
             frc = np.empty((H + 1, d), dtype=complex)
             # the mean: f_0 = f_s + ext_0 + P φ_0, by linearity from the kept solves
-            h0, hr_inv, ps = self._mean_terms(speed)
+            h0, hr_inv, ps = self.mean.terms(speed)
             ph = ps + h0 @ phi[0].real
             if np.any(ext[0].real != self.static_force):
                 ph = ph + self.P.T @ self.mean_solve(speed, (ext[0].real - self.static_force)[:, None])[:, 0]

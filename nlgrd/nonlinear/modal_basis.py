@@ -182,3 +182,35 @@ def m_orthonormal(B: NDArray, M: sp.spmatrix) -> NDArray:
     U, s, _ = np.linalg.svd(B / np.linalg.norm(B, axis=0), full_matrices=False)
     U = U[:, s > 1e-10 * s[0]]
     return sla.solve_triangular(np.linalg.cholesky(U.T @ (M @ U)), U.T, lower=True).T
+
+
+def modes_then_attachments(modes: NDArray, attachments: NDArray, M: sp.spmatrix) -> NDArray:
+    """An M-orthonormal basis [Φ, A'] of the modes Φ and the attachment vectors, the latter
+    made M-orthogonal to the modes (twice, classical Gram-Schmidt) before their own
+    orthonormalisation. Unlike :func:`m_orthonormal` of all columns, it does not mix the
+    modes: a mode that no link moves and no damping couples (an axial mode of a spur-gear
+    model) stays a coordinate of its own, which the Floquet analysis then splits off
+    (:func:`nlgrd.nonlinear.linear_algebra.mesh_block`) instead of carrying it in every
+    matrix exponential.
+
+    Parameters
+    ----------
+    modes : ndarray (n, m)
+        M-orthonormal modes (:func:`lowest_modes`).
+    attachments : ndarray (n, a)
+        Attachment vectors.
+    M : sparse matrix (n, n)
+        Mass matrix [kg], positive definite.
+
+    Returns
+    -------
+    ndarray (n, m + r)
+        Vᵀ M V = I; the first m columns are the modes (to rounding).
+    """
+    gram = modes.T @ (M @ modes)
+    Phi = sla.solve_triangular(np.linalg.cholesky(gram), modes.T, lower=True).T  # gram ~ I: no mixing
+    A = attachments
+    for _ in range(2):
+        A = A - Phi @ (Phi.T @ (M @ A))
+    keep = np.linalg.norm(A, axis=0) > 1e-8 * np.linalg.norm(attachments, axis=0)
+    return np.column_stack([Phi, m_orthonormal(A[:, keep], M)]) if keep.any() else Phi

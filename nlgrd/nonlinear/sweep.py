@@ -128,8 +128,10 @@ def sweep(
         "restart"'s when arc length fails) and the other sweep directions' stable
         solutions at that frequency, the one nearest the orbit that folded (a second pass
         when another direction's is nearer): where the curve folds more than once, the far
-        branch of arc length can be an orbit a slow sweep does not reach. "none"
-        leaves the point flagged as not converged.
+        branch of arc length can be an orbit a slow sweep does not reach; where both fail
+        (a branch that ends at a non-smooth grazing of a contact), the nearest of the other
+        directions' stable solutions (a second pass). "none" leaves the point flagged as
+        not converged.
     leave_unstable : bool
         With stability: at a point where the branch followed is unstable (by a fold or
         not), do what a slow physical sweep does. A real multiplier > 1 (the orbit
