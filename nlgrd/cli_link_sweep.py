@@ -7,10 +7,7 @@ from __future__ import annotations
 import math
 
 from nlgrd.errors import ModelError
-from nlgrd.io.command_line import Outputs
-
-#: Harmonics of the base when --harmonics is not given: 9 of the highest mesh order.
-MESH_HARMONICS = 9
+from nlgrd.io.command_line import Outputs, harmonics_line
 
 
 def needs_links(system) -> bool:
@@ -81,10 +78,11 @@ def link_sweep_command(args, system, values, out, png) -> int:
         omegas = np.asarray(values, dtype=float) * math.pi / 30 / plan.speed_per_base
     else:
         omegas = 2 * math.pi * np.asarray(values, dtype=float)
-    orders = [getattr(lk, "order", 1) for lk in model.links if hasattr(lk, "order")] or [1]
-    H = args.harmonics or MESH_HARMONICS * max(orders)
     column, label = _quantity(args.quantity, model)
-    res = link_sweep(model, omegas, H=H, directions=args.direction, stability=not args.no_stability)
+    res = link_sweep(
+        model, omegas, H=args.harmonics, directions=args.direction, stability=not args.no_stability
+    )
+    H = res.result.H
     frame = res.to_frame()
     frame.insert(1, "shaft_speed [rpm]", frame["base_frequency [Hz]"] * plan.speed_per_base * 60)
     x_col = "shaft_speed [rpm]" if args.rpm is not None else "base_frequency [Hz]"
@@ -106,7 +104,8 @@ def link_sweep_command(args, system, values, out, png) -> int:
     lost = int(np.sum(np.asarray(r.no_stable, dtype=bool)))
     print(
         f"sweep: {len(r)} points ({args.direction}), links {', '.join(lk.name for lk in model.links)}, "
-        f"base frequency = {plan.name} ({1 / plan.speed_per_base:.6g} x the shaft speed), H = {H}, "
+        f"base frequency = {plan.name} ({1 / plan.speed_per_base:.6g} x the shaft speed), "
+        f"{harmonics_line(r)}, "
         f"{bad} not converged, {lost} without a stable periodic response"
     )
     print(f"wrote {out} and {png}")

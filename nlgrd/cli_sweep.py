@@ -10,6 +10,7 @@ from nlgrd.errors import ModelError
 from nlgrd.io.command_line import (
     Outputs,
     check_quantity,
+    harmonics_line,
     output_file,
     parse_range,
     parse_span,
@@ -31,15 +32,6 @@ class _Progress:
             )
         elif i == n or i % max(1, n // 10) == 0:
             print(f"{self.label}: {i}/{n}", file=sys.stderr, flush=True)
-
-
-def _harmonics_line(res) -> str:
-    """'H = 13 (estimated error 0.12 % against H = 17)' or 'H = 5' when H was given."""
-    if res.H_check is None:
-        return f"H = {res.H}"
-    e = [float(x) for x in res.harmonic_error if math.isfinite(x)]
-    worst = f"{100 * max(e):.2g} %" if e else "n/a"
-    return f"H = {res.H} (chosen; largest estimated error {worst} against H = {res.H_check})"
 
 
 class _Unit:
@@ -135,7 +127,7 @@ def cmd_sweep(args) -> int:
         files.commit()
     bad = np.atleast_1d(res.mesh.omega[~res.mesh.converged])
     print(
-        f"sweep: {len(res.mesh)} points ({args.direction}), {_harmonics_line(res.mesh)}, "
+        f"sweep: {len(res.mesh)} points ({args.direction}), {harmonics_line(res.mesh)}, "
         f"{len(bad)} not converged"
     )
     if len(bad):
@@ -206,7 +198,7 @@ def _continuation(args, system, model, unit, omegas, count, quantity, out, png) 
             f"continuation {name} from {unit(begin)} {unit.name}: {len(w)} points spanning "
             f"{unit(w.min())}-{unit(w.max())} {unit.name}, "
             + (f"turning points at {turns} {unit.name}" if turns else "no turning point")
-            + f"; {how}; {_harmonics_line(res.curve)}"
+            + f"; {how}; {harmonics_line(res.curve)}"
         )
     with Outputs() as files:
         files.csv(pd.concat(frames, ignore_index=True), out)

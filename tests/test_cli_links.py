@@ -40,20 +40,25 @@ def clearance_model(tmp_path: Path, entry: str = CLEARANCE) -> Path:
 
 def test_idler_train_sweep_writes_both_meshes(tmp_path, capsys):
     """Two meshes: columns of both, the base frequency (= mesh frequency) and the shaft
-    speed base x 60 / 25 (25 input teeth, by hand); points without a stable periodic
+    speed base x 60 / 25 (25 input teeth, by hand); H chosen by the error estimate (on the
+    ladder, within 0.5 % at every stable point); points without a stable periodic
     response have empty link columns; the PNG is written."""
     out = tmp_path / "idler.csv"
     argv = ["sweep", str(IDLER), "--hz", "1000:1200:2", "--direction", "up", "--out", str(out)]
     assert main([*argv, "--quantity", "mesh1.dslr"]) == 0
     text = capsys.readouterr().out
     assert "links mesh0, mesh1" in text and "base frequency = mesh (25 x the shaft speed)" in text
+    assert "(chosen; largest estimated error" in text  # the default: H by the estimate
     df = pd.read_csv(out)
+    stable = df["stable"].eq(True)
+    assert df.loc[stable, "H"].isin([5, 7, 9, 13, 17, 25]).all()
+    assert df.loc[stable, "harmonic_error [-]"].le(5e-3).all()
     assert len(df) == 2 and (df["direction"] == "up").all()
     assert np.allclose(df["shaft_speed [rpm]"], df["base_frequency [Hz]"] * 60 / 25, rtol=1e-12)
     for q in ("dte_rms [m]", "force_max [N]", "dslr [-]", "contact_loss_fraction [-]"):
         for mesh in ("mesh0", "mesh1"):
             col = df[f"{mesh}.{q}"]
-            assert col.notna().equals(df["stable"].astype(bool)), (mesh, q)
+            assert col.notna().equals(df["stable"].eq(True)), (mesh, q)
     assert out.with_suffix(".png").stat().st_size > 0
 
 
@@ -63,10 +68,11 @@ def test_clearance_model_sweep_writes_the_bearing_link(tmp_path, capsys):
     radial displacement beyond the 20 µm clearance."""
     out = tmp_path / "cl.csv"
     argv = ["sweep", str(clearance_model(tmp_path)), "--rpm", "2000:3000:3", "--direction", "up"]
-    assert main([*argv, "--out", str(out), "--quantity", "B1.force_max"]) == 0
-    assert "links B1, mesh0" in capsys.readouterr().out
+    assert main([*argv, "--out", str(out), "--quantity", "B1.force_max", "--harmonics", "9"]) == 0
+    text = capsys.readouterr().out
+    assert "links B1, mesh0" in text and ", H = 9, " in text
     df = pd.read_csv(out)
-    ok = df["stable"].astype(bool)
+    ok = df["stable"].eq(True)  # empty (not converged) is not stable
     assert ok.any()
     assert (df.loc[ok, "B1.contact_fraction [-]"] == 1).all()
     assert (df.loc[ok, "B1.displacement_max [m]"] > 20e-6).all()

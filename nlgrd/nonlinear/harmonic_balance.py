@@ -416,6 +416,10 @@ class ReducedModel:
         an FE model); overrides ``state_space`` when given.
     kappa_derivative, force_derivative, nl_gain_derivative : callable, optional
         d/dω of the above; central finite differences when None.
+    outputs : callable (harmonics, omega) -> ndarray, optional
+        The per-point outputs whose change with H estimates the truncation error
+        (:mod:`nlgrd.nonlinear.harmonic_convergence`); default the first mesh's RMS DTE
+        and largest force.
     """
 
     kappa: Callable[[float, int], ArrayLike]
@@ -427,6 +431,7 @@ class ReducedModel:
     kappa_derivative: Callable[[float, int], ArrayLike] | None = None
     force_derivative: Callable[[float, int], ArrayLike] | None = None
     nl_gain_derivative: Callable[[float, int], ArrayLike] | None = None
+    outputs: Callable[[NDArray, float], NDArray] | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "nonlinearities", tuple(self.nonlinearities))

@@ -162,6 +162,8 @@ def _resolve(model: ReducedModel, w: float, z: NDArray, H_new: int, tol: float):
 
 
 def _outputs(model: ReducedModel, z: NDArray, w: float) -> NDArray:
+    if model.outputs is not None:
+        return np.asarray(model.outputs(z, w), dtype=float)
     mesh = model.mesh
     m = metrics_from_harmonics(z[mesh.coord], w, mesh)
     return np.array([getattr(m, q) for q in OUTPUTS])
@@ -214,13 +216,21 @@ def check_harmonics(
         raise ModelError("H_check", f"must exceed the sweep's H = {H}, got {H2}")
     n = len(result)
     checked = result.converged & (result.stable | ~result.stability_known)
-    values = np.array([result.metrics[q] for q in OUTPUTS]).T  # (n, n_outputs)
+    if model.outputs is None:
+        values = np.array([result.metrics[q] for q in OUTPUTS]).T  # (n, n_outputs)
+    else:  # the model's own outputs (every link's), NaN where not checked
+        ref = next((i for i in np.nonzero(checked)[0]), None)
+        m = 0 if ref is None else _outputs(model, result.harmonics[ref], float(result.omega[ref])).size
+        values = np.full((n, m), np.nan)
+        for i in np.nonzero(checked)[0]:
+            values[i] = _outputs(model, result.harmonics[i], float(result.omega[i]))
     scale = (
         FLOOR * np.nanmax(np.where(checked[:, None], np.abs(values), np.nan), axis=0)
         if checked.any()
         else 1.0
     )
     error = np.full(n, np.nan)
+    fine_values = np.full_like(values, np.nan, dtype=float)
     sols: dict = {}  # every converged point re-solved (the unstable ones for lifting only)
     for i in np.nonzero(result.converged)[0]:
         w = float(result.omega[i])
@@ -230,7 +240,13 @@ def check_harmonics(
         if sol is None:
             error[i] = np.inf
             continue
-        v2 = _outputs(model, sol.harmonics, w)
+        fine_values[i] = _outputs(model, sol.harmonics, w)
+    # an output that is zero over the whole sweep at H (a contact force where the journal
+    # never touches) is measured against its values at H'; zero at both, it carries nothing
+    top = np.max(np.where(np.isnan(fine_values), 0.0, np.abs(fine_values)), axis=0, initial=0.0)
+    scale = np.maximum(np.where(np.asarray(scale) > 0, scale, FLOOR * top), np.finfo(float).tiny)
+    for i in np.nonzero(~np.all(np.isnan(fine_values), axis=1))[0]:
+        v2 = fine_values[i]
         error[i] = float(np.max(np.abs(v2 - values[i]) / np.maximum(np.abs(v2), scale)))
     fine = {i: sol.harmonics for i, sol in sols.items() if sol is not None and checked[i]}
     starts = _jump_starts(result) if jumps else []
@@ -301,7 +317,7 @@ def lift(
     SweepResult or None
         The sweep at H'; None when a full sweep at H' is needed.
     """
-    if not check.jumps_held:
+    if not check.jumps_held or model.outputs is not None:  # a model with its own outputs: sweep
         return None
     H2 = check.H_check
     mesh = model.mesh

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.harmonic_convergence import LADDER, OUTPUT_RTOL, converged_sweep, next_harmonics
 from nlgrd.nonlinear.link_reduction import LinkReceptance
 from nlgrd.nonlinear.links import GearMeshLink
 from nlgrd.nonlinear.results import SweepResult
@@ -63,12 +64,15 @@ class LinkModel:
         The reduction.
     reduced : ReducedModel
         The harmonic-balance model on the link coordinates (base frequency ω [rad/s]).
+    top_order : int
+        The highest base harmonic an excitation sits at (a mesh's order, an unbalance's).
     """
 
     system: RotorSystem
     links: tuple
     receptance: LinkReceptance
     reduced: ReducedModel
+    top_order: int = 1
 
     def link_harmonics(self, harmonics: NDArray, name: str) -> NDArray:
         """The rows of the link ``name`` in the harmonics (d_total, 2H+1) of a point [m].
@@ -203,6 +207,18 @@ def build_link_model(
         force_dofs=[i for iy, iz, *_ in unb for i in (iy, iz)],
     )
     laws = tuple(lk.law(tuple(range(sl.start, sl.stop))) for lk, sl in zip(links, rec.slices, strict=True))
+    picks = [getattr(lk, "converged_outputs", None) or metric_names(lk) for lk in links]
+
+    def outputs(harmonics: NDArray, omega: float) -> NDArray:  # what the H estimate compares
+        return np.array(
+            [
+                m[q]
+                for lk, sl, qs in zip(links, rec.slices, picks, strict=True)
+                for m in (lk.metrics(harmonics[sl], omega),)
+                for q in qs
+            ]
+        )
+
     reduced = ReducedModel(
         kappa=lambda omega, H: rec.terms(omega, H)[0],
         force=lambda omega, H: rec.terms(omega, H)[1],
@@ -210,8 +226,10 @@ def build_link_model(
         state_space_at=rec.state_space,
         kappa_derivative=(lambda omega, H: rec.derivatives(omega, H)[0]) if rec.has_derivatives else None,
         force_derivative=(lambda omega, H: rec.derivatives(omega, H)[1]) if rec.has_derivatives else None,
+        outputs=outputs,
     )
-    return LinkModel(system, links, rec, reduced)
+    orders = [lk.order for lk in links if isinstance(lk, GearMeshLink)] + [u[-1] for u in unb]
+    return LinkModel(system, links, rec, reduced, max(orders, default=1))
 
 
 @dataclass(frozen=True)
@@ -283,7 +301,9 @@ def metric_names(link) -> list[str]:
     return list(link.metrics(np.zeros((link.n_coords, 3)), 1.0))
 
 
-def link_sweep(model: LinkModel, omegas: NDArray, H: int = 9, **options) -> LinkSweepResult:
+def link_sweep(
+    model: LinkModel, omegas: NDArray, H: int | None = None, *, rtol: float = OUTPUT_RTOL, **options
+) -> LinkSweepResult:
     """Harmonic-balance sweep of a link model with the links' outputs.
 
     Parameters
@@ -292,8 +312,14 @@ def link_sweep(model: LinkModel, omegas: NDArray, H: int = 9, **options) -> Link
         From :func:`build_link_model`.
     omegas : array_like
         Base frequencies [rad/s].
-    H : int
-        Number of harmonics [-].
+    H : int, optional
+        Number of harmonics [-]. By default chosen by the error estimate of
+        :func:`nlgrd.nonlinear.harmonic_convergence.converged_sweep` on the ladder
+        :data:`~nlgrd.nonlinear.harmonic_convergence.LADDER` times the model's
+        ``top_order`` (so a mesh at base harmonic m gets 5 m, 7 m, ... harmonics), comparing
+        every link's ``converged_outputs``; the result carries the estimate per point.
+    rtol : float
+        With H chosen: the tolerance of the estimated relative error of the outputs [-].
     **options
         Passed to :func:`nlgrd.nonlinear.sweep.sweep` (``directions``, ``tol``,
         ``stability`` (default True), ``jump``, ...).
@@ -305,9 +331,21 @@ def link_sweep(model: LinkModel, omegas: NDArray, H: int = 9, **options) -> Link
     options.setdefault("stability", True)
     options.setdefault("jump", "auto")
     omegas = np.asarray(omegas, dtype=float)
-    if omegas.size:  # a modal basis (large models) serves H x the highest frequency
-        model.receptance.prepare(H * float(np.max(np.abs(omegas))))
-    res = sweep(model.reduced, np.asarray(omegas, dtype=float), H, mesh=None, **options)
+    top = float(np.max(np.abs(omegas))) if omegas.size else 0.0
+    if H is None:
+        ladder = [h * model.top_order for h in LADDER]
+
+        def on_rung(h):  # a modal basis (large models) serves the check's H' too
+            if top > 0:
+                model.receptance.prepare(next_harmonics(h, ladder) * top)
+
+        res = converged_sweep(
+            model.reduced, omegas, rtol=rtol, ladder=ladder, on_rung=on_rung, mesh=None, **options
+        )
+    else:
+        if top > 0:  # a modal basis (large models) serves H x the highest frequency
+            model.receptance.prepare(H * top)
+        res = sweep(model.reduced, omegas, H, mesh=None, **options)
     rows = []
     for i in range(len(res)):
         row = {}

@@ -15,7 +15,10 @@ The contract (:class:`NonlinearLink`):
   damping it adds to the linear system;
 - ``forcing(omega, H)``: excitation on the local coordinates (a mesh's LSTE through its
   damping), harmonics 0..H;
-- ``metrics(harmonics, omega)``: its per-point outputs, named ``<link name>.<quantity>``.
+- ``metrics(harmonics, omega)``: its per-point outputs, named ``<link name>.<quantity>``;
+  ``converged_outputs``, the names of those whose change with the number of harmonics
+  estimates the truncation error (:mod:`nlgrd.nonlinear.harmonic_convergence`; all of
+  them when a link has none).
 
 The gear mesh with backlash (:class:`GearMeshLink`) and the bearing with radial clearance
 (:class:`BearingClearance`) are the two kinds; the solver treats them alike.
@@ -140,6 +143,8 @@ class BearingClearance:
         RadialClearanceLaw(self.stiffness, self.clearance, self.exponent, n_samples=self.n_samples)
 
     n_coords = 2
+    #: The outputs the harmonic-count estimate compares.
+    converged_outputs = ("force_max [N]", "displacement_max [m]")
 
     def projection(self, system: RotorSystem) -> NDArray:
         """P (n_dofs, 2): the journal's (u_y, u_z) less the housing's.
@@ -314,6 +319,8 @@ class GearMeshLink:
     order: int = 1
 
     n_coords = 1
+    #: The outputs the harmonic-count estimate compares (those of the single-mesh path).
+    converged_outputs = ("dte_rms [m]", "force_max [N]")
 
     @classmethod
     def from_system(
