@@ -109,7 +109,7 @@ def test_a_mean_external_force_enters_like_a_static_load():
     kap2, F2 = as_mean.terms(w, H)
     d = rec.n_coords
     f0 = as_static.forces(w, H)[0].real
-    x = as_static.mean_solve(0.0, np.column_stack([rec.P, f0]))
+    x = as_static.mean.solve(0.0, np.column_stack([rec.P, f0]))
     ref = np.linalg.solve(rec.P.T @ x[:, :d], rec.P.T @ x[:, d])
     scale = np.max(np.abs(ref))
     assert np.max(np.abs(F[0] - ref)) <= 1e-10 * scale

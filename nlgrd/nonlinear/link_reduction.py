@@ -330,22 +330,6 @@ class LinkReceptance:
                     out[k] += L[:, nz] @ ext[k, nz] if V is None else L @ (V[nz].T @ ext[k, nz])
         return out
 
-    def mean_solve(self, speed: float, rhs: NDArray) -> NDArray:
-        """x with (Z_0 + K_L) x = rhs, M-orthogonal to the rigid-body modes.
-
-        Parameters
-        ----------
-        speed : float
-            Reference shaft speed [rad/s].
-        rhs : ndarray (n_dofs, m)
-            Right-hand sides [N].
-
-        Returns
-        -------
-        ndarray (n_dofs, m)
-        """
-        return self.mean.solve(speed, rhs)
-
     def _factor(self, k: int, omega: float):
         """A solver of Z_k at ``omega``: ``solve(rhs)``."""
         speed = self.plan.speed(omega)
@@ -411,7 +395,7 @@ class LinkReceptance:
             h0, hr_inv, ps = self.mean.terms(speed)
             ph = ps + h0 @ phi[0].real
             if np.any(ext[0].real != self.static_force):
-                ph = ph + self.P.T @ self.mean_solve(speed, (ext[0].real - self.static_force)[:, None])[:, 0]
+                ph = ph + self.P.T @ self.mean.solve(speed, (ext[0].real - self.static_force)[:, None])[:, 0]
             kap[0] = hr_inv - self.k_link
             frc[0] = hr_inv @ ph
             Lf = self._pole_forces(omega, H) if self.method in ("poles", "modal") else None
@@ -532,7 +516,7 @@ class LinkReceptance:
         out = np.empty((H + 1, dofs.size), dtype=complex)
         speed = self.plan.speed(omega)
         rhs0 = f[0].real - self.P @ (G[0].real - self.k_link @ Y[0].real)
-        out[0] = self.mean_solve(speed, rhs0[:, None])[dofs, 0]
+        out[0] = self.mean.solve(speed, rhs0[:, None])[dofs, 0]
         V = self.basis
         for k in range(1, H + 1):
             pf = self._pole_form(k)

@@ -162,7 +162,7 @@ def link_time_response(
         return g, T
 
     if state0 is None:
-        u = rec.mean_solve(speed, rec.static_force[:, None])[:, 0]
+        u = rec.mean.solve(speed, rec.static_force[:, None])[:, 0]
         v = np.zeros(N)
     else:
         u, v = np.array(state0[0], dtype=float), np.array(state0[1], dtype=float)
