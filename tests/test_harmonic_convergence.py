@@ -149,9 +149,11 @@ def test_link_model_chooses_h_against_h25_on_the_idler_train():
     """A link model's sweep without H (:func:`link_sweep`) climbs the same ladder, times
     the model's highest excitation order (1 here: both meshes at the base frequency), and
     compares every link's ``converged_outputs`` (each mesh's RMS DTE and largest force).
-    On the idler train across its contact-loss band (1100-1225 Hz, both meshes losing
-    contact), against the same sweep at H = 25 at every point where both are stable and
-    on the same branch (contact-loss fractions within 0.05): H = 5 is off by more than the
+    On the idler train in its contact-loss band (1150-1200 Hz, 3 points, both meshes
+    losing contact; the band's ends, 1100-1125 and 1225 Hz, have no stable mesh-periodic
+    response and only cost landing searches), against the same sweep at H = 25 at every
+    point where both are stable and on the same branch (contact-loss fractions within
+    0.05): H = 5 is off by more than the
     0.5 % tolerance (its own estimate said so: the ladder climbed); at the chosen H the
     estimate is within the tolerance, the true error within twice it (measured 5.6e-3
     against an estimate of 3.3e-3 at one point: the estimate is the change to the next
@@ -161,7 +163,7 @@ def test_link_model_chooses_h_against_h25_on_the_idler_train():
     from nlgrd.nonlinear.link_model import build_link_model, link_sweep
 
     model = build_link_model(load_model(DATA / "models/idler_train.toml"))
-    omegas = 2 * np.pi * np.linspace(1100.0, 1225.0, 6)
+    omegas = 2 * np.pi * np.linspace(1150.0, 1200.0, 3)
     res = link_sweep(model, omegas, directions="up")
     ref = link_sweep(model, omegas, H=25, directions="up")
     r, f = res.result, ref.result
