@@ -30,6 +30,7 @@ import traceback
 import warnings
 from pathlib import Path
 
+from nlgrd.cli_study import add_parsers as add_study_parsers
 from nlgrd.cli_sweep import cmd_sweep
 from nlgrd.errors import ModelError
 from nlgrd.io.command_line import (
@@ -290,7 +291,8 @@ def build_parser() -> argparse.ArgumentParser:
     Returns
     -------
     argparse.ArgumentParser
-        The parser, one sub-command each for ``modes``, ``campbell``, ``lste`` and ``sweep``;
+        The parser, one sub-command each for ``modes``, ``campbell``, ``lste``, ``sweep``,
+        ``study`` and ``report``;
         each sets ``func`` to its ``cmd_*`` function.
     """
     p = argparse.ArgumentParser(
@@ -399,6 +401,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--out", default="sweep.csv", help="CSV file (default sweep.csv)")
     sw.add_argument("--plot", default=None, help="PNG file (default: the CSV's name with .png)")
     sw.set_defaults(func=cmd_sweep)
+    add_study_parsers(sub)
     return p
 
 

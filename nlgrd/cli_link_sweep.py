@@ -8,21 +8,9 @@ import math
 
 from nlgrd.errors import ModelError
 from nlgrd.io.command_line import Outputs, harmonics_line
+from nlgrd.nonlinear.link_model import needs_links
 
-
-def needs_links(system) -> bool:
-    """Whether ``system`` needs the link path (several meshes or a bearing clearance).
-
-    Parameters
-    ----------
-    system : RotorSystem
-        The model.
-
-    Returns
-    -------
-    bool
-    """
-    return len(system.gear_pairs) != 1 or bool(system.bearing_clearances)
+__all__ = ["link_sweep_command", "needs_links"]
 
 
 def _quantity(text: str, model) -> tuple[str, str]:

@@ -14,6 +14,7 @@ signal.signal(signal.SIGINT, signal.default_int_handler)
 #: in after them, instead of two long files ending the run on their own.
 FIRST = (
     "test_notebooks",
+    "test_design_study",
     "test_two_stage_time_domain",
     "test_geared_time_domain",
     "test_geared_clearance_time_domain",
@@ -23,6 +24,7 @@ FIRST = (
     "test_link_modal",
     "test_outputs",
     "test_jeffcott_jumps",
+    "test_studies",
 )
 
 

@@ -14,7 +14,6 @@ Format, version 1::
     [materials.steel]                # Material fields; the name is the table key
     density = 7850.0
     young_modulus = 2.1e11
-    poisson_ratio = 0.3
 
     [[shafts]]                       # Shaft fields
     name = "pinion"
@@ -42,11 +41,9 @@ Format, version 1::
     shaft = 0
     node = 0
     kyy = 1.0e8
-    kzz = 1.0e8
 
     [[couplings]]                    # Coupling fields; no shaft_b/node_b: to ground
     shaft_a = 0
-    node_a = 0
     c_torsion = 0.2
 
     [[gear_pairs]]                   # nlgrd.gear.mesh.GearMesh fields, nested tables as
@@ -104,7 +101,7 @@ from nlgrd.rotor.materials import Material
 from nlgrd.rotor.shaft import Shaft
 from nlgrd.rotor.system import RotorSystem
 
-__all__ = ["FORMAT_VERSION", "load_model", "model_from_dict"]
+__all__ = ["FORMAT_VERSION", "load_model", "model_from_dict", "model_from_file_data"]
 
 #: Version of the file format this module reads and writes.
 FORMAT_VERSION = 1
@@ -174,12 +171,29 @@ def load_model(path: str | os.PathLike) -> RotorSystem:
         raise ModelError("", f"not UTF-8 text: {exc.reason} at byte {exc.start}", name) from None
     except OSError as exc:
         raise ModelError("", f"cannot read the file: {exc.strerror or exc}", name) from None
-    system = model_from_dict(data, file=name)
-    system = _resolve_lste_files(system, os.path.dirname(os.path.abspath(name)))
+    return model_from_file_data(data, name)
+
+
+def model_from_file_data(data: Mapping[str, Any], file: str) -> RotorSystem:
+    """:func:`model_from_dict`, with ``lste_file`` paths relative to ``file`` and checked.
+
+    Parameters
+    ----------
+    data : mapping
+        The parsed model file.
+    file : str
+        The model file the data came from (paths and error messages).
+
+    Returns
+    -------
+    RotorSystem
+    """
+    system = model_from_dict(data, file=file)
+    system = _resolve_lste_files(system, os.path.dirname(os.path.abspath(file)))
     try:
         check_lste_files(system)
     except ModelError as exc:
-        raise ModelError(_one_line(exc.key), _one_line(exc.message), name) from None
+        raise ModelError(_one_line(exc.key), _one_line(exc.message), file) from None
     return system
 
 

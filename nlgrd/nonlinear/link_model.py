@@ -358,3 +358,18 @@ def link_sweep(
             row.update({f"{link.name}.{k}": v for k, v in values.items()})
         rows.append(row)
     return LinkSweepResult(res, pd.DataFrame(rows))
+
+
+def needs_links(system) -> bool:
+    """Whether ``system`` needs the link path (several meshes or a bearing clearance).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+
+    Returns
+    -------
+    bool
+    """
+    return len(system.gear_pairs) != 1 or bool(system.bearing_clearances)
