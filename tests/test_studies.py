@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from nlgrd.errors import ModelError
 from nlgrd.studies.study_file import load_study
 from nlgrd.studies.study_runner import local_cluster, run_study
 
@@ -338,3 +339,36 @@ def test_study_figures_draw_the_summary(serial):
     lines = sorted(line.get_xdata()[0] for line in ax.lines)
     assert np.allclose(lines, np.quantile(summary[q], [0.05, 0.5, 0.95]))
     plt.close("all")
+
+
+def test_profile_slope_tolerances_reach_the_lste_and_per_tooth_errors_are_refused(tmp_path):
+    """A tolerance axis on ``gear_pairs[0].errors.profile_slope_pinion`` changes the model's
+    LSTE exactly as :func:`loaded_static_transmission_error` with the same
+    :class:`GearErrors` does (same samples, to 1e-15 of the peak-to-peak); errors that
+    differ from tooth to tooth are refused when the model is built, naming the key, since
+    the mesh-periodic analysis cannot hold their shaft-order excitation."""
+    from nlgrd.gear.modifications import GearErrors
+    from nlgrd.gear.transmission_error import loaded_static_transmission_error
+    from nlgrd.io.model_file import model_from_file_data
+
+    text = STUDY.replace("range = [0.02, 0.08, 4]", "values = [0.02]")
+    text += '[[axes]]\nkey = "gear_pairs[0].errors.profile_slope_pinion"\ndistribution = "normal"\n'
+    text += "mean = 0.0\nstd = 2e-6\n[sampling]\nsamples = 3\nseed = 1\n"
+    path = tmp_path / "tol.toml"
+    path.write_text(text)
+    study = load_study(path)
+    params = study.parameter_sets()[0]
+    slope = params["gear_pairs[0].errors.profile_slope_pinion [m]"]
+    assert slope != 0
+    mesh = model_from_file_data(study.model_data(params), study.model_file).gear_pairs[0]
+    direct = loaded_static_transmission_error(
+        mesh.geometry, mesh.static_load, errors=GearErrors(profile_slope_pinion=slope), points_per_cycle=256
+    )
+    assert np.array_equal(mesh.lste_result().lste, direct.lste)
+    bare = model_from_file_data(study.model, study.model_file).gear_pairs[0]
+    assert abs(np.ptp(direct.lste) - np.ptp(bare.lste_result().lste)) > 1e-8  # the error changes the LSTE
+    data = study.model_data(params)
+    data["gear_pairs"][0]["errors"] = {"spacing_pinion": [1e-6] + [0.0] * 24}
+    with pytest.raises(ModelError, match="differ from tooth to tooth") as err:
+        model_from_file_data(data, study.model_file)
+    assert err.value.key == "gear_pairs[0].errors"

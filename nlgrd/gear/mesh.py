@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError, check_positive
 from nlgrd.gear.geometry import GearGeometry
-from nlgrd.gear.modifications import ProfileModification
+from nlgrd.gear.modifications import GearErrors, ProfileModification
 
 
 @dataclass(frozen=True)
@@ -64,6 +64,10 @@ class GearMesh:
         Tip relief of pinion and gear, used when the LSTE is computed.
     lste_points : int
         Samples per mesh cycle of the computed LSTE, >= 16.
+    errors : GearErrors, optional
+        Spacing and profile-slope errors, used when the LSTE is computed; the same on
+        every tooth of a member (errors that differ from tooth to tooth excite shaft
+        orders and sidebands, which the mesh-periodic analysis does not hold).
 
     Notes
     -----
@@ -86,6 +90,7 @@ class GearMesh:
     lste_file: str | None = None
     modifications: ProfileModification | None = None
     lste_points: int = 256
+    errors: GearErrors | None = None
 
     def __post_init__(self):
         for key in ("pinion_shaft", "pinion_node", "gear_shaft", "gear_node", "input_node", "output_node"):
@@ -112,6 +117,12 @@ class GearMesh:
             raise ModelError("lste_points", f"must be an integer >= 16, got {self.lste_points!r}")
         if self.driver not in ("pinion", "gear"):
             raise ModelError("driver", f"must be 'pinion' or 'gear', got {self.driver!r}")
+        if self.errors is not None and self.errors.hunting_cycles(self.geometry) > 1:
+            raise ModelError(
+                "errors",
+                "differ from tooth to tooth: they excite shaft orders and sidebands, which the "
+                "mesh-periodic analysis does not hold yet; give each member the same errors on every tooth",
+            )
 
     # geometry in the system
     @property
@@ -224,7 +235,9 @@ class GearMesh:
         """The loaded static transmission error computed from the geometry at W_0 (LSTEResult)."""
         if self.static_load <= 0:
             raise ModelError("torque", "a positive torque is needed to compute the LSTE from the geometry")
-        return _lste_cached(self.geometry, self.static_load, self.modifications, self.lste_points)
+        return _lste_cached(
+            self.geometry, self.static_load, self.modifications, self.lste_points, self.errors
+        )
 
     def excitation(self, H: int = 30):
         """The LSTE as a :class:`~nlgrd.gear.lste_file.MeshExcitation`, mean removed [m].
@@ -255,14 +268,14 @@ def _computed_stiffness(geometry: GearGeometry, load: float) -> float:
     return _lste_cached(geometry, load, None, 256).k_mean
 
 
-def _lste_cached(geometry, load, modifications, points):
+def _lste_cached(geometry, load, modifications, points, errors=None):
     """LSTE results are costly (tooth compliance integrals); models are frozen, so they
     are kept in the geometry's cache."""
     from nlgrd.gear.transmission_error import loaded_static_transmission_error
 
     return geometry.cache.get(
-        ("lste", load, modifications, points),
+        ("lste", load, modifications, points, errors),
         lambda: loaded_static_transmission_error(
-            geometry, load, modifications=modifications, points_per_cycle=points
+            geometry, load, modifications=modifications, errors=errors, points_per_cycle=points
         ),
     )

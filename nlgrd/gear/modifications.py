@@ -135,10 +135,10 @@ class GearErrors:
         at the pitch point; a scalar for every tooth or one value per tooth.
     """
 
-    spacing_pinion: ArrayLike | None = None
-    spacing_gear: ArrayLike | None = None
-    profile_slope_pinion: float | ArrayLike = 0.0
-    profile_slope_gear: float | ArrayLike = 0.0
+    spacing_pinion: NDArray | None = None
+    spacing_gear: NDArray | None = None
+    profile_slope_pinion: float | NDArray = 0.0
+    profile_slope_gear: float | NDArray = 0.0
 
     def __post_init__(self):
         for key in ("spacing_pinion", "spacing_gear", "profile_slope_pinion", "profile_slope_gear"):

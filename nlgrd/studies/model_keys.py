@@ -31,6 +31,8 @@ UNITS = {
     "start_roll_angle_pinion": "rad",
     "start_roll_angle_gear": "rad",
     "shape": "-",
+    "profile_slope_pinion": "m",
+    "profile_slope_gear": "m",
     "face_width": "m",
     "module": "m",
     "pressure_angle": "rad",
