@@ -149,6 +149,8 @@ def cmd_report(args) -> int:
     if not nb.is_file():
         raise ModelError("notebook", f"no notebook {args.notebook!r} (a file, or a name in {NOTEBOOKS})")
     args.model = str(nb)
+    if args.workers is not None and args.workers < 1:
+        raise ModelError("--workers", f"must be at least 1, got {args.workers}")
     common = {name: _literal(value) for name, value in args.p}
     if "out_dir" in common:
         raise ModelError("-p out_dir", "the batch sets out_dir; give --out")

@@ -105,6 +105,7 @@ def test_design_study_figures_are_captioned_and_study_files_rerun(design, tmp_pa
             "relief_map.png",
             "relief_curves.png",
             "jump_band.png",
+            "tolerance_distribution.png",
         }
     )
     # the study file written beside the results runs from the command line as it is
@@ -207,3 +208,19 @@ def test_a_misspelt_parameter_in_a_batch_fails_before_anything_runs(tmp_path):
     assert r.stderr.strip().startswith("nlgrd: error: ") and "to14k: parameters.rpm_mx" in r.stderr
     assert "\n" not in r.stderr.strip()
     assert not out.exists()
+
+
+@pytest.mark.notebook
+def test_tolerance_study_ran_the_study_files_draws(design):
+    """The tolerance section's rows are the shipped study file's first Latin-hypercube
+    draws (seed 2026, 6 in fast mode), every one a finished sweep with a peak above 1."""
+    from nlgrd.studies.study_file import load_study
+
+    study = dataclasses.replace(
+        load_study(ROOT / "data" / "studies" / "kubo_relief_tolerance.toml"), samples=6
+    )
+    expected = pd.DataFrame(study.parameter_sets())
+    tol = pd.read_csv(design / "tolerance_summary.csv")
+    assert (tol["status"] == "done").all() and (tol["dslr_peak [-]"] > 1).all()
+    for column in expected:
+        assert np.allclose(tol[column], expected[column], rtol=1e-9, atol=0)

@@ -32,7 +32,7 @@ from nlgrd.rotor.modal import modal_analysis
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
 
 DATA = Path(__file__).resolve().parent.parent / "data"
-MODELS = sorted(DATA.glob("**/*.toml"))
+MODELS = sorted(p for p in DATA.glob("**/*.toml") if p.parent.name != "studies")  # study files are not models
 
 
 def free_rotations(system) -> int:

@@ -355,8 +355,7 @@ def write_tables(study: Study, specs: list[TaskSpec], store: ResultStore) -> Non
     _atomic_parquet(summary, store.out / "summary.parquet", index=False)
     dims = [a.name for a in study.grid_axes] + (["sample"] if "sample" in summary else [])
     if dims:
-        numeric = summary.drop(columns=["task", "status", "error", "key"])
-        numeric = numeric.drop(columns=[a.name for a in study.axes if a.sampled])
+        numeric = summary.drop(columns=["task", "status", "error", "key"])  # drawn values stay as variables
         _atomic_parquet(numeric.set_index(dims), store.out / "grid.parquet", index=True)
     parts = []
     for s in specs:
