@@ -372,3 +372,127 @@ def test_profile_slope_tolerances_reach_the_lste_and_per_tooth_errors_are_refuse
     with pytest.raises(ModelError, match="differ from tooth to tooth") as err:
         model_from_file_data(data, study.model_file)
     assert err.value.key == "gear_pairs[0].errors"
+
+
+def _self_signed(folder: Path) -> tuple[Path, Path]:
+    """A self-signed certificate (its own CA) and its key, as PEM files, for 127.0.0.1."""
+    import datetime
+    import ipaddress
+
+    from cryptography import x509
+    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives.asymmetric import rsa
+    from cryptography.x509.oid import NameOID
+
+    key = rsa.generate_private_key(public_exponent=65537, key_size=2048)
+    name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "nlgrd-test")])
+    now = datetime.datetime.now(datetime.UTC)
+    cert = (
+        x509.CertificateBuilder()
+        .subject_name(name)
+        .issuer_name(name)
+        .public_key(key.public_key())
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(now - datetime.timedelta(minutes=5))
+        .not_valid_after(now + datetime.timedelta(days=1))
+        .add_extension(x509.BasicConstraints(ca=True, path_length=None), critical=True)
+        .add_extension(
+            x509.SubjectAlternativeName([x509.IPAddress(ipaddress.ip_address("127.0.0.1"))]), False
+        )
+        .sign(key, hashes.SHA256())
+    )
+    cert_file, key_file = folder / "cert.pem", folder / "key.pem"
+    cert_file.write_bytes(cert.public_bytes(serialization.Encoding.PEM))
+    key_file.write_bytes(
+        key.private_bytes(
+            serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8, serialization.NoEncryption()
+        )
+    )
+    return cert_file, key_file
+
+
+@pytest.mark.slow
+def test_a_tls_cluster_is_used_with_the_dask_configuration_certificates(study_file, serial, tmp_path):
+    """README: a ``dask scheduler`` and ``dask worker`` secured with TLS (one self-signed
+    certificate as CA, server and client, as ``distributed.Security.temporary`` makes),
+    and ``nlgrd study --scheduler tls://...`` taking the client's certificate from the Dask
+    configuration (here its environment form): the study runs and gives the serial
+    bytes. Without the configuration the client cannot connect: exit status 1, one line."""
+    cert, key = _self_signed(tmp_path)
+    tls = ["--tls-ca-file", cert, "--tls-cert", cert, "--tls-key", key]
+    dask = Path(sys.executable).with_name("dask")
+    sched_file = tmp_path / "scheduler.json"
+    procs = [
+        subprocess.Popen(
+            [
+                dask,
+                "scheduler",
+                "--protocol",
+                "tls",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                sched_file,
+                *tls,
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    ]
+    try:
+        import json
+
+        _wait_for(sched_file.exists, 60, "the scheduler file")
+        address = _wait_for(
+            lambda: json.loads(sched_file.read_text() or "{}").get("address"), 30, "the address"
+        )
+        assert address.startswith("tls://127.0.0.1:")
+        procs.append(
+            subprocess.Popen(
+                [
+                    dask,
+                    "worker",
+                    address,
+                    "--nthreads",
+                    "1",
+                    "--nworkers",
+                    "1",
+                    "--host",
+                    "127.0.0.1",
+                    "--no-dashboard",
+                    *tls,
+                ],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
+        )
+        config = {
+            "DASK_DISTRIBUTED__COMM__TLS__CA_FILE": str(cert),
+            "DASK_DISTRIBUTED__COMM__TLS__CLIENT__CERT": str(cert),
+            "DASK_DISTRIBUTED__COMM__TLS__CLIENT__KEY": str(key),
+            "DASK_DISTRIBUTED__COMM__REQUIRE_ENCRYPTION": "True",
+        }
+        out = tmp_path / "tls"
+        cmd = [*NLGRD, "study", str(study_file), "--scheduler", address, "--out", str(out), "--no-progress"]
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env={**os.environ, **config})
+        assert r.returncode == 0, r.stderr
+        assert (out / "summary.csv").read_bytes() == (serial / "summary.csv").read_bytes()
+        env = {**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "5s"}
+        bad = subprocess.run(
+            [*cmd[:-3], "--out", str(tmp_path / "no"), "--no-progress"],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            env=env,
+        )
+        assert (
+            bad.returncode == 1 and bad.stderr.startswith("nlgrd: error: ") and "Traceback" not in bad.stderr
+        )
+    finally:
+        for p in procs[::-1]:
+            p.terminate()
+        for p in procs:
+            p.wait(30)
