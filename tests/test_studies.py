@@ -20,6 +20,8 @@ comparisons below test the machinery, not the solver (which other modules check)
 
 from __future__ import annotations
 
+import contextlib
+import json
 import os
 import shutil
 import signal
@@ -108,66 +110,47 @@ def _wait_for(predicate, timeout: float, what: str):
     raise AssertionError(f"timed out waiting for {what}")
 
 
-@pytest.mark.slow
-def test_external_scheduler_and_workers_give_the_serial_bytes(study_file, serial, tmp_path):
+@contextlib.contextmanager
+def dask_cluster(folder: Path, workers: int, options: tuple = ()):
+    """``dask scheduler`` and ``workers`` x ``dask worker`` processes on 127.0.0.1 (with
+    ``options``, e.g. TLS files, on both); yields the scheduler's address."""
     dask = Path(sys.executable).with_name("dask")
-    sched_file = tmp_path / "scheduler.json"
+    sched_file = folder / "scheduler.json"
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
+    common = ["--host", "127.0.0.1", "--no-dashboard", *options]
     procs = [
-        subprocess.Popen(
-            [
-                dask,
-                "scheduler",
-                "--host",
-                "127.0.0.1",
-                "--port",
-                "0",
-                "--no-dashboard",
-                "--scheduler-file",
-                sched_file,
-            ],
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-        )
+        subprocess.Popen([dask, "scheduler", "--port", "0", "--scheduler-file", sched_file, *common], **quiet)
     ]
     try:
         _wait_for(sched_file.exists, 60, "the scheduler file")
-        import json
-
         address = _wait_for(
             lambda: json.loads(sched_file.read_text() or "{}").get("address"), 30, "the address"
         )
-        for _ in range(2):
+        for _ in range(workers):
             procs.append(
                 subprocess.Popen(
-                    [
-                        dask,
-                        "worker",
-                        address,
-                        "--nthreads",
-                        "1",
-                        "--nworkers",
-                        "1",
-                        "--host",
-                        "127.0.0.1",
-                        "--no-dashboard",
-                    ],
-                    stdout=subprocess.DEVNULL,
-                    stderr=subprocess.DEVNULL,
+                    [dask, "worker", address, "--nthreads", "1", "--nworkers", "1", *common], **quiet
                 )
             )
+        yield address
+    finally:
+        for p in procs[::-1]:
+            p.terminate()
+        for p in procs:
+            p.wait(30)
+
+
+@pytest.mark.slow
+def test_external_scheduler_and_workers_give_the_serial_bytes(study_file, serial, tmp_path):
+    with dask_cluster(tmp_path, workers=2) as address:
         from distributed import Client
 
         with Client(address) as client:
             client.wait_for_workers(2, timeout=60)
         out = study_file.parent / "external"
         run = run_study(load_study(study_file), out, scheduler=address, progress=False)
-        assert (run.computed, run.failed) == (16, 0)
-        assert (out / "summary.csv").read_bytes() == (serial / "summary.csv").read_bytes()
-    finally:
-        for p in procs[::-1]:
-            p.terminate()
-        for p in procs:
-            p.wait(30)
+    assert (run.computed, run.failed) == (16, 0)
+    assert (out / "summary.csv").read_bytes() == (serial / "summary.csv").read_bytes()
 
 
 @pytest.mark.slow
@@ -419,56 +402,9 @@ def test_a_tls_cluster_is_used_with_the_dask_configuration_certificates(study_fi
     configuration (here its environment form): the study runs and gives the serial
     bytes. Without the configuration the client cannot connect: exit status 1, one line."""
     cert, key = _self_signed(tmp_path)
-    tls = ["--tls-ca-file", cert, "--tls-cert", cert, "--tls-key", key]
-    dask = Path(sys.executable).with_name("dask")
-    sched_file = tmp_path / "scheduler.json"
-    procs = [
-        subprocess.Popen(
-            [
-                dask,
-                "scheduler",
-                "--protocol",
-                "tls",
-                "--host",
-                "127.0.0.1",
-                "--port",
-                "0",
-                "--no-dashboard",
-                "--scheduler-file",
-                sched_file,
-                *tls,
-            ],
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-        )
-    ]
-    try:
-        import json
-
-        _wait_for(sched_file.exists, 60, "the scheduler file")
-        address = _wait_for(
-            lambda: json.loads(sched_file.read_text() or "{}").get("address"), 30, "the address"
-        )
+    tls = ("--protocol", "tls", "--tls-ca-file", cert, "--tls-cert", cert, "--tls-key", key)
+    with dask_cluster(tmp_path, workers=1, options=tls) as address:
         assert address.startswith("tls://127.0.0.1:")
-        procs.append(
-            subprocess.Popen(
-                [
-                    dask,
-                    "worker",
-                    address,
-                    "--nthreads",
-                    "1",
-                    "--nworkers",
-                    "1",
-                    "--host",
-                    "127.0.0.1",
-                    "--no-dashboard",
-                    *tls,
-                ],
-                stdout=subprocess.DEVNULL,
-                stderr=subprocess.DEVNULL,
-            )
-        )
         config = {
             "DASK_DISTRIBUTED__COMM__TLS__CA_FILE": str(cert),
             "DASK_DISTRIBUTED__COMM__TLS__CLIENT__CERT": str(cert),
@@ -491,8 +427,3 @@ def test_a_tls_cluster_is_used_with_the_dask_configuration_certificates(study_fi
         assert (
             bad.returncode == 1 and bad.stderr.startswith("nlgrd: error: ") and "Traceback" not in bad.stderr
         )
-    finally:
-        for p in procs[::-1]:
-            p.terminate()
-        for p in procs:
-            p.wait(30)
