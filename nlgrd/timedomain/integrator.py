@@ -16,6 +16,9 @@ K_eff = M/(βΔt²) + (1+α)(γ/(βΔt) D + K) is factorised once (sparse LU). T
 enters through the single coordinate δ = wᵀq, so with z = K_eff⁻¹ w precomputed each
 step needs one sparse solve and the exact solution of the scalar monotone
 piecewise-linear equation x + c f(x) = p (c = (1+α) k_h wᵀz > 0): no Newton iterations.
+Up to a few hundred DOFs the linear part of a whole period is precomputed
+(:class:`nlgrd.timedomain.period_map.PeriodMap`), so that a step costs a dot product and
+that scalar equation; the last period is stepped again with all DOFs to record them.
 
 The integration starts from the static solution with the mesh at k_h in drive-side
 contact, (K + k_h w wᵀ) q_s = F0 + k_h w (e_0 + b) (least squares: a free torsional
@@ -37,6 +40,7 @@ from nlgrd.nonlinear.harmonics import differentiate, sample
 from nlgrd.nonlinear.metrics import MeshMetrics, TimeHistory, metrics_from_history
 from nlgrd.rotor.assembly import mesh_matrix
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
+from nlgrd.timedomain.period_map import MAX_STATE, PeriodMap
 
 
 @dataclass(frozen=True)
@@ -282,44 +286,59 @@ def integrate_fe(
     else:
         rhs0 = F0 + w * (force_w[0] - g) - D @ v - K @ u
         acc = spla.splu(M).solve(rhs0)
-    delta_hist = np.empty(ns)
-    ddot_hist = np.empty(ns)
-    g_hist = np.empty(ns)
-    q_hist = np.empty((N, ns)) if store_dofs else None
-    prev = None
-    diffs: list[float] = []
-    converged = False
-    scale0 = abs(F0 @ w) / (k_h * (w @ w)) if np.any(F0) else 0.0
-    p = 0
-    n = 0
-    state = np.concatenate([u, v, acc])
-    for p in range(1, max_periods + 1):
+    loads = F0[None, :] + np.outer(ap * np.roll(force_w, -1) - alpha * force_w, w)
+
+    def solve_mesh(pv: float, jn: int) -> float:
+        """The mesh force g given the prediction pv of δ - e with g = 0 (jn unused)."""
+        if pv > b:
+            return k_h * ((pv + cc * b) / (1 + cc) - b)
+        if pv < -b:
+            return k_h * ((pv - cc * b) / (1 + cc) + b)
+        return 0.0
+
+    def step_period(state, g, hist):
+        """One period step by step (all DOFs); fills ``hist`` = (δ, δ', g, q or None)."""
         for j in range(ns):
-            # state at step n (time n dt), phase j; advance to n + 1
-            if q_hist is not None:
-                q_hist[:, j] = state[:N]
-            delta_hist[j] = w @ state[:N]
-            ddot_hist[j] = w @ state[N : 2 * N]
-            g_hist[j] = g
+            if hist[3] is not None:
+                hist[3][:, j] = state[:N]
+            hist[0][j] = w @ state[:N]
+            hist[1][j] = w @ state[N : 2 * N]
+            hist[2][j] = g
             jn = (j + 1) % ns
             rhs = A_all @ state + F0 + w * (ap * force_w[jn] - alpha * force_w[j] + alpha * g)
             y = lu.solve(rhs)
-            pv = w @ y - e_s[jn]
-            if pv > b:
-                xx = (pv + cc * b) / (1 + cc)
-                g = k_h * (xx - b)
-            elif pv < -b:
-                xx = (pv - cc * b) / (1 + cc)
-                g = k_h * (xx + b)
-            else:
-                g = 0.0
+            g = solve_mesh(w @ y - e_s[jn], jn)
             un = y - ap * g * zvec
             u0, v0, acc0 = state[:N], state[N : 2 * N], state[2 * N :]
             an = a1 * (un - u0) - a2 * v0 - a3 * acc0
             vn = b1 * (un - u0) + b2 * v0 + b3 * acc0
             state = np.concatenate([un, vn, an])
-            n += 1
-        cur = delta_hist.copy()
+        return state, g
+
+    hist = (np.empty(ns), np.empty(ns), np.empty(ns), np.empty((N, ns)) if store_dofs else None)
+    pmap = PeriodMap(step, alpha, w[:, None], loads) if 3 * N + 1 <= MAX_STATE else None
+
+    e_next = np.roll(e_s, -1).tolist()
+    apcw = ap * cw
+
+    def solve_link(y_lin: float, j: int) -> tuple[float, float]:
+        g1 = solve_mesh(y_lin - e_next[j], j)
+        return y_lin - apcw * g1, g1
+
+    prev = None
+    diffs: list[float] = []
+    converged = False
+    scale0 = abs(F0 @ w) / (k_h * (w @ w)) if np.any(F0) else 0.0
+    p = 0
+    state = np.concatenate([u, v, acc])
+    for p in range(1, max_periods + 1):
+        start = (state, g)
+        if pmap is None:
+            state, g = step_period(state, g, hist)
+            cur = hist[0].copy()
+        else:
+            ys, s_end = pmap.run(np.append(state, g), solve_link)
+            state, g, cur = s_end[: 3 * N], float(s_end[-1]), ys[0]
         if prev is not None:
             d = float(np.max(np.abs(cur - prev)) / (np.ptp(cur) + scale0 + 1e-300))
             diffs.append(d)
@@ -329,6 +348,9 @@ def integrate_fe(
                     converged = True
                     break
         prev = cur
+    if pmap is not None and p:
+        state, g = step_period(*start, hist)  # the last period again, to record every history
+    delta_hist, ddot_hist, g_hist, q_hist = hist
     t = dt * np.arange(ns)
     force = g_hist + c_m * (ddot_hist - edot_s)
     hist = TimeHistory(t, delta_hist.copy(), ddot_hist.copy(), e_s.copy(), edot_s.copy(), force)

@@ -11,8 +11,10 @@ Hughes & Taylor 1977, Earthq. Eng. Struct. Dyn. 5:283; β = (1 - α)²/4, γ = 1
 a fixed step. Each step is linear in q except through the link coordinates y = Pᵀ q:
 with K_eff factorised once and S = Pᵀ K_eff⁻¹ P (d x d), the step solves
 y = y_lin - (1 + α) S g(y) by Newton on the d link coordinates only, with the links'
-pointwise tangents, then q follows. Integration runs period by period to a periodic
-steady state (the criterion of :func:`nlgrd.timedomain.integrator.integrate_fe`).
+pointwise tangents, then q follows (up to a few hundred DOFs through the precomputed
+:class:`nlgrd.timedomain.period_map.PeriodMap`, as in
+:func:`nlgrd.timedomain.integrator.integrate_fe`). Integration runs period by period to a
+periodic steady state (the criterion of :func:`nlgrd.timedomain.integrator.integrate_fe`).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from nlgrd.nonlinear.results import SweepResult, assemble_result
 from nlgrd.nonlinear.sweep import sweep_orders
 from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.integrator import hht_step
+from nlgrd.timedomain.period_map import MAX_STATE, PeriodMap
 
 
 @dataclass(frozen=True)
@@ -171,43 +174,71 @@ def link_time_response(
         acc = np.array(state0[2], dtype=float)
     else:
         acc = spla.splu(M).solve(F[0] - P @ g - D @ v - K @ u)
-    state = np.concatenate([u, v, acc])
     y_hist = np.empty((d, ns))
     out = np.asarray(output_dofs, dtype=int)
     q_hist = np.empty((out.size, ns))
-    scale_c = max((getattr(lk, "clearance", 0.0) for lk in model.links), default=0.0)
-    prev, diffs, converged, p = None, [], False, 0
-    for p in range(1, max_periods + 1):
+    eye = np.eye(d)
+
+    def solve_y(y_lin: NDArray, jn: int) -> tuple[NDArray, NDArray]:
+        """Link coordinates and forces at phase jn from the prediction with g = 0 (Newton on d)."""
+        y = y_lin.copy()
+        for _ in range(50):
+            gy, Ty = link_forces(y, theta[jn])
+            res = y - y_lin + ap * (S @ gy)
+            if abs(res).max() <= 1e-13 * (abs(y).max() + 1e-12):
+                return y, gy
+            y = y - np.linalg.solve(eye + ap * (S @ Ty), res)
+        return y, link_forces(y, theta[jn])[0]
+
+    def step_period(state: NDArray, g: NDArray) -> tuple[NDArray, NDArray]:
+        """One period step by step (all DOFs), recording y and the output DOFs."""
         for j in range(ns):
             y_hist[:, j] = P.T @ state[:N]
             q_hist[:, j] = state[out]
             jn = (j + 1) % ns
             rhs = A_all @ state + ap * F[jn] - alpha * F[j] + alpha * (P @ g)
             q_lin = lu.solve(rhs)
-            y_lin = P.T @ q_lin
-            y = y_lin.copy()
-            for _ in range(50):
-                gy, Ty = link_forces(y, theta[jn])
-                res = y - y_lin + ap * (S @ gy)
-                if np.max(np.abs(res)) <= 1e-13 * (np.max(np.abs(y)) + 1e-12):
-                    break
-                y = y - np.linalg.solve(np.eye(d) + ap * (S @ Ty), res)
-            g, _ = link_forces(y, theta[jn])
+            _, g = solve_y(P.T @ q_lin, jn)
             q_new = q_lin - ap * (Zp @ g)
             u_old, v_old, acc_old = state[:N], state[N : 2 * N], state[2 * N :]
             acc_new = a1 * (q_new - u_old) - a2 * v_old - a3 * acc_old
             v_new = v_old + dt * ((1 - gamma) * acc_old + gamma * acc_new)
             state = np.concatenate([q_new, v_new, acc_new])
+        return state, g
+
+    pmap = None
+    if 3 * N + d <= MAX_STATE:
+        pmap = PeriodMap(step, alpha, P, ap * np.roll(F, -1, axis=0) - alpha * F)
+
+    def solve_link(y_lin, j):
+        if d == 1:
+            y1, g1 = solve_y(np.array([y_lin]), (j + 1) % ns)
+            return float(y1[0]), float(g1[0])
+        return solve_y(y_lin, (j + 1) % ns)
+
+    scale_c = max((getattr(lk, "clearance", 0.0) for lk in model.links), default=0.0)
+    prev, diffs, converged, p = None, [], False, 0
+    state = np.concatenate([u, v, acc])
+    for p in range(1, max_periods + 1):
+        start = (state, g)
+        if pmap is None:
+            state, g = step_period(state, g)
+            cur = y_hist.copy()
+        else:
+            cur, s_end = pmap.run(np.concatenate([state, g]), solve_link)
+            state, g = s_end[: 3 * N], s_end[3 * N :]
         if prev is not None:
-            scale = float(np.max(np.ptp(y_hist, axis=1))) + scale_c + 1e-300
-            diffs.append(float(np.max(np.abs(y_hist - prev))) / scale)
+            scale = float(np.max(np.ptp(cur, axis=1))) + scale_c + 1e-300
+            diffs.append(float(np.max(np.abs(cur - prev))) / scale)
             if p >= min_periods and len(diffs) >= 2:
                 rho = diffs[-1] / diffs[-2] if diffs[-2] > 0 else 0.0
                 tail = diffs[-1] * rho / (1 - rho) if rho < 1 else np.inf
                 if diffs[-1] < tol and tail < tol:
                     converged = True
                     break
-        prev = y_hist.copy()
+        prev = cur
+    if pmap is not None and p:
+        state, g = step_period(*start)  # the last period again, to record the output DOFs
     return LinkTimeResponse(
         float(omega),
         y_hist.copy(),
