@@ -101,7 +101,7 @@ def build_geared_model(
         Highest mesh frequency to be solved [rad/s]; sizes the modal bases.
     H : int
         Largest number of harmonics to be used (for the modal basis).
-    receptance : {"auto", "direct", "modal"}
+    receptance : {"auto", "poles", "direct", "modal"}
         See :class:`~nlgrd.nonlinear.receptance.MeshReceptance`.
     lste_harmonics : int
         Harmonics kept of the LSTE (solutions use the first H).
@@ -269,7 +269,7 @@ def geared_sweep(
         Solver (see :func:`nlgrd.nonlinear.solvers.solve`).
     stability : bool
         Floquet multipliers of each point (projected linear part).
-    receptance : {"auto", "direct", "modal"}
+    receptance : {"auto", "poles", "direct", "modal"}
         See :class:`~nlgrd.nonlinear.receptance.MeshReceptance` (when ``model`` is built here).
     tol : float
         Convergence tolerance of the solver (relative residual).
