@@ -80,6 +80,7 @@ def test_modes_writes_table_csv_and_png(tmp_path, capsys):
     assert (tmp_path / "two_shaft_modes.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_campbell_writes_outputs(tmp_path):
     """`nlgrd campbell` writes the diagram, its CSV and the critical speeds."""
     assert main(["campbell", str(TWO_SHAFT), "--rpm", "0:20000:21", "--out", str(tmp_path)]) == 0

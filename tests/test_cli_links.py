@@ -38,6 +38,7 @@ def clearance_model(tmp_path: Path, entry: str = CLEARANCE) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_idler_train_sweep_writes_both_meshes(tmp_path, capsys):
     """Two meshes: columns of both, the base frequency (= mesh frequency) and the shaft
     speed base x 60 / 25 (25 input teeth, by hand); H chosen by the error estimate (on the

@@ -115,6 +115,7 @@ def test_helpers_and_bad_input():
         check_harmonics(rm, sweep(rm, w, 5), 5)
 
 
+@pytest.mark.slow
 def test_continuation_chooses_h_like_the_sweep():
     """converged_continuation on Kubo's single-DOF model from 1.3 to 0.3 x its natural
     frequency (main and superharmonic resonances, with folds): every stable point of the

@@ -55,6 +55,7 @@ def pair():
     return system, modal.receptance, direct.receptance
 
 
+@pytest.mark.slow
 def test_modal_reduction_equals_direct_solves(pair):
     """κ_k, F_k and their ω-derivatives, modal basis against direct sparse solves of the
     full model, every harmonic k = 1..9 at five base frequencies 1000-1700 Hz: within 1e-6

@@ -149,6 +149,7 @@ def test_stability_basis_follows_the_requested_cutoff():
     assert mr.state_space(f0, f0)[0].shape[0] == small
 
 
+@pytest.mark.slow
 def test_pole_residue_receptances_are_checked_and_fall_back_to_a_direct_solve(monkeypatch):
     """The a-posteriori check of the pole-residue form passes on the two-shaft model
     (difference < 1e-8 for every harmonic); with the check's tolerance forced to fail,

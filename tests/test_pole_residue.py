@@ -64,7 +64,7 @@ def test_pole_residue_solve_and_derivative_against_dense_solves():
     assert pr.check(A0, A1, A2, b, [1.0, 2.0]) < 1e-12
 
 
-@pytest.mark.parametrize("name", ["idler_train", "two_stage"])
+@pytest.mark.parametrize("name", ["idler_train", pytest.param("two_stage", marks=pytest.mark.slow)])
 def test_poles_equal_direct_solves_of_the_link_reduction(name):
     """κ_k, F_k, dκ_k/dω, dF_k/dω and every DOF's recovery: poles against direct LU at
     five base frequencies, 1e-8 of each array's largest entry."""
