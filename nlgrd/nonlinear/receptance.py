@@ -236,7 +236,12 @@ class MeshReceptance:
             cutoff_factor,
             rigid=R if R.shape[1] > 0 and self._rigid_decoupled() else None,
         )
-        self.basis, self.n_modes = V, modes.shape[1]
+        self._project(V, modes.shape[1])
+
+    def _project(self, V: NDArray, n_modes: int) -> None:
+        """Take ``V`` as the basis: the model's matrices projected on it."""
+        m = self.model
+        self.basis, self.n_modes = V, n_modes
         P = lambda A: V.T @ (A @ V)  # noqa: E731
         self._red = {"M": P(m.M), "K": P(m.K), "C": P(m.C + m.Ci), "G": P(m.G), "Kc": P(m.Kc)}
         self._red_hyst = [(h.speed_ratio, P(h.Kb), P(h.Kx)) for h in m.hysteretic_parts]
@@ -257,15 +262,8 @@ class MeshReceptance:
             N = sla.null_space((m.M @ R)[keep].T)
         V = np.zeros((m.n_dofs, N.shape[1]))
         V[keep] = N  # DOFs no mesh reaches respond exactly 0
-        self.basis, self.n_modes = V, V.shape[1]
-        P = lambda A: V.T @ (A @ V)  # noqa: E731
-        self._red = {"M": P(m.M), "K": P(m.K), "C": P(m.C + m.Ci), "G": P(m.G), "Kc": P(m.Kc)}
-        self._red_hyst = [(h.speed_ratio, P(h.Kb), P(h.Kx)) for h in m.hysteretic_parts]
-        self._red_bear = [(b, r, V[dofs]) for b, r, dofs in m.tabulated_bearings]
-        self._W_red = V.T @ self.W
+        self._project(V, V.shape[1])
         self._shift = self._W_red @ np.diag(self.k_h) @ self._W_red.T
-        self._poles.clear()
-        self._stacks.clear()
 
     def _rigid_decoupled(self) -> bool:
         """True when the rigid-body modes R (which move no mesh) are free of damping,
