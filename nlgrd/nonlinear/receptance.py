@@ -404,6 +404,19 @@ class MeshReceptance:
                 self._stacks.pop(next(iter(self._stacks)))
         return self._stacks[key]
 
+    def _unshift(self, rows: slice, h: NDArray, U: NDArray, dh: NDArray | None) -> None:
+        """In place on ``rows``: h', U', dh' of Z + W K Wᵀ (``"poles"``) to those of Z:
+        h = h' (I - K h')⁻¹, U = U' (I - K h')⁻¹, dh = (I - h' K)⁻¹ dh' (I - K h')⁻¹."""
+        if self._shift is None:
+            return
+        eye, kd = np.eye(self.n_coords), np.diag(self.k_h)
+        hs = h[rows]
+        left = np.linalg.inv(eye - kd @ hs)
+        if dh is not None:
+            dh[rows] = np.linalg.inv(eye - hs @ kd) @ dh[rows] @ left
+        h[rows] = hs @ left
+        U[rows] = U[rows] @ left
+
     def _solve(self, omega: float, H: int, derivative: bool = False) -> list:
         """[h_k, U_k at the output DOFs, dh_k/dω or None] for k = 1..H, cached per frequency.
 
@@ -430,8 +443,6 @@ class MeshReceptance:
                 dh[: start - 1] = dh0
         derivative = dh is not None
         poles = self.method in ("modal", "poles") and not self._red_bear and omega > 0
-        eye = np.eye(nc)
-        kd = np.diag(self.k_h)
         stack = self._pole_stack(start, H) if poles else None
         if stack is not None:  # every harmonic in pole-residue form: all at once
             lam, cw, co, Y = stack
@@ -441,13 +452,7 @@ class MeshReceptance:
             U[start - 1 :] = co @ Yg
             if derivative:
                 dh[start - 1 :] = -cw @ (Yg * g[:, :, None])
-            if self._shift is not None:
-                hs = h[start - 1 :]
-                left = np.linalg.inv(eye - kd @ hs)
-                if derivative:
-                    dh[start - 1 :] = np.linalg.inv(eye - hs @ kd) @ dh[start - 1 :] @ left
-                h[start - 1 :] = hs @ left
-                U[start - 1 :] = U[start - 1 :] @ left
+            self._unshift(slice(start - 1, H), h, U, dh if derivative else None)
             start = H + 1
         for k in range(start, H + 1):
             w = k * omega
@@ -460,12 +465,7 @@ class MeshReceptance:
                 U[k - 1] = co @ Yg
                 if derivative:
                     dh[k - 1] = -cw @ (Yg * g[:, None])
-                if self._shift is not None:  # h' of Z + W K Wᵀ back to h of Z
-                    left = np.linalg.inv(eye - kd @ h[k - 1])
-                    if derivative:
-                        dh[k - 1] = np.linalg.inv(eye - h[k - 1] @ kd) @ dh[k - 1] @ left
-                    h[k - 1] = h[k - 1] @ left
-                    U[k - 1] = U[k - 1] @ left
+                self._unshift(slice(k - 1, k), h, U, dh if derivative else None)
             elif self.method == "direct":
                 keep, sel, Z, rows, cols, Wk, out = self._restricted()
                 Z.data = self.model.dynamic_stiffness_data(w, speed)[sel]

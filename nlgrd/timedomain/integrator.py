@@ -288,8 +288,8 @@ def integrate_fe(
         acc = spla.splu(M).solve(rhs0)
     loads = F0[None, :] + np.outer(ap * np.roll(force_w, -1) - alpha * force_w, w)
 
-    def solve_mesh(pv: float, jn: int) -> float:
-        """The mesh force g given the prediction pv of δ - e with g = 0 (jn unused)."""
+    def solve_mesh(pv: float) -> float:
+        """The mesh force g given the prediction pv of δ - e with g = 0."""
         if pv > b:
             return k_h * ((pv + cc * b) / (1 + cc) - b)
         if pv < -b:
@@ -307,7 +307,7 @@ def integrate_fe(
             jn = (j + 1) % ns
             rhs = A_all @ state + F0 + w * (ap * force_w[jn] - alpha * force_w[j] + alpha * g)
             y = lu.solve(rhs)
-            g = solve_mesh(w @ y - e_s[jn], jn)
+            g = solve_mesh(w @ y - e_s[jn])
             un = y - ap * g * zvec
             u0, v0, acc0 = state[:N], state[N : 2 * N], state[2 * N :]
             an = a1 * (un - u0) - a2 * v0 - a3 * acc0
@@ -322,7 +322,7 @@ def integrate_fe(
     apcw = ap * cw
 
     def solve_link(y_lin: float, j: int) -> tuple[float, float]:
-        g1 = solve_mesh(y_lin - e_next[j], j)
+        g1 = solve_mesh(y_lin - e_next[j])
         return y_lin - apcw * g1, g1
 
     prev = None
