@@ -194,7 +194,8 @@ def jump_to_branch(
     tol: float = 1e-10,
     require_stable: bool = True,
     max_excursion: float = 50.0,
-) -> tuple[NDArray | None, int, int]:
+    max_overshoot: float = 20.0,
+) -> tuple[NDArray | None, int, int, NDArray | None]:
     """Find the solution at ``omega_target`` reached after the branch through ``omega_prev`` folded.
 
     Follows the curve from (z_prev, ω_prev) towards ω_target by arc-length continuation
@@ -231,6 +232,11 @@ def jump_to_branch(
     max_excursion : float
         Give up when the curve strays from ``omega_prev`` by more than ``max_excursion``
         times |omega_target - omega_prev| plus half of |omega_prev| [-].
+    max_overshoot : float
+        Give up when the curve has passed ``omega_target`` by more than ``max_overshoot``
+        times |omega_target - omega_prev| plus 2 % of |omega_target| [-]: it crossed the
+        target without a stable landing and runs on along a branch away from it (a
+        slow sweep does not reach an orbit that only a far fold brings back).
 
     Returns
     -------
@@ -240,6 +246,10 @@ def jump_to_branch(
         Continuation steps taken.
     folds : int
         Turning points passed.
+    unstable : ndarray or None
+        With ``require_stable``, when no stable landing was found: the first crossing of
+        ``omega_target`` that converged but is unstable (harmonics as above), the orbit a
+        sweep reports as "no stable mesh-periodic response"; otherwise None.
     """
     direction = 1 if omega_target > omega_prev else -1
     tracer = Tracer(model, H, z_prev, omega_prev, 1e-9)
@@ -247,6 +257,7 @@ def jump_to_branch(
     prev: CurvePoint | None = None
     steps = 0
     folds = 0
+    unstable = None
     for p in tracer.trace(z_prev, omega_prev, direction, 0.01, 1e-8, 0.2, max_steps, grow_below=4):
         steps += 1
         if prev is not None and np.sign(p.tangent[-1]) != np.sign(prev.tangent[-1]):
@@ -268,8 +279,12 @@ def jump_to_branch(
                     )
                     ok = bool(np.max(np.abs(mu)) < 1 + STABLE_RTOL)
                 if ok:
-                    return sol.harmonics, steps, folds
+                    return sol.harmonics, steps, folds, None
+                if unstable is None:
+                    unstable = sol.harmonics
         if abs(p.omega - omega_prev) > max_excursion * span + 0.5 * abs(omega_prev):
             break
+        if direction * (p.omega - omega_target) > max_overshoot * span + 0.02 * abs(omega_target):
+            break
         prev = p
-    return None, steps, folds
+    return None, steps, folds, unstable

@@ -73,7 +73,8 @@ def restart(model, problem, z_prev, omega, H, method, tol, max_iter):
     """Land on another branch after a fold without arc-length continuation.
 
     Newton is started from the full-contact linear response and from the previous
-    solution with its alternating part scaled by 1/4, 1/2, 2 and 4. Of the converged
+    solution with its alternating part scaled by 1/4, 1/2, 2 and 4, and gives up on a
+    start where it stalls (``stall`` of :func:`nlgrd.nonlinear.solvers.solve`). Of the converged
     solutions that are stable (checked whenever the model has a linear state space),
     the one nearest the previous solution is returned (None if there is none): after a
     fold a slow sweep falls to the nearest coexisting stable branch, in the usual case
@@ -113,7 +114,7 @@ def restart(model, problem, z_prev, omega, H, method, tol, max_iter):
         guesses.append(g.reshape(z_prev.shape))
     best, best_d = None, np.inf
     for guess in guesses:
-        cand = solve(problem, guess, method=method, tol=tol, max_iter=max_iter, fallback=False)
+        cand = solve(problem, guess, method=method, tol=tol, max_iter=max_iter, fallback=False, stall=True)
         if not cand.converged or not is_stable(model, cand, omega):
             continue
         d = distance(cand, z_prev)
@@ -283,7 +284,9 @@ def follow_branch(
     switched : bool
         Continuation passed a fold on the way: the point is a jump.
     """
-    zj, steps, folds = jump_to_branch(model, H, z_prev, omega_prev, omega, tol=tol, require_stable=stability)
+    zj, steps, folds, _ = jump_to_branch(
+        model, H, z_prev, omega_prev, omega, tol=tol, require_stable=stability
+    )
     if zj is None:
         return sol, False
     fol = solve(problem, zj, method="newton", tol=tol, max_iter=max_iter, fallback=False)
@@ -346,7 +349,7 @@ def approach(model, problem, order, i, H, method, tol, max_iter, stability, look
         start = solve(model.at(float(wk), H), None, method=method, tol=tol, max_iter=max_iter, fallback=True)
         if not start.converged:
             continue
-        zj, steps, _ = jump_to_branch(
+        zj, steps, _, _ = jump_to_branch(
             model, H, start.harmonics, float(wk), omega, tol=tol, require_stable=stability
         )
         if zj is None:

@@ -270,8 +270,9 @@ def _sweep_pass(
                 if cand is not None:
                     sol, switched = cand, True
                     try_jump = False
+            searched = False  # the landing search has already looked for a stable orbit here
             if not sol.converged and try_jump:
-                zj, steps, folds = jump_to_branch(
+                zj, steps, folds, unstable = jump_to_branch(
                     model, H, z, last_w, float(w), tol=tol, require_stable=stability
                 )
                 if zj is not None:
@@ -292,6 +293,11 @@ def _sweep_pass(
                 elif auto and (cand := landing.restart(model, problem, z, w, H, method, tol, max_iter)):
                     sol, switched = cand, True
                     sol = landing.nearest_landing(sol, z, others())
+                elif unstable is not None:  # no stable orbit found: report the unstable crossing
+                    sol = solve(
+                        problem, unstable, method="newton", tol=tol, max_iter=max_iter, fallback=False
+                    )
+                    switched, searched = folds > 0, auto
                 else:  # Newton from the previous point without giving up early, then hybr
                     sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback)
             if not sol.converged and auto and pool:  # the branch ended: another direction's orbit
@@ -311,7 +317,9 @@ def _sweep_pass(
                     if leave_unstable and fmax >= 1 + STABLE_RTOL:
                         fold = abs(dom.imag) <= 1e-6 * abs(dom) and dom.real > 0
                         cand = (
-                            landing.restart(model, problem, z, w, H, method, tol, max_iter) if fold else None
+                            landing.restart(model, problem, z, w, H, method, tol, max_iter)
+                            if fold and not searched
+                            else None
                         )
                         if fold and auto:
                             for c in others():

@@ -1,7 +1,7 @@
 """Time integration of the full geared finite-element model, the independent reference
 of its harmonic balance (:class:`nlgrd.nonlinear.geared.GearedModel`): one frequency
 (:func:`time_response`) and sweeps, each point continuing from the last
-(:func:`time_sweep`).
+(:func:`time_sweep`), or from a harmonic-balance orbit (:func:`start_from_harmonics`).
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.geared import GearedModel
-from nlgrd.nonlinear.harmonics import analyse
+from nlgrd.nonlinear.harmonics import analyse, real_to_complex
 from nlgrd.nonlinear.results import SweepResult, assemble_result
 from nlgrd.nonlinear.sweep import sweep_orders
 from nlgrd.threads import single_blas_thread
@@ -29,6 +29,8 @@ def time_response(
     tol: float = 1e-6,
     state0: tuple | None = None,
     store_dofs: bool = False,
+    max_periods: int = 3000,
+    min_periods: int = 5,
 ):
     """Direct time integration of the full FE model with the nonlinear mesh at one frequency.
 
@@ -51,6 +53,8 @@ def time_response(
         Start state (the end of the previous frequency); default the static solution.
     store_dofs : bool
         Keep every DOF over the last period.
+    max_periods, min_periods : int
+        Most and fewest mesh periods integrated [-].
 
     Returns
     -------
@@ -80,7 +84,42 @@ def time_response(
         tol=tol,
         state0=state0,
         store_dofs=store_dofs,
+        max_periods=max_periods,
+        min_periods=min_periods,
     )
+
+
+def start_from_harmonics(model: GearedModel, omega: float, harmonics: NDArray) -> tuple:
+    """The state (q, q', q'') at θ = 0 of a harmonic-balance solution, to integrate from it.
+
+    Every DOF is recovered from the mesh harmonics (G_k = F_k - κ_k Y_k, the balance the
+    solver met; :meth:`MeshReceptance.recover`). The integration then checks
+    independently whether the orbit is a periodic solution of the full equations that
+    attracts: an unstable one departs.
+
+    Parameters
+    ----------
+    model : GearedModel
+        The model solved.
+    omega : float
+        Mesh frequency [rad/s].
+    harmonics : ndarray (2H+1,) or (1, 2H+1)
+        Real harmonics [y_0, a_1, b_1, ...] of δ [m].
+
+    Returns
+    -------
+    tuple of ndarray
+        (q, q', q'') at θ = 0 [m, m/s, m/s²] (angles in rad).
+    """
+    z = np.asarray(harmonics, dtype=float).reshape(-1)
+    H = (z.size - 1) // 2
+    Y = real_to_complex(z)[:, None]
+    F = np.asarray(model.reduced.force(omega, H), dtype=complex).reshape(H + 1, -1)
+    kap = np.asarray(model.reduced.kappa(omega, H), dtype=complex).reshape(H + 1, -1)
+    mr = model.receptance
+    Q = mr.recover(omega, Y, F - kap * Y, F, np.arange(mr.model.n_dofs))
+    kw = 1j * omega * np.arange(H + 1)[:, None]  # x(θ) = Re Σ_k Q_k e^{ikθ}
+    return tuple(np.real(np.sum(Q * kw**p, axis=0)) for p in range(3))
 
 
 def time_sweep(
