@@ -15,7 +15,7 @@ e_0 is kept as given (it only shifts δ by e_0).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -25,6 +25,7 @@ from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.harmonics import real_to_complex, resize_harmonics
 from nlgrd.nonlinear.state_space import LinearStateSpace
+from nlgrd.nonlinear.subharmonic import spread
 
 
 @dataclass(frozen=True)
@@ -91,6 +92,22 @@ class SDOFGearPair:
             / (pinion_inertia * gear_base_radius**2 + gear_inertia * pinion_base_radius**2)
         )
         return cls(m, mesh_stiffness, half_backlash, static_load, np.asarray(lste), damping_ratio)
+
+    def subharmonic(self, nu: int) -> SDOFGearPair:
+        """The same gear pair described on the base ω / ν: the LSTE moved to harmonics νk
+        (:func:`nlgrd.nonlinear.subharmonic.spread`), for orbits of period ν mesh periods.
+        Solve and integrate it at ω / ν.
+
+        Parameters
+        ----------
+        nu : int
+            Mesh periods per base period [-].
+
+        Returns
+        -------
+        SDOFGearPair
+        """
+        return replace(self, lste=spread(self.lste, nu))
 
     @property
     def mesh_damping(self) -> float:

@@ -1,0 +1,302 @@
+"""Period-ν harmonic balance: orbits that repeat every ν mesh periods (issue 12, items 1-2).
+
+A period-ν orbit is written in harmonics of the base ω_b = ω / ν (ω the mesh frequency).
+Every mesh-periodic excitation (LSTE, its damping forcing, the static load) then sits at
+the harmonics νk of the base; the response holds all of them, and the components at
+base harmonics j that are not multiples of ν are its subharmonic content (at j ω / ν).
+Receptances, force laws, Floquet stability and the output metrics work unchanged on the
+base: the force law samples x = δ - e over the long period, and the monodromy over 2π/ω_b
+is the ν-th power of the period-1 one when the orbit is period-1.
+
+Period doubling (Kahraman & Singh 1990, J. Sound Vib. 142:49; Seydel 2010, §7.4): where
+a period-1 orbit's Floquet multiplier crosses -1, the period-2 harmonic-balance Jacobian at
+that orbit (spread onto ω/2) is singular. It is block diagonal in the even and the odd
+base harmonics (the tangent stiffness of a period-1 orbit holds even harmonics only), and
+the odd block's null vector, the critical Floquet mode, is the direction in which the
+period-2 branch leaves (:func:`branch_off`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from nlgrd.errors import ModelError
+from nlgrd.nonlinear.floquet import floquet_multipliers
+from nlgrd.nonlinear.harmonic_balance import HarmonicSolution, ReducedModel, ReducedProblem
+from nlgrd.nonlinear.harmonics import n_harmonics
+from nlgrd.nonlinear.metrics import MeshMetrics, metrics_from_harmonics
+from nlgrd.nonlinear.results import SweepResult, assemble_result, dominant_multiplier
+from nlgrd.nonlinear.solvers import solve
+from nlgrd.nonlinear.sweep import sweep_orders
+from nlgrd.threads import single_blas_thread
+
+#: Subharmonic content below this fraction of the largest alternating amplitude is rounding:
+#: the orbit has the shorter period.
+SUBHARMONIC_RTOL = 1e-6
+#: Starts of :func:`branch_off`: the critical mode scaled to these fractions of the
+#: period-1 orbit's largest alternating amplitude.
+BRANCH_OFF_SCALES = (0.05, 0.2, 0.5, 1.0)
+
+
+def _check_period(nu: int) -> int:
+    if int(nu) != nu or nu < 1:
+        raise ModelError("period", f"a whole number of mesh periods >= 1, got {nu!r}")
+    return int(nu)
+
+
+def spread(z: ArrayLike, nu: int) -> NDArray[np.float64]:
+    """Harmonics of ω written as harmonics of ω / ν: harmonic k moves to νk.
+
+    Parameters
+    ----------
+    z : array_like (..., 2H+1)
+        Real harmonics [x_0, a_1, b_1, ...] of a mesh-periodic signal (any unit).
+    nu : int
+        Mesh periods per base period [-].
+
+    Returns
+    -------
+    ndarray (..., 2νH+1)
+        The same signal in harmonics of the base ω / ν (zeros between).
+    """
+    nu = _check_period(nu)
+    z = np.asarray(z, dtype=float)
+    H = n_harmonics(z)
+    out = np.zeros((*z.shape[:-1], 2 * nu * H + 1))
+    out[..., 0] = z[..., 0]
+    k = np.arange(1, H + 1)
+    out[..., 2 * nu * k - 1] = z[..., 1::2]
+    out[..., 2 * nu * k] = z[..., 2::2]
+    return out
+
+
+def subharmonic_mask(H: int, nu: int) -> NDArray[np.bool_]:
+    """Positions in real harmonics [x_0, a_1, b_1, ...] of H base harmonics whose harmonic
+    is not a multiple of ν (the subharmonic part).
+
+    Parameters
+    ----------
+    H : int
+        Number of base harmonics.
+    nu : int
+        Mesh periods per base period.
+
+    Returns
+    -------
+    ndarray of bool (2H+1,)
+    """
+    nu = _check_period(nu)
+    j = np.concatenate([[0], np.repeat(np.arange(1, H + 1), 2)])
+    return j % nu != 0
+
+
+def amplitudes(z: ArrayLike) -> NDArray[np.float64]:
+    """|X_j| of every base harmonic j = 1..H, per coordinate.
+
+    Parameters
+    ----------
+    z : array_like (..., 2H+1)
+        Real harmonics [x_0, a_1, b_1, ...] (any unit).
+
+    Returns
+    -------
+    ndarray (..., H)
+        sqrt(a_j² + b_j²), the amplitude of the component at j times the base (unit of z).
+    """
+    z = np.asarray(z, dtype=float)
+    return np.hypot(z[..., 1::2], z[..., 2::2])
+
+
+def period_of(z: ArrayLike, nu: int, rtol: float = SUBHARMONIC_RTOL) -> int:
+    """The period of an orbit of period ν (in mesh periods): the smallest divisor p of ν
+    such that every base harmonic that is not a multiple of ν / p is below ``rtol`` times
+    the largest alternating amplitude.
+
+    Parameters
+    ----------
+    z : array_like (n, 2H+1) or (2H+1,)
+        Real harmonics of the base ω / ν.
+    nu : int
+        Mesh periods of the base period.
+    rtol : float
+        Relative amplitude below which a component counts as absent [-].
+
+    Returns
+    -------
+    int
+        p in mesh periods (1 for a mesh-periodic orbit).
+    """
+    nu = _check_period(nu)
+    a = np.atleast_2d(amplitudes(z))
+    top = float(np.max(a)) if a.size else 0.0
+    j = np.arange(1, a.shape[-1] + 1)
+    for p in (d for d in range(1, nu + 1) if nu % d == 0):
+        other = j % (nu // p) != 0
+        if top == 0 or not np.any(a[:, other] > rtol * top):
+            return p
+    return nu
+
+
+def branch_off(
+    problem: ReducedProblem,
+    z1: ArrayLike,
+    nu: int = 2,
+    *,
+    tol: float = 1e-10,
+    max_iter: int = 50,
+    scales: tuple[float, ...] = BRANCH_OFF_SCALES,
+) -> HarmonicSolution | None:
+    """A period-ν orbit near a period-1 orbit that has lost stability by period doubling.
+
+    The harmonic-balance Jacobian of the period-ν problem at the period-1 orbit ``z1``
+    (spread onto the base) couples the subharmonic positions only among themselves; the
+    right singular vector of their block's smallest singular value is the critical
+    mode. Newton starts from z1 ± s a φ (a the orbit's largest alternating amplitude, s
+    in ``scales``) and the first converged orbit of period ν is returned.
+
+    Parameters
+    ----------
+    problem : ReducedProblem
+        The period-ν problem at the base frequency ω / ν.
+    z1 : array_like (n, 2H₁+1)
+        The period-1 orbit: real harmonics of ω of the nonlinear coordinates [m].
+    nu : int
+        Mesh periods of the orbit sought (2: period doubling).
+    tol, max_iter : float, int
+        Newton's tolerance (relative residual) and iteration limit per start.
+    scales : tuple of float
+        Sizes of the starts [-].
+
+    Returns
+    -------
+    HarmonicSolution or None
+        The period-ν orbit (its ``message`` names the start), None when every start
+        converged back to period 1 or failed.
+    """
+    n, H = problem.n_coords, problem.H
+    z1 = np.atleast_2d(np.asarray(z1, dtype=float))
+    H1 = H // nu
+    zs = spread(np.pad(z1, ((0, 0), (0, max(0, 2 * H1 + 1 - z1.shape[1]))))[:, : 2 * H1 + 1], nu)
+    zs = np.pad(zs, ((0, 0), (0, 2 * H + 1 - zs.shape[1]))).reshape(-1)
+    sub = np.tile(subharmonic_mask(H, nu), n)
+    J = problem.residual_jacobian(zs)[1]
+    phi = np.zeros(zs.size)
+    phi[sub] = np.linalg.svd(J[np.ix_(sub, sub)])[2][-1]
+    a = float(np.max(amplitudes(z1))) or float(np.max(np.abs(z1))) or 1.0
+    for s in scales:
+        for sign in (1.0, -1.0):
+            sol = solve(problem, zs + sign * s * a * phi, tol=tol, max_iter=max_iter, fallback=False)
+            if sol.converged and period_of(sol.harmonics, nu) == nu:
+                return HarmonicSolution(
+                    sol.omega,
+                    sol.harmonics,
+                    True,
+                    sol.residual,
+                    sol.iterations,
+                    sol.method,
+                    sol.iterate,
+                    f"period {nu} from the critical mode, start {sign * s:+g} x amplitude",
+                )
+    return None
+
+
+@single_blas_thread
+def period_sweep(
+    model: ReducedModel,
+    omegas: ArrayLike,
+    H: int,
+    nu: int,
+    period1: SweepResult,
+    direction: str = "up",
+    *,
+    stability: bool = True,
+    tol: float = 1e-10,
+    max_iter: int = 50,
+) -> SweepResult:
+    """Follow the period-ν orbits that start where period-1 orbits lose stability by period
+    doubling (ν = 2), by natural continuation over a grid of mesh frequencies.
+
+    At each frequency Newton starts from the previous period-ν orbit; when it fails or
+    falls back onto a period-1 orbit, and the period-1 orbit there (``period1``, on the
+    same grid) has a real multiplier < -1, :func:`branch_off` starts the branch afresh.
+    Points without a period-ν orbit are kept, not converged, with NaN outputs.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model on the base ω / ν (mesh excitation at harmonics νk), e.g.
+        ``SDOFGearPair.subharmonic(nu).reduced_model()``.
+    omegas : array_like
+        Mesh frequencies [rad/s].
+    H : int
+        Harmonics of the base [-] (ν times those of a period-1 solution of equal resolution).
+    nu : int
+        Mesh periods of the orbits followed [-].
+    period1 : SweepResult
+        Period-1 solutions with Floquet multipliers at the same frequencies.
+    direction : {"up", "down"}
+        Sweep direction.
+    stability : bool
+        Floquet multipliers over the period 2πν/ω.
+    tol, max_iter : float, int
+        Newton's tolerance (relative residual) and iteration limit.
+
+    Returns
+    -------
+    SweepResult
+        ``omega`` the mesh frequencies; ``harmonics`` real harmonics of the base ω / ν
+        [m]; metrics over the whole period ν T (force extremes, RMS DTE);
+        ``dominant_multiplier`` of the period-ν map. :func:`period_of` gives each point's
+        period.
+    """
+    nu = _check_period(nu)
+    (_, order), *_ = sweep_orders(np.asarray(omegas, dtype=float), direction)
+    p1 = {float(w): i for i, w in enumerate(period1.omega) if period1.direction[i] == direction}
+    mesh = model.mesh
+    rows: dict[str, list] = {k: [] for k in "wzcrifmu"}
+    z = None
+    for w in order:
+        base = float(w) / nu
+        problem = model.at(base, H)
+        sol = None
+        if z is not None:
+            sol = solve(problem, z, tol=tol, max_iter=max_iter, fallback=False, stall=True)
+            if not (sol.converged and period_of(sol.harmonics, nu) == nu):
+                sol = None
+        i1 = p1.get(float(w))
+        if sol is None and i1 is not None and period1.converged[i1]:
+            mu1 = complex(period1.dominant_multiplier[i1])
+            if abs(mu1.imag) <= 1e-6 * abs(mu1) and mu1.real < -1:
+                sol = branch_off(problem, period1.harmonics[i1], nu, tol=tol, max_iter=max_iter)
+        ok = sol is not None
+        z = sol.harmonics if ok else None
+        n_nl = problem.n_coords
+        harm = z if ok else np.full((n_nl, 2 * H + 1), np.nan)
+        fmax, dom = np.nan, complex(np.nan, np.nan)
+        ss = model.linear_state_space(base) if (stability and ok) else None
+        if ss is not None:
+            fmax, dom = dominant_multiplier(floquet_multipliers(ss, model.nonlinearities, z, base))
+        met = (
+            metrics_from_harmonics(harm[mesh.coord], base, mesh)
+            if ok and mesh is not None
+            else MeshMetrics.nan(H)
+        )
+        vals = (w, harm, ok, sol.residual if ok else np.nan, sol.iterations if ok else 0, fmax, met, dom)
+        for k, v in zip("wzcrifmu", vals, strict=True):
+            rows[k].append(v)
+    n = len(rows["w"])
+    return assemble_result(
+        rows["w"],
+        [direction] * n,
+        rows["z"],
+        rows["c"],
+        rows["r"],
+        rows["i"],
+        rows["f"],
+        rows["m"],
+        f"harmonic balance, period {nu} (H={H} of the base ω/{nu})",
+        [False] * n,
+        [False] * n,
+        rows["u"],
+    )
