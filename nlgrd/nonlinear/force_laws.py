@@ -184,6 +184,35 @@ class BacklashMesh:
 
 
 @dataclass(frozen=True)
+class ContactStop(BacklashMesh):
+    """A one-sided contact: k (x - g) while x = y - e(θ) exceeds the gap g, nothing below it
+    (an impact oscillator's stop, a gear mesh whose back flank never engages).
+
+    The backlash law with its back-side contact removed: the same exact contact
+    intervals, with the intervals of x < -g counted as separation, so its exact Fourier
+    coefficients, Jacobian and Floquet segments are those of :class:`BacklashMesh`
+    restricted to drive-side contact. Parameters as :class:`BacklashMesh`
+    (``half_backlash`` is the gap g [m]); only ``method="exact"``.
+    """
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.method != "exact":
+            raise ModelError("method", f"a contact stop has exact coefficients only, got {self.method!r}")
+
+    def _intervals(self, x: NDArray) -> ContactIntervals:
+        iv = super()._intervals(x)
+        if not np.any(iv.state < 0):
+            return iv
+        return ContactIntervals(iv.start, iv.end, np.maximum(iv.state, 0))
+
+    def force_time(self, y: NDArray, theta: NDArray) -> NDArray:
+        """Contact force k (x - g)⁺ at angles θ for coordinate samples y (1, N)."""
+        x = np.asarray(y).reshape(1, -1) - evaluate(self.lste, theta)
+        return self.stiffness * np.maximum(x - self.half_backlash, 0.0)
+
+
+@dataclass(frozen=True)
 class AFTNonlinearity:
     """Any scalar local force law g = force(y - offset(θ)) by AFT: plug-in example.
 
