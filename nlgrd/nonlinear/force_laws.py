@@ -191,8 +191,17 @@ class ContactStop(BacklashMesh):
     The backlash law with its back-side contact removed: the same exact contact
     intervals, with the intervals of x < -g counted as separation, so its exact Fourier
     coefficients, Jacobian and Floquet segments are those of :class:`BacklashMesh`
-    restricted to drive-side contact. Parameters as :class:`BacklashMesh`
-    (``half_backlash`` is the gap g [m]); only ``method="exact"``.
+    restricted to drive-side contact.
+
+    Parameters
+    ----------
+    stiffness : float
+        Contact stiffness k [N/m].
+    half_backlash : float
+        The gap g [m], >= 0.
+    lste : array_like
+        Real harmonics of the seat's motion e(θ) [m].
+    Other parameters as :class:`BacklashMesh` (``method`` "exact" only).
     """
 
     def __post_init__(self):
@@ -210,6 +219,84 @@ class ContactStop(BacklashMesh):
         """Contact force k (x - g)⁺ at angles θ for coordinate samples y (1, N)."""
         x = np.asarray(y).reshape(1, -1) - evaluate(self.lste, theta)
         return self.stiffness * np.maximum(x - self.half_backlash, 0.0)
+
+
+@dataclass(frozen=True)
+class ParametricMesh(BacklashMesh):
+    """A mesh whose stiffness varies over the mesh cycle: W = k_h ρ(θ) f(δ - e(θ)) + c_m (δ' - e').
+
+    ρ(θ) = k(θ) / k_h (mean 1) is the tooth-pair stiffness variation (from the load
+    sharing, a Fourier series or a file) and e(θ) the *unloaded* transmission error
+    (profile and spacing errors, relief); with constant ρ = 1 the law is the paper's
+    :class:`BacklashMesh` with e the loaded STE. This is the parametric formulation of
+    Kahraman & Singh (1991, J. Sound Vib. 146:135) and Özgüven & Houser (1988, J. Sound
+    Vib. 125:71). Its exact harmonics are the product of ρ's with those of the backlash
+    force, taken to the harmonics the product reaches (a sampled product of two band-limited
+    signals, exact); its Floquet segments split each contact interval into cells with ρ at
+    their midpoints (``n_cells`` per period, second order in the cell width).
+
+    Parameters
+    ----------
+    stiffness_variation : array_like
+        Real harmonics [ρ_0, a_1, b_1, ...] of ρ(θ) = k(θ)/k_h [-]; ρ_0 = 1 by convention.
+    n_cells : int
+        Cells per period of the Floquet segments.
+    Other parameters as :class:`BacklashMesh` (``method`` "exact" only).
+    """
+
+    stiffness_variation: NDArray = field(default_factory=lambda: np.ones(1))
+    n_cells: int = 256
+
+    def __post_init__(self):
+        super().__post_init__()
+        rho = np.atleast_1d(np.asarray(self.stiffness_variation, dtype=float))
+        check_finite("stiffness_variation", rho)
+        if rho.ndim != 1 or rho.size % 2 != 1:
+            raise ModelError("stiffness_variation", f"real harmonics of odd length, got {rho.shape}")
+        object.__setattr__(self, "stiffness_variation", rho)
+        if self.method != "exact":
+            raise ModelError("method", f"a parametric mesh has exact coefficients only, got {self.method!r}")
+
+    def _product_map(self, L: int, H: int) -> NDArray:
+        """The real (2H+1) x (2L+1) matrix of ρ(θ) g(θ) for g with L harmonics, cut at H."""
+        key = ("product", L, H)
+
+        def make():
+            P = n_harmonics(self.stiffness_variation)
+            N = int(2 ** np.ceil(np.log2(2 * (L + P + H) + 2)))
+            basis = sample(np.eye(2 * L + 1), N)  # row i: samples of real harmonic i
+            rho = sample(self.stiffness_variation, N)
+            return analyse(basis * rho, H).T
+
+        return self.cache.get(key, make)
+
+    def harmonics(self, y: NDArray, jacobian: bool = False):
+        """Harmonics of k_h ρ f(δ - e), shape (1, 2H+1), and optionally dG/dδ."""
+        y = np.asarray(y, dtype=float).reshape(1, -1)
+        H = n_harmonics(y)
+        L = H + n_harmonics(self.stiffness_variation)
+        x = self.relative(y[0])
+        out = fourier_exact(x, self.half_backlash, L, self.stiffness, jacobian, intervals=self._intervals(x))
+        Mr = self._product_map(L, H)
+        if jacobian:
+            return (Mr @ out[0])[None, :], Mr @ out[1][:, : 2 * H + 1]
+        return (Mr @ out)[None, :]
+
+    def tangent_segments(self, y: NDArray) -> tuple[NDArray, NDArray]:
+        """Contact intervals cut into ``n_cells`` cells per period, tangent k_h ρ(mid) or 0."""
+        iv = self.intervals(np.asarray(y, dtype=float).reshape(-1))
+        start = iv.start[0]
+        grid = start + np.arange(self.n_cells + 1) * (2 * np.pi / self.n_cells)
+        breaks = np.unique(np.concatenate([np.append(iv.start, iv.end[-1]), grid]))
+        breaks = breaks[np.append(True, np.diff(breaks) > 1e-13)]
+        mid = 0.5 * (breaks[:-1] + breaks[1:])
+        where = np.clip(np.searchsorted(iv.start, mid, side="right") - 1, 0, iv.state.size - 1)
+        kt = self.stiffness * np.abs(iv.state[where]) * evaluate(self.stiffness_variation, mid)
+        return breaks, kt[:, None, None]
+
+    def force_time(self, y: NDArray, theta: NDArray) -> NDArray:
+        """Elastic mesh force k_h ρ(θ) f(δ - e) at angles θ for δ samples y (1, N)."""
+        return super().force_time(y, theta) * evaluate(self.stiffness_variation, theta)
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError, check_finite, check_positive
-from nlgrd.nonlinear.force_laws import BacklashMesh
+from nlgrd.nonlinear.force_laws import BacklashMesh, ParametricMesh
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.harmonics import real_to_complex, resize_harmonics
 from nlgrd.nonlinear.state_space import LinearStateSpace
@@ -48,6 +48,10 @@ class SDOFGearPair:
         ζ, giving c_m = 2 ζ sqrt(k_h m_eq) unless ``damping`` is set.
     damping : float, optional
         Mesh damping c_m [N s/m].
+    stiffness_variation : array_like, optional
+        Real harmonics [1, a_1, b_1, ...] of k(θ)/k_h: the parametric mesh of
+        :class:`~nlgrd.nonlinear.force_laws.ParametricMesh` (``lste`` is then the unloaded
+        transmission error); default constant stiffness, the paper's model.
     """
 
     mass: float
@@ -57,6 +61,7 @@ class SDOFGearPair:
     lste: NDArray = field(default_factory=lambda: np.zeros(1))
     damping_ratio: float = 0.0
     damping: float | None = None
+    stiffness_variation: NDArray = field(default_factory=lambda: np.ones(1))
 
     def __post_init__(self):
         check_positive("mass", self.mass)
@@ -71,6 +76,14 @@ class SDOFGearPair:
         object.__setattr__(self, "lste", lste)
         if self.damping is not None:
             check_positive("damping", self.damping, allow_zero=True)
+        rho = np.atleast_1d(np.asarray(self.stiffness_variation, dtype=float))
+        check_finite("stiffness_variation", rho)
+        if rho.ndim != 1 or rho.size % 2 != 1 or abs(rho[0] - 1) > 1e-12:
+            raise ModelError(
+                "stiffness_variation",
+                f"real harmonics [1, a1, b1, ...] of k(θ)/k_h (mean 1: k_h is the mean), got {rho}",
+            )
+        object.__setattr__(self, "stiffness_variation", rho)
 
     @classmethod
     def from_gears(
@@ -107,7 +120,8 @@ class SDOFGearPair:
         -------
         SDOFGearPair
         """
-        return replace(self, lste=spread(self.lste, nu))
+        rho = spread(self.stiffness_variation, nu)
+        return replace(self, lste=spread(self.lste, nu), stiffness_variation=rho)
 
     @property
     def mesh_damping(self) -> float:
@@ -122,17 +136,13 @@ class SDOFGearPair:
         return float(np.sqrt(self.mesh_stiffness / self.mass))
 
     def mesh(self, method: str = "exact", n_samples: int | None = None) -> BacklashMesh:
-        """The mesh nonlinearity (acting on coordinate 0, δ)."""
-        return BacklashMesh(
-            self.mesh_stiffness,
-            self.half_backlash,
-            self.lste,
-            self.mesh_damping,
-            self.static_load,
-            0,
-            method,
-            n_samples,
-        )
+        """The mesh nonlinearity (acting on coordinate 0, δ): :class:`ParametricMesh` when
+        the stiffness varies, else :class:`BacklashMesh`."""
+        args = (self.mesh_stiffness, self.half_backlash, self.lste, self.mesh_damping, self.static_load, 0)
+        rho = self.stiffness_variation
+        if rho.size > 1 and np.any(rho[1:]):
+            return ParametricMesh(*args, method, n_samples, stiffness_variation=rho)
+        return BacklashMesh(*args, method, n_samples)
 
     def kappa(self, omega: float, H: int) -> NDArray[np.complex128]:
         """κ_k = -m (kω)² + i kω c_m, k = 0..H [N/m]."""

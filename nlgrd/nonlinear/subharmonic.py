@@ -35,8 +35,9 @@ from nlgrd.threads import single_blas_thread
 #: the orbit has the shorter period.
 SUBHARMONIC_RTOL = 1e-6
 #: Starts of :func:`branch_off`: the critical mode scaled to these fractions of the
-#: period-1 orbit's largest alternating amplitude.
-BRANCH_OFF_SCALES = (0.05, 0.2, 0.5, 1.0)
+#: period-1 orbit's size (its largest alternating amplitude or mean, whichever is larger:
+#: a subcritical period-2 orbit can be far larger than the period-1 vibration).
+BRANCH_OFF_SCALES = (0.02, 0.05, 0.2, 0.5, 1.0)
 
 
 def _check_period(nu: int) -> int:
@@ -152,8 +153,9 @@ def branch_off(
     The harmonic-balance Jacobian of the period-ν problem at the period-1 orbit ``z1``
     (spread onto the base) couples the subharmonic positions only among themselves; the
     right singular vector of their block's smallest singular value is the critical
-    mode. Newton starts from z1 ± s a φ (a the orbit's largest alternating amplitude, s
-    in ``scales``) and the first converged orbit of period ν is returned.
+    mode. Newton starts from z1 ± s a φ (a the larger of the orbit's largest alternating
+    amplitude and its mean, s in ``scales``, smallest first) and the first converged orbit
+    of period ν is returned.
 
     Parameters
     ----------
@@ -183,7 +185,7 @@ def branch_off(
     J = problem.residual_jacobian(zs)[1]
     phi = np.zeros(zs.size)
     phi[sub] = np.linalg.svd(J[np.ix_(sub, sub)])[2][-1]
-    a = float(np.max(amplitudes(z1))) or float(np.max(np.abs(z1))) or 1.0
+    a = max(float(np.max(amplitudes(z1), initial=0.0)), float(np.max(np.abs(z1[:, 0])))) or 1.0
     for s in scales:
         for sign in (1.0, -1.0):
             sol = solve(problem, zs + sign * s * a * phi, tol=tol, max_iter=max_iter, fallback=False)
@@ -208,7 +210,7 @@ def period_sweep(
     H: int,
     nu: int,
     period1: SweepResult,
-    direction: str = "up",
+    directions: str = "both",
     *,
     stability: bool = True,
     tol: float = 1e-10,
@@ -217,10 +219,15 @@ def period_sweep(
     """Follow the period-ν orbits that start where period-1 orbits lose stability by period
     doubling (ν = 2), by natural continuation over a grid of mesh frequencies.
 
-    At each frequency Newton starts from the previous period-ν orbit; when it fails or
-    falls back onto a period-1 orbit, and the period-1 orbit there (``period1``, on the
-    same grid) has a real multiplier < -1, :func:`branch_off` starts the branch afresh.
-    Points without a period-ν orbit are kept, not converged, with NaN outputs.
+    At each frequency Newton starts from the previous period-ν orbit of the sweep; when it
+    fails or falls back onto a shorter period, from the other direction's period-ν orbit
+    at that frequency, and then, where the period-1 orbit there (``period1``, on the same
+    grid) has a real multiplier < -1, :func:`branch_off` starts the branch afresh. With
+    "both" the up sweep is repeated with the down sweep's orbits as starts when the down
+    sweep found orbits the up sweep missed (a subcritical period-2 branch, far from the
+    period-1 orbit, is found by branch_off only some way into the flip-unstable range,
+    and followed back from there). Points without a period-ν orbit are kept, not
+    converged, with NaN outputs.
 
     Parameters
     ----------
@@ -234,9 +241,10 @@ def period_sweep(
     nu : int
         Mesh periods of the orbits followed [-].
     period1 : SweepResult
-        Period-1 solutions with Floquet multipliers at the same frequencies.
-    direction : {"up", "down"}
-        Sweep direction.
+        Period-1 solutions with Floquet multipliers at the same frequencies (either
+        direction; a flip-unstable one of either may start the branch).
+    directions : {"both", "up", "down"}
+        Sweep directions ("both": up, then down).
     stability : bool
         Floquet multipliers over the period 2πν/ω.
     tol, max_iter : float, int
@@ -251,28 +259,63 @@ def period_sweep(
         period.
     """
     nu = _check_period(nu)
-    (_, order), *_ = sweep_orders(np.asarray(omegas, dtype=float), direction)
-    p1 = {float(w): i for i, w in enumerate(period1.omega) if period1.direction[i] == direction}
+    flips: dict[float, NDArray] = {}
+    for i in range(len(period1.omega)):
+        mu = complex(period1.dominant_multiplier[i])
+        if period1.converged[i] and abs(mu.imag) <= 1e-6 * abs(mu) and mu.real < -1:
+            flips.setdefault(float(period1.omega[i]), period1.harmonics[i])
+    kw = dict(model=model, H=H, nu=nu, flips=flips, stability=stability, tol=tol, max_iter=max_iter)
+    passes = {}
+    for d, order in sweep_orders(np.asarray(omegas, dtype=float), directions):
+        other = passes.get("up" if d == "down" else "down")
+        passes[d] = _period_pass(order, d, pool=other, **kw)
+    if "up" in passes and "down" in passes:
+        found = {w for w, r in passes["down"].items() if r[1]}
+        if any(not passes["up"][w][1] for w in found):
+            up = sweep_orders(np.asarray(omegas, dtype=float), "up")[0][1]
+            passes["up"] = _period_pass(up, "up", pool=passes["down"], **kw)
+    rows = [(w, d, *r) for d, p in passes.items() for w, r in p.items()]
+    cols = list(zip(*rows, strict=True))
+    return assemble_result(
+        cols[0],
+        cols[1],
+        cols[2],
+        cols[3],
+        cols[4],
+        cols[5],
+        cols[6],
+        cols[7],
+        f"harmonic balance, period {nu} (H={H} of the base ω/{nu})",
+        [False] * len(rows),
+        [False] * len(rows),
+        cols[8],
+    )
+
+
+def _period_pass(order, direction, *, model, H, nu, flips, stability, tol, max_iter, pool=None) -> dict:
+    """One sweep of :func:`period_sweep`: {ω: (harmonics, converged, residual, iterations,
+    max |μ|, metrics, dominant μ)} in sweep order."""
     mesh = model.mesh
-    rows: dict[str, list] = {k: [] for k in "wzcrifmu"}
+    out: dict[float, tuple] = {}
     z = None
     for w in order:
-        base = float(w) / nu
+        w = float(w)
+        base = w / nu
         problem = model.at(base, H)
+        starts = [z] if z is not None else []
+        if pool is not None and pool.get(w, (None, False))[1]:
+            starts.append(pool[w][0])
         sol = None
-        if z is not None:
-            sol = solve(problem, z, tol=tol, max_iter=max_iter, fallback=False, stall=True)
-            if not (sol.converged and period_of(sol.harmonics, nu) == nu):
-                sol = None
-        i1 = p1.get(float(w))
-        if sol is None and i1 is not None and period1.converged[i1]:
-            mu1 = complex(period1.dominant_multiplier[i1])
-            if abs(mu1.imag) <= 1e-6 * abs(mu1) and mu1.real < -1:
-                sol = branch_off(problem, period1.harmonics[i1], nu, tol=tol, max_iter=max_iter)
+        for start in starts:
+            cand = solve(problem, start, tol=tol, max_iter=max_iter, fallback=False, stall=True)
+            if cand.converged and period_of(cand.harmonics, nu) == nu:
+                sol = cand
+                break
+        if sol is None and w in flips:
+            sol = branch_off(problem, flips[w], nu, tol=tol, max_iter=max_iter)
         ok = sol is not None
         z = sol.harmonics if ok else None
-        n_nl = problem.n_coords
-        harm = z if ok else np.full((n_nl, 2 * H + 1), np.nan)
+        harm = z if ok else np.full((problem.n_coords, 2 * H + 1), np.nan)
         fmax, dom = np.nan, complex(np.nan, np.nan)
         ss = model.linear_state_space(base) if (stability and ok) else None
         if ss is not None:
@@ -282,21 +325,5 @@ def period_sweep(
             if ok and mesh is not None
             else MeshMetrics.nan(H)
         )
-        vals = (w, harm, ok, sol.residual if ok else np.nan, sol.iterations if ok else 0, fmax, met, dom)
-        for k, v in zip("wzcrifmu", vals, strict=True):
-            rows[k].append(v)
-    n = len(rows["w"])
-    return assemble_result(
-        rows["w"],
-        [direction] * n,
-        rows["z"],
-        rows["c"],
-        rows["r"],
-        rows["i"],
-        rows["f"],
-        rows["m"],
-        f"harmonic balance, period {nu} (H={H} of the base ω/{nu})",
-        [False] * n,
-        [False] * n,
-        rows["u"],
-    )
+        out[w] = (harm, ok, sol.residual if ok else np.nan, sol.iterations if ok else 0, fmax, met, dom)
+    return out

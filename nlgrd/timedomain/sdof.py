@@ -55,17 +55,20 @@ class TimeResponse:
         return analyse(self.history.delta, H)
 
 
-def _segment_rhs(mode: int, zeta2: float, w0: float, bt: float, ecoef: tuple):
-    """RHS u'' = -2ζ u' - |m| (u - ẽ - m b̃) + w0 + 2ζ ẽ' in the scaled variables."""
+def _segment_rhs(mode: int, zeta2: float, w0: float, bt: float, ecoef: tuple, rho: NDArray):
+    """RHS u'' = -2ζ u' - |m| ρ(θ) (u - ẽ - m b̃) + w0 + 2ζ ẽ' in the scaled variables
+    (ρ: real harmonics of k(θ)/k_h, [1.0] for a constant mesh stiffness)."""
     k, a, bb, e0, s = ecoef
     stiff = float(abs(mode))
+    parametric = rho.size > 1
 
     def rhs(tau, y):
         th = s * tau * k
         c, sn = np.cos(th), np.sin(th)
         e = e0 + a @ c + bb @ sn
         de = s * ((bb * k) @ c - (a * k) @ sn)
-        return np.array([y[1], -zeta2 * y[1] - stiff * (y[0] - e - mode * bt) + w0 + zeta2 * de])
+        kt = stiff * (evaluate(rho, s * tau) if parametric else rho[0])
+        return np.array([y[1], -zeta2 * y[1] - kt * (y[0] - e - mode * bt) + w0 + zeta2 * de])
 
     return rhs
 
@@ -104,7 +107,8 @@ def integrate(
     method: str = "DOP853",
     rtol: float = 1e-10,
 ) -> TimeResponse:
-    """Integrate the SDOF gear pair to a periodic steady state at mesh frequency ``omega``.
+    """Integrate the SDOF gear pair to a periodic steady state at mesh frequency ``omega``
+    (with its mesh stiffness k_h ρ(θ) when ``model.stiffness_variation`` varies).
 
     The equation is scaled (τ = ω_n t, δ = L u with L = max(b, W_0/k_h, max|e|)) and
     integrated with :func:`scipy.integrate.solve_ivp` in segments of constant contact
@@ -156,7 +160,8 @@ def integrate(
         y = np.array([(b + model.static_load / k_h + E[0]) / L, 0.0])
     else:
         y = np.array([state0[0] / L, state0[1] / (L * wn)], dtype=float)
-    rhs = {md: _segment_rhs(md, zeta2, w0, bt, ecoef) for md in (-1, 0, 1)}
+    kvar = np.atleast_1d(np.asarray(model.stiffness_variation, dtype=float))
+    rhs = {md: _segment_rhs(md, zeta2, w0, bt, ecoef, kvar) for md in (-1, 0, 1)}
     evs = {md: _events(md, bt, ecoef) for md in (-1, 0, 1)}
 
     def mode_of(tau, yy):
@@ -220,7 +225,7 @@ def integrate(
     ddot = samples[1] * L * wn
     e = evaluate(E, theta)
     edot = omega * evaluate(differentiate(E), theta)
-    force = k_h * deadzone(delta - e, b) + model.mesh_damping * (ddot - edot)
+    force = k_h * evaluate(kvar, theta) * deadzone(delta - e, b) + model.mesh_damping * (ddot - edot)
     hist = TimeHistory(t / wn, delta, ddot, e, edot, force)
     return TimeResponse(
         omega, hist, converged, p, diffs[-1] if diffs else float("nan"), np.array([y[0] * L, y[1] * L * wn])
