@@ -30,6 +30,7 @@ from nlgrd.nonlinear.harmonics import real_to_complex
 from nlgrd.nonlinear.receptance import MeshReceptance
 from nlgrd.nonlinear.results import ContinuationResult, SweepResult
 from nlgrd.nonlinear.state_space import LinearStateSpace
+from nlgrd.nonlinear.subharmonic import spread
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.rotor.system import RotorSystem
 
@@ -90,6 +91,7 @@ def build_geared_model(
     receptance: str = "auto",
     lste_harmonics: int = 30,
     aft: bool = False,
+    period: int = 1,
 ) -> GearedModel:
     """Reduce ``system`` onto its gear mesh.
 
@@ -107,6 +109,11 @@ def build_geared_model(
         Harmonics kept of the LSTE (solutions use the first H).
     aft : bool
         Fourier coefficients of the mesh force by AFT instead of exact integration.
+    period : int
+        ν: the model of orbits of ν mesh periods, solved at the base ω/ν with ``H``
+        harmonics of it (the LSTE at the harmonics νk, the speed still that of the mesh
+        frequency ν ω_b; :mod:`nlgrd.nonlinear.subharmonic`). ``max_mesh_frequency`` stays
+        the highest *mesh* frequency.
 
     Returns
     -------
@@ -125,11 +132,14 @@ def build_geared_model(
     if not (np.isfinite(max_mesh_frequency) and max_mesh_frequency > 0):
         raise ModelError("max_mesh_frequency", f"must be positive and finite, got {max_mesh_frequency!r}")
     gp = system.gear_pairs[0]
-    mr = MeshReceptance(system, method=receptance, max_frequency=H * max_mesh_frequency)
+    mr = MeshReceptance(system, method=receptance, max_frequency=H * max_mesh_frequency / period)
+    # the receptances are evaluated at the base ω/ν: the speed per unit base frequency is ν times
+    mr.speed_per_mesh_frequency *= period
     ex = gp.excitation(lste_harmonics)
     lste = np.empty(2 * len(ex.a) + 1)
     lste[0] = ex.e0
     lste[1::2], lste[2::2] = ex.a, ex.b
+    lste = spread(lste, period)
     mesh = BacklashMesh(
         stiffness=float(mr.k_h[0]),
         half_backlash=gp.half_backlash,
