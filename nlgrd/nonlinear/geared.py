@@ -132,9 +132,9 @@ def build_geared_model(
     if not (np.isfinite(max_mesh_frequency) and max_mesh_frequency > 0):
         raise ModelError("max_mesh_frequency", f"must be positive and finite, got {max_mesh_frequency!r}")
     gp = system.gear_pairs[0]
-    mr = MeshReceptance(system, method=receptance, max_frequency=H * max_mesh_frequency / period)
-    # the receptances are evaluated at the base ω/ν: the speed per unit base frequency is ν times
-    mr.speed_per_mesh_frequency *= period
+    mr = MeshReceptance(
+        system, method=receptance, max_frequency=H * max_mesh_frequency / period, period=period
+    )
     ex = gp.excitation(lste_harmonics)
     lste = np.empty(2 * len(ex.a) + 1)
     lste[0] = ex.e0

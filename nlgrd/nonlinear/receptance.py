@@ -115,6 +115,9 @@ class MeshReceptance:
         highest mesh frequency); required for ``"modal"``.
     cutoff_factor : float
         Modal basis: keep modes up to ``cutoff_factor * max_frequency``.
+    period : int
+        Receptances taken at the base ω_mesh / ``period`` (orbits of that many mesh
+        periods) with the speed of the mesh frequency.
     """
 
     def __init__(
@@ -123,6 +126,7 @@ class MeshReceptance:
         method: str = "auto",
         max_frequency: float | None = None,
         cutoff_factor: float = 3.0,
+        period: int = 1,
     ):
         if not system.gear_pairs:
             raise ModelError("gear_pairs", "the model has no gear pair: nothing to reduce onto")
@@ -139,7 +143,8 @@ class MeshReceptance:
         self.static_force = sum(g.static_torques(system) for g in system.gear_pairs)
         g0 = system.gear_pairs[0]
         s_p = abs(system.shafts[g0.pinion_shaft].speed_ratio)
-        self.speed_per_mesh_frequency = 1.0 / (g0.geometry.teeth_pinion * s_p)
+        # per unit of the frequency the receptances take: ω_mesh / period
+        self.speed_per_mesh_frequency = period / (g0.geometry.teeth_pinion * s_p)
         if method == "auto":
             n = self.model.n_dofs
             small = len(self._mesh_component()) <= POLES_LIMIT and not self.model.tabulated_bearings
