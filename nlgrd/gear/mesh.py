@@ -68,6 +68,13 @@ class GearMesh:
         Spacing and profile-slope errors, used when the LSTE is computed; the same on
         every tooth of a member (errors that differ from tooth to tooth excite shaft
         orders and sidebands, which the mesh-periodic analysis does not hold).
+    stiffness_variation : {None, "load_sharing"} or sequence of float
+        How the mesh stiffness varies over the mesh cycle. None (default): the paper's
+        constant k_h with the LSTE as excitation. "load_sharing": k(θ) = k_h ρ(θ) with ρ
+        the shape of the tangent mesh stiffness of nlgrd's load-sharing calculation at W_0
+        (:func:`~nlgrd.gear.transmission_error.loaded_static_transmission_error`). A
+        sequence: the real Fourier harmonics [1, a_1, b_1, ...] of ρ(θ) in the mesh angle,
+        ρ_0 = 1, ρ > 0 throughout. See :meth:`mesh_law`.
 
     Notes
     -----
@@ -91,6 +98,7 @@ class GearMesh:
     modifications: ProfileModification | None = None
     lste_points: int = 256
     errors: GearErrors | None = None
+    stiffness_variation: str | tuple[float, ...] | None = None
 
     def __post_init__(self):
         for key in ("pinion_shaft", "pinion_node", "gear_shaft", "gear_node", "input_node", "output_node"):
@@ -117,12 +125,36 @@ class GearMesh:
             raise ModelError("lste_points", f"must be an integer >= 16, got {self.lste_points!r}")
         if self.driver not in ("pinion", "gear"):
             raise ModelError("driver", f"must be 'pinion' or 'gear', got {self.driver!r}")
+        self._check_stiffness_variation()
         if self.errors is not None and self.errors.hunting_cycles(self.geometry) > 1:
             raise ModelError(
                 "errors",
                 "differ from tooth to tooth: they excite shaft orders and sidebands, which the "
                 "mesh-periodic analysis does not hold yet; give each member the same errors on every tooth",
             )
+
+    def _check_stiffness_variation(self) -> None:
+        v = self.stiffness_variation
+        if v is None or v == "load_sharing":
+            return
+        if isinstance(v, str) or not np.iterable(v):
+            raise ModelError(
+                "stiffness_variation", f"'load_sharing' or Fourier harmonics [1, a1, b1, ...], got {v!r}"
+            )
+        try:
+            rho = np.asarray(v, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise ModelError("stiffness_variation", f"must be numbers, got {v!r}") from None
+        if rho.size % 2 != 1 or not np.all(np.isfinite(rho)) or abs(rho[0] - 1.0) > 1e-9:
+            raise ModelError(
+                "stiffness_variation",
+                f"real harmonics [1, a1, b1, ...]: odd length, finite, mean 1; got {list(rho)}",
+            )
+        theta = np.linspace(0, 2 * np.pi, 64 * rho.size, endpoint=False)
+        k = np.arange(1, rho.size // 2 + 1)[:, None] * theta
+        if np.min(rho[0] + rho[1::2] @ np.cos(k) + rho[2::2] @ np.sin(k)) <= 0:
+            raise ModelError("stiffness_variation", "k_h ρ(θ) must stay positive over the mesh cycle")
+        object.__setattr__(self, "stiffness_variation", tuple(float(r) for r in rho))
 
     # geometry in the system
     @property
@@ -250,6 +282,22 @@ class GearMesh:
             ex = read_excitation(self.lste_file, teeth_pinion=self.geometry.teeth_pinion)
             return ex.without_mean()
         return self.lste_result().excitation(H)
+
+    def stiffness_harmonics(self, H: int = 30) -> NDArray | None:
+        """Real harmonics [1, a_1, b_1, ...] of ρ(θ) = k(θ)/k_h, ``H`` of them from the load
+        sharing (all that were given otherwise); None for the constant k_h."""
+        v = self.stiffness_variation
+        if v is None:
+            return None
+        if v == "load_sharing":
+            k = self.lste_result().mesh_stiffness
+            if 2 * H >= k.size:
+                raise ModelError("lste_points", f"{H} harmonics of the stiffness need more than {2 * H}")
+            c = np.fft.rfft(k)[: H + 1] / np.sum(k)
+            out = np.empty(2 * H + 1)
+            out[0], out[1::2], out[2::2] = 1.0, 2 * c[1:].real, -2 * c[1:].imag
+            return out
+        return np.array(v)
 
     def damping_coefficient(self, system) -> float:
         """Mesh damping coefficient c_m [N s/m]."""

@@ -25,6 +25,7 @@ from nlgrd.nonlinear.describing_functions import (
 )
 from nlgrd.nonlinear.harmonics import (
     analyse,
+    differentiate,
     evaluate,
     n_harmonics,
     real_to_complex,
@@ -182,6 +183,26 @@ class BacklashMesh:
         e = evaluate(self.lste, theta)
         return self.stiffness * deadzone(np.asarray(y).reshape(1, -1) - e, self.half_backlash)
 
+    def stiffness_time(self, theta: NDArray) -> NDArray:
+        """Contact stiffness at angles θ (N,) [N/m]: k_h throughout."""
+        return np.full(np.shape(theta), float(self.stiffness))
+
+    def lste_samples(self, n_samples: int) -> tuple[NDArray, NDArray]:
+        """e(θ) and de/dθ at θ_j = 2πj/n_samples, read-only (kept in the cache)."""
+
+        def make():
+            out = (sample(self.lste, n_samples), sample(differentiate(self.lste), n_samples))
+            for a in out:
+                a.setflags(write=False)
+            return out
+
+        return self.cache.get(("lste samples", int(n_samples)), make)
+
+    def elastic_samples(self, delta: NDArray) -> NDArray:
+        """Elastic force at θ_j = 2πj/N for N equally spaced δ samples (N,) [N]."""
+        e = self.lste_samples(delta.size)[0]
+        return self.stiffness * deadzone(delta - e, self.half_backlash)
+
 
 @dataclass(frozen=True)
 class ContactStop(BacklashMesh):
@@ -219,6 +240,11 @@ class ContactStop(BacklashMesh):
         """Contact force k (x - g)⁺ at angles θ for coordinate samples y (1, N)."""
         x = np.asarray(y).reshape(1, -1) - evaluate(self.lste, theta)
         return self.stiffness * np.maximum(x - self.half_backlash, 0.0)
+
+    def elastic_samples(self, delta: NDArray) -> NDArray:
+        """Contact force at θ_j = 2πj/N for N equally spaced samples (N,) [N]."""
+        e = self.lste_samples(delta.size)[0]
+        return self.stiffness * np.maximum(delta - e - self.half_backlash, 0.0)
 
 
 @dataclass(frozen=True)
@@ -297,6 +323,16 @@ class ParametricMesh(BacklashMesh):
     def force_time(self, y: NDArray, theta: NDArray) -> NDArray:
         """Elastic mesh force k_h ρ(θ) f(δ - e) at angles θ for δ samples y (1, N)."""
         return super().force_time(y, theta) * evaluate(self.stiffness_variation, theta)
+
+    def stiffness_time(self, theta: NDArray) -> NDArray:
+        """Contact stiffness k_h ρ(θ) at angles θ (N,) [N/m]."""
+        return self.stiffness * evaluate(self.stiffness_variation, np.asarray(theta, dtype=float))
+
+    def elastic_samples(self, delta: NDArray) -> NDArray:
+        """Elastic force k_h ρ f(δ - e) at θ_j = 2πj/N for N equally spaced δ samples [N]."""
+        n = delta.size
+        rho = self.cache.get(("rho samples", n), lambda: sample(self.stiffness_variation, n))
+        return super().elastic_samples(delta) * rho
 
 
 @dataclass(frozen=True)

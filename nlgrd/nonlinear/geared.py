@@ -27,10 +27,10 @@ from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.harmonic_convergence import LADDER, OUTPUT_RTOL, converged_continuation, converged_sweep
 from nlgrd.nonlinear.harmonics import real_to_complex
+from nlgrd.nonlinear.mesh_law import gear_mesh_force
 from nlgrd.nonlinear.receptance import MeshReceptance
 from nlgrd.nonlinear.results import ContinuationResult, SweepResult
 from nlgrd.nonlinear.state_space import LinearStateSpace
-from nlgrd.nonlinear.subharmonic import spread
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.rotor.system import RotorSystem
 
@@ -135,18 +135,8 @@ def build_geared_model(
     mr = MeshReceptance(
         system, method=receptance, max_frequency=H * max_mesh_frequency / period, period=period
     )
-    ex = gp.excitation(lste_harmonics)
-    lste = np.empty(2 * len(ex.a) + 1)
-    lste[0] = ex.e0
-    lste[1::2], lste[2::2] = ex.a, ex.b
-    lste = spread(lste, period)
-    mesh = BacklashMesh(
-        stiffness=float(mr.k_h[0]),
-        half_backlash=gp.half_backlash,
-        lste=lste,
-        damping=float(mr.c_m[0]),
-        static_load=gp.static_load,
-        method="aft" if aft else "exact",
+    mesh = gear_mesh_force(
+        gp, mr.k_h[0], mr.c_m[0], lste_harmonics, order=period, method="aft" if aft else "exact"
     )
     dofs = []
     for b in system.bearings:

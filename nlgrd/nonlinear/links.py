@@ -39,6 +39,7 @@ from nlgrd.errors import ModelError, check_positive
 from nlgrd.nonlinear.clearance import RadialClearanceLaw
 from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonics import evaluate, real_to_complex, sample
+from nlgrd.nonlinear.mesh_law import gear_mesh_force
 from nlgrd.nonlinear.metrics import metrics_from_harmonics
 from nlgrd.rotor.system import RotorSystem
 
@@ -351,12 +352,8 @@ class GearMeshLink:
             raise ModelError("order", f"a positive integer, got {order!r}")
         order = int(order)
         gp = system.gear_pairs[index]
-        ex = gp.excitation(30)
-        lste = np.zeros(2 * order * len(ex.a) + 1)
-        lste[0] = ex.e0
-        lste[2 * order - 1 :: 2 * order], lste[2 * order :: 2 * order] = ex.a, ex.b
         link = assemble(system).meshes[index]
-        mesh = BacklashMesh(link.stiffness, gp.half_backlash, lste, link.damping, gp.static_load)
+        mesh = gear_mesh_force(gp, link.stiffness, link.damping, 30, order=order)
         return cls(name or f"mesh{index}", mesh, np.asarray(link.w, dtype=float), index, order)
 
     @property
@@ -397,7 +394,7 @@ class GearMeshLink:
         return replace(self.mesh, coord=int(coords[0]))
 
     def pointwise(self, y: NDArray, theta: float) -> tuple[NDArray, NDArray]:
-        """k_h f(δ - e(θ)) and its slope at one instant.
+        """k_h f(δ - e(θ)) (k_h ρ(θ) f of a parametric mesh) and its slope at one instant.
 
         Parameters
         ----------
@@ -411,15 +408,20 @@ class GearMeshLink:
         tuple of ndarray
             g (1,) [N] and ∂g/∂δ (1, 1) [N/m].
         """
-        e = self._lste_at.get((float(theta),), lambda: float(evaluate(self.mesh.lste, np.array([theta]))[0]))
+
+        def at():
+            th = np.array([theta], dtype=float)
+            return float(evaluate(self.mesh.lste, th)[0]), float(self.mesh.stiffness_time(th)[0])
+
+        e, k = self._lste_at.get((float(theta),), at)
         x = float(np.asarray(y).reshape(-1)[0]) - e
-        b, k = self.mesh.half_backlash, self.mesh.stiffness
+        b = self.mesh.half_backlash
         g = k * (x - b) if x > b else (k * (x + b) if x < -b else 0.0)  # the dead zone
         return np.array([g]), np.array([[k if abs(x) > b else 0.0]])
 
     @cached_property
     def _lste_at(self) -> BoundedCache:
-        """e(θ) at the angles of a time integration's steps (they repeat every period)."""
+        """e(θ) and the stiffness at the angles of a time integration's steps (they repeat every period)."""
         return BoundedCache(16384)
 
     def linear_stiffness(self) -> NDArray:

@@ -19,7 +19,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from nlgrd.nonlinear.describing_functions import deadzone
 from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonics import differentiate, n_harmonics, real_to_complex, resize_harmonics, sample
 
@@ -115,19 +114,6 @@ class TimeHistory:
         return plot_time_history(self, quantity=quantity, ax=ax)
 
 
-def _lste_samples(mesh: BacklashMesh, n_samples: int) -> tuple[NDArray, NDArray]:
-    """e(θ) and de/dθ on n_samples points (the same at every point of a sweep: kept in
-    the mesh's cache)."""
-
-    def make():
-        out = (sample(mesh.lste, n_samples), sample(differentiate(mesh.lste), n_samples))
-        for a in out:
-            a.setflags(write=False)
-        return out
-
-    return mesh.cache.get(("lste samples", int(n_samples)), make)
-
-
 def time_history(harmonics, omega: float, mesh: BacklashMesh, n_samples: int = 1024) -> TimeHistory:
     """Reconstruct one period of δ, e and W from the harmonics of δ (1-D, real convention).
 
@@ -156,9 +142,9 @@ def time_history(harmonics, omega: float, mesh: BacklashMesh, n_samples: int = 1
     theta = 2 * np.pi * np.arange(n_samples) / n_samples
     delta = sample(z, n_samples)
     ddot = omega * sample(differentiate(z), n_samples)
-    e, de = _lste_samples(mesh, n_samples)
+    e, de = mesh.lste_samples(n_samples)
     e, edot = e.copy(), omega * de
-    force = mesh.stiffness * deadzone(delta - e, mesh.half_backlash) + mesh.damping * (ddot - edot)
+    force = mesh.elastic_samples(delta) + mesh.damping * (ddot - edot)
     return TimeHistory(theta / omega, delta, ddot, e, edot, force)
 
 

@@ -3,7 +3,8 @@
     M q'' + D q' + K q = F0 - w W(t),   W = k_h f(wᵀq - e) + c_m (wᵀq' - e')
 
 with D containing the mesh damping c_m w wᵀ and K excluding the mesh stiffness, so the
-right-hand side is F0 - w k_h f(δ - e) + w c_m e'(t).
+right-hand side is F0 - w k_h f(δ - e) + w c_m e'(t); a parametric mesh
+(:class:`~nlgrd.nonlinear.force_laws.ParametricMesh`) has k_h ρ(θ) in place of k_h.
 
 Method: HHT-α (Hilber, Hughes & Taylor 1977), implicit, unconditionally stable and
 second order for -1/3 <= α <= 0, with γ = (1 - 2α)/2, β = (1 - α)²/4. Why: an FE rotor
@@ -266,14 +267,15 @@ def integrate_fe(
     lu, A_all = step.lu, step.A_all
     zvec = lu.solve(w)
     cw = float(w @ zvec)
-    cc = ap * k_h * cw
+    apcw = ap * cw
     e_s = sample(mesh.lste, ns)
+    k_s = mesh.stiffness_time(2 * np.pi * np.arange(ns) / ns)  # k_h, or k_h ρ(θ) of a parametric mesh
     edot_s = omega * sample(differentiate(mesh.lste), ns)
     force_w = c_m * edot_s  # coefficient of w in F(t) - F0
 
     def g_of(delta: float, n: int) -> float:
-        x = delta - e_s[n % ns]
-        return k_h * (x - b) if x > b else (k_h * (x + b) if x < -b else 0.0)
+        x, k = delta - e_s[n % ns], k_s[n % ns]
+        return k * (x - b) if x > b else (k * (x + b) if x < -b else 0.0)
 
     if state0 is None:
         u = static_solution(K, w, mesh, F0, M=M)
@@ -288,12 +290,13 @@ def integrate_fe(
         acc = spla.splu(M).solve(rhs0)
     loads = F0[None, :] + np.outer(ap * np.roll(force_w, -1) - alpha * force_w, w)
 
-    def solve_mesh(pv: float) -> float:
-        """The mesh force g given the prediction pv of δ - e with g = 0."""
+    def solve_mesh(pv: float, k: float) -> float:
+        """The mesh force g given the prediction pv of δ - e with g = 0, contact stiffness k."""
+        cc = apcw * k
         if pv > b:
-            return k_h * ((pv + cc * b) / (1 + cc) - b)
+            return k * ((pv + cc * b) / (1 + cc) - b)
         if pv < -b:
-            return k_h * ((pv - cc * b) / (1 + cc) + b)
+            return k * ((pv - cc * b) / (1 + cc) + b)
         return 0.0
 
     def step_period(state, g, hist):
@@ -307,7 +310,7 @@ def integrate_fe(
             jn = (j + 1) % ns
             rhs = A_all @ state + F0 + w * (ap * force_w[jn] - alpha * force_w[j] + alpha * g)
             y = lu.solve(rhs)
-            g = solve_mesh(w @ y - e_s[jn])
+            g = solve_mesh(w @ y - e_s[jn], k_s[jn])
             un = y - ap * g * zvec
             u0, v0, acc0 = state[:N], state[N : 2 * N], state[2 * N :]
             an = a1 * (un - u0) - a2 * v0 - a3 * acc0
@@ -319,10 +322,10 @@ def integrate_fe(
     pmap = PeriodMap(step, alpha, w[:, None], loads) if 3 * N + 1 <= MAX_STATE else None
 
     e_next = np.roll(e_s, -1).tolist()
-    apcw = ap * cw
+    k_next = np.roll(k_s, -1).tolist()
 
     def solve_link(y_lin: float, j: int) -> tuple[float, float]:
-        g1 = solve_mesh(y_lin - e_next[j])
+        g1 = solve_mesh(y_lin - e_next[j], k_next[j])
         return y_lin - apcw * g1, g1
 
     prev = None
