@@ -397,6 +397,16 @@ def build_parser() -> argparse.ArgumentParser:
         "contact_loss_fraction or back_contact; for a link sweep LINK.QUANTITY, e.g. mesh1.dslr or "
         "B1.force_max",
     )
+    sw.add_argument(
+        "--period",
+        choices=["auto", "1", "2"],
+        default="auto",
+        help="orbits of how many mesh periods: auto (default) gives the mesh-periodic response where it "
+        "is stable and the period-doubled one where it has lost stability by period doubling; 1 the "
+        "mesh-periodic orbits only; 2 the period-2 branches alone. The CSV has each point's period, "
+        "its ω/2 content and, where a complex pair of Floquet multipliers left the unit circle "
+        "(quasi-periodic), the secondary frequency",
+    )
     sw.add_argument("--no-stability", action="store_true", help="skip the Floquet stability of each point")
     sw.add_argument("--out", default="sweep.csv", help="CSV file (default sweep.csv)")
     sw.add_argument("--plot", default=None, help="PNG file (default: the CSV's name with .png)")

@@ -104,8 +104,18 @@ def cmd_sweep(args) -> int:
         args.rpm is not None, gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
     )
     omegas = unit.omega(values)
-    model = build_geared_model(system, float(omegas.max()), H=args.harmonics or LADDER[-1])
     pyplot()
+    from nlgrd.nonlinear.auto_period import transitions
+
+    if gp.error_period > 1:  # teeth that differ: the revolution's shaft orders and sidebands
+        if args.continuation or args.period not in ("auto", str(gp.error_period)):
+            raise ModelError(
+                "--period",
+                f"the gear errors repeat every {gp.error_period} mesh periods: a sweep over that "
+                "period only (no --continuation, --period auto)",
+            )
+        return _shaft_order_command(args, system, omegas, unit, quantity, out, png)
+    model = build_geared_model(system, float(omegas.max()), H=args.harmonics or LADDER[-1])
     if args.continuation:
         return _continuation(args, system, model, unit, omegas, count, quantity, out, png)
     from nlgrd.nonlinear.geared import geared_sweep
@@ -118,13 +128,78 @@ def cmd_sweep(args) -> int:
         model=model,
         stability=not args.no_stability,
         progress=_Progress("sweep"),
+        period=args.period if args.period == "auto" else int(args.period),
     )
+    _write_sweep(res, quantity, out, png)
+    return _summary(args, res, unit, out, png, transitions)
+
+
+def _write_sweep(res, quantity, out, png, extra=None) -> None:
     with Outputs() as files:
         files.csv(res.to_frame(), out)
         ax = res.plot(quantity=quantity)
         ax.figure.tight_layout()
         files.figure(ax.figure, png)
+        if extra is not None:
+            files.figure(*extra)
         files.commit()
+
+
+def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
+    """The sweep over the error period, and the spectra of its largest response."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from nlgrd.nonlinear.auto_period import transitions
+    from nlgrd.nonlinear.shaft_orders import (
+        SHAFT_ORDER_LADDER,
+        bearing_force_spectrum,
+        dte_spectrum,
+        shaft_order_model,
+        shaft_order_sweep,
+    )
+    from nlgrd.plotting.nonlinear import plot_spectrum
+
+    model = shaft_order_model(system, float(omegas.max()), args.harmonics or SHAFT_ORDER_LADDER[-1])
+    res = shaft_order_sweep(
+        system,
+        omegas,
+        H=args.harmonics,
+        directions=args.direction,
+        model=model,
+        stability=not args.no_stability,
+        progress=_Progress("sweep"),
+    )
+    rms = np.where(res.mesh.converged & ~res.mesh.no_stable, res.mesh.dte_rms, -np.inf)
+    extra = None
+    if np.isfinite(rms.max()):
+        i = int(np.argmax(rms))
+        w_mesh = float(res.mesh.omega[i])
+        fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+        plot_spectrum(*dte_spectrum(res, i), w_mesh, ax=a1)
+        fb, ab = bearing_force_spectrum(model, float(res.mesh.omega[i]), res.mesh.harmonics[i])
+        j = int(np.argmax(ab.max(axis=0)))
+        plot_spectrum(
+            fb,
+            ab[:, j],
+            w_mesh,
+            ax=a2,
+            ylabel="bearing force amplitude [N]",
+            scale=1.0,
+            label=res.bearing_names[j],
+        )
+        a1.set_title(f"spectra at {unit(res.mesh.omega[i])} {unit.name} (the largest RMS DTE)")
+        fig.tight_layout()
+        extra = (fig, out.with_name(out.stem + "_spectrum.png"))
+    _write_sweep(res, quantity, out, png, extra)
+    if extra is not None:
+        print(f"wrote {extra[1]}")
+    return _summary(args, res, unit, out, png, transitions)
+
+
+def _summary(args, res, unit, out, png, transitions) -> int:
+    import numpy as np
+
     bad = np.atleast_1d(res.mesh.omega[~res.mesh.converged])
     print(
         f"sweep: {len(res.mesh)} points ({args.direction}), {harmonics_line(res.mesh)}, "
@@ -135,14 +210,32 @@ def cmd_sweep(args) -> int:
             f"not converged (NaN in the CSV, flagged converged = False) at {unit.name}: "
             + ", ".join(unit(w) for w in bad)
         )
-    lost = np.atleast_1d(res.mesh.omega[res.mesh.no_stable])
+    torus = np.isfinite(res.mesh.secondary_frequency)
+    lost = np.atleast_1d(res.mesh.omega[res.mesh.no_stable & ~torus])
     if len(lost):
         print(
-            f"no stable mesh-periodic response (response column; NaN outputs) at {unit.name}: "
+            f"no stable periodic response (response column; NaN outputs) at {unit.name}: "
             + ", ".join(unit(w) for w in lost)
         )
+    if np.any(torus):
+        print(
+            f"quasi-periodic (a complex pair of multipliers left the unit circle; NaN outputs) at "
+            f"{unit.name} (secondary frequency Hz): "
+            + ", ".join(
+                f"{unit(w)} ({f / (2 * np.pi):.0f})"
+                for w, f in zip(res.mesh.omega[torus], res.mesh.secondary_frequency[torus], strict=True)
+            )
+        )
+    two = np.atleast_1d(res.mesh.omega[(res.mesh.period == 2) & ~res.mesh.no_stable])
+    if len(two):
+        print(f"period 2 (period doubled) at {unit.name}: " + ", ".join(unit(w) for w in two))
     for j in res.jumps():
         print(f"jump ({j.direction}): {unit(j.omega_from)} -> {unit(j.omega_to)} {unit.name}")
+    for t in transitions(res.mesh):
+        print(
+            f"{t.kind} ({t.direction}): {unit(t.omega_from)} -> {unit(t.omega_to)} {unit.name}, "
+            f"{t.response_from} -> {t.response_to}"
+        )
     print(f"wrote {out} and {png}")
     return 0
 

@@ -6,6 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -120,6 +121,34 @@ def test_sweep_writes_csv_png_and_summary(tmp_path, capsys):
     assert sorted(df["direction"].unique()) == ["down", "up"] and len(df) == 14
     assert {"pinion_speed [rpm]", "dslr [-]", "dte_rms [um]"} <= set(df.columns)
     assert out.with_suffix(".png").exists()
+
+
+def test_sweep_period_auto_and_one(tmp_path, capsys):
+    """`--period auto` (the default) writes each point's period, its ω/2 content and the
+    secondary frequency of a torus, and lists the bifurcations with their kind; `--period
+    1` leaves the flip-unstable point without a response (Kubo's rig down from 14 100 rpm,
+    H = 13: tests/test_beyond_period_one.py checks these points)."""
+    common = ["sweep", str(KUBO), "--rpm", "9700:14100:45", "--direction", "down", "--harmonics", "13"]
+    out = tmp_path / "auto.csv"
+    assert main([*common, "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "period doubling (down): 9900.0 -> 9800.0 rpm, periodic -> period 2" in text
+    assert (
+        "Neimark-Sacker (down): 14100.0 -> 14000.0 rpm" in text
+        and "period 2 (period doubled) at rpm: 9800.0" in text
+    )
+    df = pd.read_csv(out).round({"pinion_speed [rpm]": 6}).set_index("pinion_speed [rpm]")
+    assert df.loc[9800.0, "period"] == 2 and df.loc[9800.0, "subharmonic_amp [um]"] > 1
+    assert df.loc[9900.0, "period"] == 1 and df.loc[9900.0, "subharmonic_amp [um]"] == 0
+    assert df.loc[14000.0, "response"] == "quasi-periodic" and df.loc[14000.0, "secondary_frequency [Hz]"] > 0
+    assert np.isnan(df.loc[14000.0, "dte_rms [um]"]) and np.isnan(df.loc[9900.0, "secondary_frequency [Hz]"])
+    one = tmp_path / "one.csv"
+    assert main([*common, "--period", "1", "--out", str(one)]) == 0
+    df1 = pd.read_csv(one).round({"pinion_speed [rpm]": 6}).set_index("pinion_speed [rpm]")
+    assert df1.loc[9800.0, "response"] == "no stable mesh-periodic response" and np.isnan(
+        df1.loc[9800.0, "period"]
+    )
+    assert (df1["period"].dropna() == 1).all()
 
 
 @pytest.mark.parametrize(

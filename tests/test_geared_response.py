@@ -205,7 +205,7 @@ def test_sweep_leaves_unstable_branches():
     rpm = np.linspace(4000, 16000, 121)
     model = build_geared_model(kubo, 2 * np.pi * 16000 / 60 * 25 * 1.01, H=5)
     om = model.mesh_frequency(rpm)
-    stay = geared_sweep(kubo, omegas=om, H=5, model=model)
+    stay = geared_sweep(kubo, omegas=om, H=5, model=model, period=1)
     from nlgrd.nonlinear.sweep import sweep
 
     kept = sweep(model.reduced, om, 5, leave_unstable=False, jump="auto")
@@ -214,7 +214,7 @@ def test_sweep_leaves_unstable_branches():
     assert not np.any(m.converged & ~m.stable & ~m.no_stable)
     assert m.no_stable.sum() >= 4
     df = stay.to_frame()
-    lost = df[df["response"] == "no stable mesh-periodic response"]
+    lost = df[df["response"].isin(["no stable mesh-periodic response", "quasi-periodic"])]
     assert len(lost) == m.no_stable.sum()
     assert lost["dte_rms [um]"].isna().all() and lost["force_max [N]"].isna().all()
     assert (

@@ -32,6 +32,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.auto_period import merge_periods, transitions
 from nlgrd.nonlinear.force_laws import BacklashMesh, ContactStop
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.harmonics import analyse, evaluate
@@ -94,6 +95,27 @@ def test_period_two_branch_against_time_integration(runs):
     # where the period-1 orbit is still stable no period-2 orbit is reported
     first = both[0]
     assert not p2.converged[: first - 1].any()
+
+
+@pytest.mark.slow
+def test_auto_period_sweep_has_the_time_integrations_period(runs):
+    """The merged sweep (period 1 where stable, else period 2: what ``period="auto"`` does)
+    answers at every grid point with the period the time integration settles on; at the
+    last point (1.39 ω_n) the integration reaches no periodic state in 600 cycles and the
+    sweep has no stable orbit of period 1 or 2 there."""
+    p1, p2, td = runs
+    merged = merge_periods(p1, p2)
+    settled = np.array([c for c, _, _ in td])
+    doubled = np.array([c and h > 1e-3 for c, h, _ in td])
+    assert doubled.sum() >= 15 and settled[:-1].all()
+    np.testing.assert_array_equal(merged.no_stable, ~settled)
+    np.testing.assert_array_equal(merged.period[settled], np.where(doubled, 2, 1)[settled])
+    sub = merged.subharmonic_amplitude
+    a_td = np.array([amplitudes(z)[0] for _, _, z in td])  # the ω/2 component
+    np.testing.assert_allclose(sub[doubled], a_td[doubled], rtol=1e-2)
+    assert np.all(sub[~doubled & settled] == 0)
+    kinds = [(t.kind, t.response_to) for t in transitions(merged)]
+    assert kinds[0] == ("period doubling", "period 2") and len(kinds) == 2
 
 
 def test_spread_and_period_of():

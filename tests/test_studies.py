@@ -34,7 +34,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from nlgrd.errors import ModelError
 from nlgrd.studies.study_file import load_study
 from nlgrd.studies.study_runner import local_cluster, run_study
 
@@ -324,12 +323,11 @@ def test_study_figures_draw_the_summary(serial):
     plt.close("all")
 
 
-def test_profile_slope_tolerances_reach_the_lste_and_per_tooth_errors_are_refused(tmp_path):
+def test_profile_slope_tolerances_reach_the_lste_and_per_tooth_errors_their_period(tmp_path):
     """A tolerance axis on ``gear_pairs[0].errors.profile_slope_pinion`` changes the model's
     LSTE exactly as :func:`loaded_static_transmission_error` with the same
     :class:`GearErrors` does (same samples, to 1e-15 of the peak-to-peak); errors that
-    differ from tooth to tooth are refused when the model is built, naming the key, since
-    the mesh-periodic analysis cannot hold their shaft-order excitation."""
+    differ from tooth to tooth give the model their period, a pinion revolution."""
     from nlgrd.gear.modifications import GearErrors
     from nlgrd.gear.transmission_error import loaded_static_transmission_error
     from nlgrd.io.model_file import model_from_file_data
@@ -352,9 +350,8 @@ def test_profile_slope_tolerances_reach_the_lste_and_per_tooth_errors_are_refuse
     assert abs(np.ptp(direct.lste) - np.ptp(bare.lste_result().lste)) > 1e-8  # the error changes the LSTE
     data = study.model_data(params)
     data["gear_pairs"][0]["errors"] = {"spacing_pinion": [1e-6] + [0.0] * 24}
-    with pytest.raises(ModelError, match="differ from tooth to tooth") as err:
-        model_from_file_data(data, study.model_file)
-    assert err.value.key == "gear_pairs[0].errors"
+    tooth = model_from_file_data(data, study.model_file).gear_pairs[0]
+    assert tooth.error_period == 25  # swept over a pinion revolution (tests/test_shaft_orders.py)
 
 
 def _self_signed(folder: Path) -> tuple[Path, Path]:

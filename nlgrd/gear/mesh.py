@@ -65,9 +65,10 @@ class GearMesh:
     lste_points : int
         Samples per mesh cycle of the computed LSTE, >= 16.
     errors : GearErrors, optional
-        Spacing and profile-slope errors, used when the LSTE is computed; the same on
-        every tooth of a member (errors that differ from tooth to tooth excite shaft
-        orders and sidebands, which the mesh-periodic analysis does not hold).
+        Spacing and profile-slope errors, used when the LSTE is computed. Errors that
+        differ from tooth to tooth repeat only after :attr:`error_period` mesh cycles (a
+        revolution, or the hunting period): they excite shaft orders and the sidebands of
+        the mesh harmonics, and the analysis is then solved over that period.
     stiffness_variation : {None, "load_sharing"} or sequence of float
         How the mesh stiffness varies over the mesh cycle. None (default): the paper's
         constant k_h with the LSTE as excitation. "load_sharing": k(θ) = k_h ρ(θ) with ρ
@@ -126,12 +127,6 @@ class GearMesh:
         if self.driver not in ("pinion", "gear"):
             raise ModelError("driver", f"must be 'pinion' or 'gear', got {self.driver!r}")
         self._check_stiffness_variation()
-        if self.errors is not None and self.errors.hunting_cycles(self.geometry) > 1:
-            raise ModelError(
-                "errors",
-                "differ from tooth to tooth: they excite shaft orders and sidebands, which the "
-                "mesh-periodic analysis does not hold yet; give each member the same errors on every tooth",
-            )
 
     def _check_stiffness_variation(self) -> None:
         v = self.stiffness_variation
@@ -283,19 +278,38 @@ class GearMesh:
             return ex.without_mean()
         return self.lste_result().excitation(H)
 
+    @property
+    def error_period(self) -> int:
+        """Mesh cycles after which the excitation repeats [-]: 1, or with errors that differ
+        from tooth to tooth z_1, z_2 or the hunting period (:meth:`GearErrors.hunting_cycles`);
+        1 with an ``lste_file`` (a mesh cycle's LSTE)."""
+        if self.errors is None or self.lste_file:
+            return 1
+        return self.errors.hunting_cycles(self.geometry)
+
+    def lste_harmonics(self, H: int = 30) -> NDArray:
+        """Real harmonics [0, a_1, b_1, ...] of the LSTE, mean removed, over
+        :attr:`error_period` N mesh cycles: N H harmonics of ω/N (the mesh harmonics at
+        multiples of N, shaft orders and sidebands between) [m]."""
+        N = self.error_period
+        if N == 1:
+            ex = self.excitation(H)
+            return np.concatenate([[0.0], np.column_stack([ex.a, ex.b]).reshape(-1)])
+        out = _real_harmonics(self.lste_result().lste, N * H, "lste_points")
+        out[0] = 0.0
+        return out
+
     def stiffness_harmonics(self, H: int = 30) -> NDArray | None:
-        """Real harmonics [1, a_1, b_1, ...] of ρ(θ) = k(θ)/k_h, ``H`` of them from the load
-        sharing (all that were given otherwise); None for the constant k_h."""
+        """Real harmonics [1, a_1, b_1, ...] of ρ(θ) = k(θ)/k_h: from the load sharing N H of
+        ω/N as :meth:`lste_harmonics`, all that were given otherwise (of the mesh
+        frequency); None for the constant k_h."""
         v = self.stiffness_variation
         if v is None:
             return None
         if v == "load_sharing":
             k = self.lste_result().mesh_stiffness
-            if 2 * H >= k.size:
-                raise ModelError("lste_points", f"{H} harmonics of the stiffness need more than {2 * H}")
-            c = np.fft.rfft(k)[: H + 1] / np.sum(k)
-            out = np.empty(2 * H + 1)
-            out[0], out[1::2], out[2::2] = 1.0, 2 * c[1:].real, -2 * c[1:].imag
+            out = _real_harmonics(k / np.mean(k), self.error_period * H, "lste_points")
+            out[0] = 1.0
             return out
         return np.array(v)
 
@@ -306,6 +320,17 @@ class GearMesh:
         if self.damping_ratio == 0:
             return 0.0
         return 2 * self.damping_ratio * float(np.sqrt(self.stiffness() * self.equivalent_mass(system)))
+
+
+def _real_harmonics(samples: NDArray, H: int, key: str) -> NDArray:
+    """Real harmonics [c_0, a_1, b_1, ...] of equally spaced samples over one period."""
+    n = samples.size
+    if 2 * H >= n:
+        raise ModelError(key, f"{H} harmonics need more than {2 * H} samples over the period, got {n}")
+    c = np.fft.rfft(samples)[: H + 1] / n
+    out = np.empty(2 * H + 1)
+    out[0], out[1::2], out[2::2] = c[0].real, 2 * c[1:].real, -2 * c[1:].imag
+    return out
 
 
 def _computed_stiffness(geometry: GearGeometry, load: float) -> float:

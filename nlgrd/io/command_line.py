@@ -354,11 +354,12 @@ def harmonics_line(res) -> str:
     -------
     str
     """
+    H = res.H // res.base  # of the mesh frequency
     if res.H_check is None:
-        return f"H = {res.H}"
+        return f"H = {H}"
     e = [float(x) for x in res.harmonic_error if math.isfinite(x)]
     worst = f"{100 * max(e):.2g} %" if e else "n/a"
-    return f"H = {res.H} (chosen; largest estimated error {worst} against H = {res.H_check})"
+    return f"H = {H} (chosen; largest estimated error {worst} against H = {res.H_check})"
 
 
 def pyplot():

@@ -84,7 +84,8 @@ def bearing_response(model: GearedModel, result: SweepResult) -> BearingResponse
     model : GearedModel
         The model the sweep was solved on.
     result : SweepResult
-        The mesh solutions (harmonics of δ per point).
+        The mesh solutions (harmonics of δ per point), at the frequencies the model's
+        receptances take (the base ω/ν of a period-ν model).
 
     Returns
     -------
@@ -127,7 +128,9 @@ def bearing_response(model: GearedModel, result: SweepResult) -> BearingResponse
     out["force_rms"][rows] = np.sqrt(
         np.sum(np.abs(Fs[:, 1:, 0::2]) ** 2 + np.abs(Fs[:, 1:, 1::2]) ** 2, axis=1) / 2
     )
-    out["force_amplitude"][rows] = np.maximum(np.abs(Fs[:, 1, 0::2]), np.abs(Fs[:, 1, 1::2])) if H else 0.0
+    m = mr.period  # the mesh harmonic on the base of a period-ν model
+    amp = np.maximum(np.abs(Fs[:, m, 0::2]), np.abs(Fs[:, m, 1::2])) if H >= m else 0.0
+    out["force_amplitude"][rows] = amp
     for a in range(0, len(pts), 200):
         sl = slice(a, a + 200)
         out["displacement_max"][rows[sl]] = _radial_maxima(Qs[sl])

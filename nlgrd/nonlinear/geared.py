@@ -11,26 +11,38 @@ bearing displacements and forces of every converged point linearly
 
 from __future__ import annotations
 
+import dataclasses as dc
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.auto_period import flip_unstable, merge_periods, period_only
 from nlgrd.nonlinear.bearing_loads import BearingResponse, bearing_response
 from nlgrd.nonlinear.continuation import continuation
 from nlgrd.nonlinear.floquet import FloquetCache
 from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
-from nlgrd.nonlinear.harmonic_convergence import LADDER, OUTPUT_RTOL, converged_continuation, converged_sweep
+from nlgrd.nonlinear.harmonic_convergence import (
+    LADDER,
+    OUTPUT_RTOL,
+    check_harmonics,
+    converged_continuation,
+    converged_sweep,
+    next_harmonics,
+    with_harmonic_error,
+)
 from nlgrd.nonlinear.harmonics import real_to_complex
 from nlgrd.nonlinear.mesh_law import gear_mesh_force
 from nlgrd.nonlinear.receptance import MeshReceptance
 from nlgrd.nonlinear.results import ContinuationResult, SweepResult
 from nlgrd.nonlinear.state_space import LinearStateSpace
+from nlgrd.nonlinear.subharmonic import period_sweep
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.rotor.system import RotorSystem
 
@@ -74,6 +86,11 @@ class GearedModel:
                 f"H <= {self.H}; asked for {top / (2 * np.pi):.6g} Hz and H = {H}: build it again "
                 "with build_geared_model(system, max_mesh_frequency, H)",
             )
+
+    @cached_property
+    def cache(self) -> BoundedCache:
+        """Models derived from this one (the period-2 model of ``period="auto"`` sweeps)."""
+        return BoundedCache(4)
 
     def mesh_frequency(self, rpm: NDArray) -> NDArray:
         """Mesh frequency [rad/s] at pinion speeds ``rpm``."""
@@ -248,6 +265,7 @@ def geared_sweep(
     model: GearedModel | None = None,
     progress: Callable[[int, int], None] | None = None,
     harmonic_rtol: float = OUTPUT_RTOL,
+    period: int | str = "auto",
 ) -> GearedSweepResult:
     """Up and/or down harmonic-balance sweep of a geared FE model.
 
@@ -285,11 +303,19 @@ def geared_sweep(
         ``progress(i, n)`` after each point.
     harmonic_rtol : float
         Tolerance of the estimated relative error when ``H`` is chosen (``H`` None).
+    period : {"auto", 1, 2}
+        "auto" (default): the mesh-periodic orbits where they are stable, and where one has
+        lost stability by period doubling the stable period-2 orbit
+        (:func:`nlgrd.nonlinear.subharmonic.period_sweep` from the critical mode, with
+        2 H_max harmonics of ω/2; :func:`nlgrd.nonlinear.auto_period.merge_periods`); without
+        ``stability`` nothing is known of that, and it is 1. 1: mesh-periodic orbits only.
+        2: the period-2 branches alone (needs ``stability``).
 
     Returns
     -------
     GearedSweepResult
-        Points that did not converge carry ``converged = False`` and NaN outputs.
+        Points that did not converge carry ``converged = False`` and NaN outputs. The
+        ``period`` of each point; with ``period`` other than 1 the harmonics are of ω/2.
 
     Raises
     ------
@@ -299,6 +325,10 @@ def geared_sweep(
     """
     if (rpm is None) == (omegas is None):
         raise ModelError("rpm", "give either pinion speeds (rpm) or mesh frequencies, not both")
+    if period not in (1, 2, "auto"):
+        raise ModelError("period", f"1, 2 or 'auto', got {period!r}")
+    if period == 2 and not stability:
+        raise ModelError("period", "period doubling is found from the Floquet multipliers: needs stability")
     if model is None:
         top = np.max(omegas) if omegas is not None else None
         if top is None:
@@ -345,11 +375,42 @@ def geared_sweep(
         res = converged_sweep(reduced, omegas, ladder=ladder, rtol=harmonic_rtol, on_rung=on_rung, **options)
     else:
         res = sweep(reduced, omegas, H=H, **options)
-    bearings = bearing_response(model, res)
+    if period == 1 or not stability:
+        bearings = bearing_response(model, res)
+    else:
+        res, bearings = _beyond_period_one(model, res, omegas, directions, period, harmonic_rtol)
     names = [
         b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(model.system.bearings)
     ]
-    return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), names, res.H)
+    return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), names, res.H // res.base)
+
+
+def _beyond_period_one(model: GearedModel, p1: SweepResult, omegas, directions, period, harmonic_rtol):
+    """The period-2 sweep where ``p1`` is flip-unstable, merged (``period`` "auto") or alone
+    (2), with its bearing recovery on the period-2 model."""
+    if period == "auto" and not np.any(flip_unstable(p1)):
+        return p1, bearing_response(model, p1)
+    H2, H_check = 2 * p1.H, 2 * next_harmonics(p1.H)  # as fine as period 1, and its check
+    model2 = model.cache.get(
+        ("period 2", H_check),
+        lambda: build_geared_model(
+            model.system, model.max_mesh_frequency, H_check, model.receptance.method, period=2
+        ),
+    )
+    p2 = period_sweep(model2.reduced, omegas, H2, 2, p1, directions)
+    on_base = dc.replace(p2, omega=p2.omega / 2)  # the frequencies model2's receptances take
+    check = check_harmonics(model2.reduced, on_base, H_check, jumps=False)
+    p2 = dc.replace(with_harmonic_error(on_base, check, harmonic_rtol), omega=p2.omega)
+    b2 = bearing_response(model2, on_base)
+    if period == 2:
+        return period_only(p2), b2
+    merged = merge_periods(p1, p2)
+    b1 = bearing_response(model, p1)
+    index2 = {(d, float(w)): i for i, (d, w) in enumerate(zip(p2.direction, p2.omega, strict=True))}
+    rows2 = [index2[(d, float(w))] for d, w in zip(p1.direction, p1.omega, strict=True)]
+    two = (merged.period == 2)[:, None]
+    keys = BearingResponse.__dataclass_fields__
+    return merged, BearingResponse(**{k: np.where(two, getattr(b2, k)[rows2], getattr(b1, k)) for k in keys})
 
 
 def geared_continuation(

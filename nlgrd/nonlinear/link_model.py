@@ -269,7 +269,7 @@ class LinkSweepResult:
         quantities : str or sequence of str, optional
             ``<link>.<quantity>`` columns; default every column.
         rtol, ratio : float
-            As :func:`nlgrd.nonlinear.results.find_jumps` [-].
+            As :func:`nlgrd.nonlinear.jumps.find_jumps` [-].
 
         Returns
         -------

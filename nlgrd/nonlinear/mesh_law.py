@@ -10,9 +10,9 @@ model (:func:`nlgrd.nonlinear.geared.build_geared_model`) and the links
 
 from __future__ import annotations
 
-import numpy as np
 from numpy.typing import NDArray
 
+from nlgrd.errors import ModelError
 from nlgrd.gear.mesh import GearMesh
 from nlgrd.nonlinear.force_laws import BacklashMesh, ParametricMesh
 from nlgrd.nonlinear.harmonics import analyse, sample
@@ -33,12 +33,15 @@ def mesh_law(gear_pair: GearMesh, H: int = 30) -> tuple[NDArray, NDArray | None]
     Özgüven & Houser 1988, J. Sound Vib. 121:383, §3). e_p is taken to ``H`` harmonics
     from 64 H samples of the truncated ρ.
 
+    With errors that differ from tooth to tooth both are over the gear pair's
+    :attr:`~nlgrd.gear.mesh.GearMesh.error_period` N mesh cycles, in harmonics of ω/N.
+
     Parameters
     ----------
     gear_pair : GearMesh
         The gear pair (its ``stiffness_variation`` decides).
     H : int
-        Harmonics of the LSTE (and of ρ from the load sharing).
+        Mesh harmonics of the LSTE (and of ρ from the load sharing): N H of ω/N.
 
     Returns
     -------
@@ -47,12 +50,11 @@ def mesh_law(gear_pair: GearMesh, H: int = 30) -> tuple[NDArray, NDArray | None]
     rho : ndarray or None
         Real harmonics of ρ; None for the constant k_h.
     """
-    ex = gear_pair.excitation(H)
-    e = np.concatenate([[ex.e0], np.column_stack([ex.a, ex.b]).reshape(-1)])
+    e = gear_pair.lste_harmonics(H)
     rho = gear_pair.stiffness_harmonics(H)
     if rho is None:
         return e, None
-    n = 64 * max(H, (rho.size - 1) // 2, 1)
+    n = 64 * max((e.size - 1) // 2, (rho.size - 1) // 2, 1)
     shift = gear_pair.static_load / gear_pair.stiffness() * (1.0 - 1.0 / sample(rho, n))
     return e + analyse(shift, (e.size - 1) // 2), rho
 
@@ -77,15 +79,29 @@ def gear_mesh_force(
         Mesh harmonics of the LSTE and of ρ [-].
     order : int
         The mesh frequency's harmonic of the base frequency (ν of a period-ν model, or the
-        mesh's order on a frequency plan): the harmonics k of the mesh land on νk [-].
+        mesh's order on a frequency plan): the harmonics k of the mesh land on νk [-]. A
+        multiple of the gear pair's :attr:`~nlgrd.gear.mesh.GearMesh.error_period` N.
     method : {"exact", "aft"}
         Fourier coefficients of the constant-stiffness law (a parametric one is exact).
+
+    Raises
+    ------
+    ModelError
+        ``period`` when ``order`` is not a multiple of N.
 
     Returns
     -------
     BacklashMesh
         A :class:`~nlgrd.nonlinear.force_laws.ParametricMesh` when the stiffness varies.
     """
+    N = gear_pair.error_period
+    if order % N:
+        raise ModelError(
+            "period",
+            f"the gear errors differ from tooth to tooth and repeat every {N} mesh cycles: the "
+            f"analysis period must be a multiple of {N} mesh periods, got {order}",
+        )
+    order //= N
     e, rho = mesh_law(gear_pair, H)
     args = dict(
         stiffness=float(stiffness),

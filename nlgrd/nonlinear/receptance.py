@@ -143,7 +143,7 @@ class MeshReceptance:
         self.static_force = sum(g.static_torques(system) for g in system.gear_pairs)
         g0 = system.gear_pairs[0]
         s_p = abs(system.shafts[g0.pinion_shaft].speed_ratio)
-        # per unit of the frequency the receptances take: ω_mesh / period
+        self.period = int(period)  # they are taken at ω_mesh / period
         self.speed_per_mesh_frequency = period / (g0.geometry.teeth_pinion * s_p)
         if method == "auto":
             n = self.model.n_dofs

@@ -16,7 +16,11 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.jumps import Jump, find_jumps
 from nlgrd.nonlinear.metrics import METRIC_NAMES, NO_STABLE, MeshMetrics
+
+#: The response where an orbit lost stability to a complex pair (a torus): not drawn.
+QUASI_PERIODIC = "quasi-periodic"
 
 #: A point is stable when max |μ| < 1 + STABLE_RTOL.
 STABLE_RTOL = 1e-6
@@ -107,6 +111,26 @@ def instability_kind(mu: NDArray, stable: NDArray) -> NDArray:
     return out
 
 
+def response_kind(result: SweepResult) -> NDArray:
+    """Per point: "periodic" (the mesh period), "period ν", "quasi-periodic" (lost to a
+    complex pair, ``secondary_frequency`` known) or :data:`NO_STABLE`.
+
+    Parameters
+    ----------
+    result : SweepResult
+        The sweep.
+
+    Returns
+    -------
+    ndarray of str (object)
+    """
+    period = np.asarray(result.period, dtype=int)
+    out = np.array(["periodic" if p == 1 else f"period {p}" for p in period], dtype=object).reshape(-1)
+    out[result.no_stable] = NO_STABLE
+    out[result.no_stable & np.isfinite(result.secondary_frequency)] = QUASI_PERIODIC
+    return out
+
+
 def _significant(values: NDArray, digits: int) -> NDArray:
     """``values`` rounded to ``digits`` significant digits (an estimate's noise not written)."""
     v = np.asarray(values, dtype=float).copy()
@@ -126,76 +150,6 @@ def check_quantity(quantity: str) -> None:
     """
     if quantity not in METRIC_NAMES:
         raise ModelError("quantity", f"must be one of {', '.join(METRIC_NAMES)}, got {quantity!r}")
-
-
-@dataclass(frozen=True)
-class Jump:
-    """A jump of a swept branch between two consecutive points.
-
-    Attributes
-    ----------
-    direction : str
-        "up" or "down".
-    omega_from : float
-        The last point on the branch left [rad/s].
-    omega_to : float
-        The first point on the new branch [rad/s]; the fold lies between the two, their
-        midpoint is :attr:`omega`.
-    value_from, value_to : float
-        The quantity tested at the two points (SI).
-    """
-
-    direction: str
-    omega_from: float
-    omega_to: float
-    value_from: float
-    value_to: float
-
-    @property
-    def omega(self) -> float:
-        """Midpoint estimate of the jump frequency [rad/s]."""
-        return 0.5 * (self.omega_from + self.omega_to)
-
-
-def find_jumps(
-    omegas: NDArray, value: NDArray, direction: str, rtol: float = 0.15, ratio: float = 4.0
-) -> list[Jump]:
-    """Jumps in one sweep direction: steps much larger than their neighbours.
-
-    A step i -> i+1 (in sweep order) is a jump when |Δv| exceeds ``rtol`` times the
-    range of v over the sweep and ``ratio`` times both neighbouring steps.
-
-    Parameters
-    ----------
-    omegas : ndarray
-        Frequencies in sweep order [rad/s].
-    value : ndarray
-        The quantity per point (NaN points are skipped).
-    direction : str
-        Sweep direction written into the jumps.
-    rtol : float
-        Smallest jump relative to the range of ``value`` [-].
-    ratio : float
-        How much larger than both neighbouring steps a jump must be [-].
-
-    Returns
-    -------
-    list of Jump
-    """
-    v = np.asarray(value, dtype=float)
-    ok = np.isfinite(v)
-    w, v = np.asarray(omegas, dtype=float)[ok], v[ok]
-    if v.size < 2:
-        return []
-    dv = np.abs(np.diff(v))
-    rng = np.ptp(v) + 1e-300
-    out = []
-    for i, step in enumerate(dv):
-        left = dv[i - 1] if i > 0 else 0.0
-        right = dv[i + 1] if i + 1 < dv.size else 0.0
-        if step > rtol * rng and step > ratio * left and step > ratio * right:
-            out.append(Jump(direction, float(w[i]), float(w[i + 1]), float(v[i]), float(v[i + 1])))
-    return out
 
 
 @dataclass(frozen=True)
@@ -233,7 +187,7 @@ class SweepResult:
         Estimated relative error of the outputs from the truncation to H harmonics
         (:func:`nlgrd.nonlinear.harmonic_convergence.check_harmonics`); NaN where not estimated.
     H_check : int, optional
-        The H the estimate was made against.
+        The H the estimate was made against (of the mesh frequency).
     no_stable : ndarray of bool
         No stable mesh-periodic response was found at the point: the harmonics are those of
         the unstable orbit the sweep reached (kept for the analysis of what grows from
@@ -244,6 +198,16 @@ class SweepResult:
     residual_kind : str
         A key of :data:`RESIDUAL_COLUMNS`: "relative residual" (harmonic balance, curves)
         or "period difference" (time integration).
+    period : ndarray of int, optional
+        Mesh periods after which the point's orbit repeats (1: mesh-periodic; 2: period
+        doubled; :mod:`nlgrd.nonlinear.subharmonic`). The harmonics and metrics of a
+        point of period ν are those of its whole period, on the base ω/ν.
+    subharmonic_amplitude : ndarray, optional
+        Largest DTE amplitude at a frequency j ω/ν, j not a multiple of ν [m] (0 for
+        mesh-periodic points).
+    base : int
+        The harmonics are of ω/base (2 when some point has period 2, N for a shaft-order
+        sweep); ``H`` counts them, the ``H`` column the mesh harmonics H / base.
     """
 
     omega: NDArray
@@ -263,10 +227,17 @@ class SweepResult:
     no_stable: NDArray | None = None
     dominant_multiplier: NDArray | None = None
     residual_kind: str = "relative residual"
+    period: NDArray | None = None
+    subharmonic_amplitude: NDArray | None = None
+    base: int = 1
 
     def __post_init__(self):
         if self.residual_kind not in RESIDUAL_COLUMNS:
             raise ModelError("residual_kind", f"must be one of {', '.join(RESIDUAL_COLUMNS)}")
+        n = self.omega.size
+        for name, default in (("period", np.ones(n, dtype=int)), ("subharmonic_amplitude", np.zeros(n))):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, default)
         if self.branch_switch is None:
             object.__setattr__(self, "branch_switch", np.zeros(self.omega.size, dtype=bool))
         if self.no_stable is None:
@@ -283,6 +254,18 @@ class SweepResult:
 
     def __len__(self) -> int:
         return self.omega.size
+
+    @property
+    def secondary_frequency(self) -> NDArray:
+        """Per point without a stable response whose orbit lost stability to a complex pair
+        of multipliers μ (Neimark-Sacker: the motion near it is quasi-periodic), the
+        frequency of the secondary oscillation |arg μ| ω/(2π ν), in (0, ω/2ν] [rad/s];
+        NaN elsewhere."""
+        mu = np.asarray(self.dominant_multiplier, dtype=complex)
+        with np.errstate(invalid="ignore"):
+            torus = self.no_stable & (np.abs(mu.imag) > 1e-6 * np.abs(mu)) & (np.abs(mu) > 1)
+        f = np.abs(np.angle(mu)) * self.omega / (2 * np.pi * self.period)
+        return np.where(torus, f, np.nan)
 
     @property
     def stability_known(self) -> NDArray:
@@ -316,6 +299,9 @@ class SweepResult:
             self.no_stable[keep],
             self.dominant_multiplier[keep],
             self.residual_kind,
+            self.period[keep],
+            self.subharmonic_amplitude[keep],
+            self.base,
         )
 
     def failures(self) -> NDArray:
@@ -331,11 +317,11 @@ class SweepResult:
         """Jumps of each sweep direction, in sweep order.
 
         A step is a jump when any of ``quantities`` jumps by the test of
-        :func:`find_jumps` (a jump onto or off a contact-loss branch shows most clearly in
-        the contact-loss fraction), when the solver had to leave the folded branch
-        (``branch_switch``), or where the sweep enters or leaves a range with no stable
-        mesh-periodic response (``no_stable``; its values are NaN). The reported values
-        are those of the first quantity.
+        :func:`~nlgrd.nonlinear.jumps.find_jumps` (a jump onto or off a contact-loss
+        branch shows most clearly in the contact-loss fraction), when the solver had to
+        leave the folded branch (``branch_switch``), or where the sweep enters or leaves
+        a range with no stable response (``no_stable``; its values are NaN), or changes
+        period (``period``). The reported values are those of the first quantity.
         """
         qs = (quantities,) if isinstance(quantities, str) else tuple(quantities)
         return self.jumps_of({q: self.metrics[q] for q in qs}, rtol, ratio)
@@ -349,7 +335,7 @@ class SweepResult:
         values : dict of str to ndarray
             The quantities; the reported values are those of the first.
         rtol, ratio : float
-            As :func:`find_jumps` [-].
+            As :func:`~nlgrd.nonlinear.jumps.find_jumps` [-].
 
         Returns
         -------
@@ -361,6 +347,7 @@ class SweepResult:
             part = self.select(d)
             steps: set[int] = set(np.nonzero(part.branch_switch[1:])[0].tolist())
             steps |= set(np.nonzero(np.diff(part.no_stable.astype(int)) != 0)[0].tolist())
+            steps |= set(np.nonzero(np.diff(part.period) != 0)[0].tolist())
             for q in values:
                 for j in find_jumps(part.omega, np.asarray(values[q])[keep], d, rtol, ratio):
                     steps.add(int(np.nonzero(part.omega == j.omega_from)[0][0]))
@@ -399,17 +386,20 @@ class SweepResult:
             "iterations": iterations,
             "stable": flag(self.stable, self.stability_known),
             "floquet_max [-]": floquet_output(num(self.floquet_max)),
-            "H": pd.array(np.where(ok, self.H, 0), dtype="Int64"),
+            "H": pd.array(np.where(ok, self.H // self.base, 0), dtype="Int64"),
             "harmonic_error [-]": _significant(num(self.harmonic_error), 3),
-            "response": pd.array(
-                np.where(self.no_stable, NO_STABLE, "periodic").astype(object), dtype="string"
-            ),
+            "response": pd.array(response_kind(self), dtype="string"),
+            "period": pd.array(np.asarray(self.period, dtype=int), dtype="Int64"),
+            "subharmonic_amp [um]": num(self.subharmonic_amplitude) * 1e6,
+            "secondary_frequency [Hz]": _significant(num(self.secondary_frequency) / (2 * np.pi), 8),
             "instability": pd.array(instability_kind(self.dominant_multiplier, self.stable), dtype="string"),
             "dominant_multiplier_re [-]": floquet_output(num(self.dominant_multiplier.real), signed=True),
             "dominant_multiplier_im [-]": floquet_output(num(self.dominant_multiplier.imag), signed=True),
         }
         data["H"][~ok] = pd.NA
         data["response"][~ok] = pd.NA
+        data["period"][~ok | self.no_stable] = pd.NA
+        data["subharmonic_amp [um]"][self.no_stable] = np.nan
         data["instability"][~ok | ~self.stability_known] = pd.NA
         ok = ok & ~self.no_stable  # the metrics: of the response only
         for name in METRIC_NAMES:

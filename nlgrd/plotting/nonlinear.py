@@ -325,3 +325,54 @@ def plot_time_history(history, quantity: str = "delta", ax=None, label: str | No
     ax.set_xlabel("time [ms]")
     ax.legend(fontsize=8)
     return ax
+
+
+def plot_spectrum(
+    omegas,
+    amplitude,
+    omega_mesh: float,
+    ax=None,
+    ylabel: str = "DTE amplitude [µm]",
+    scale: float = 1e6,
+    label: str | None = None,
+):
+    """A line spectrum against frequency [Hz], the mesh harmonics told from the sidebands
+    and shaft orders between them (:func:`nlgrd.nonlinear.shaft_orders.dte_spectrum`,
+    :func:`~nlgrd.nonlinear.shaft_orders.bearing_force_spectrum`).
+
+    Parameters
+    ----------
+    omegas : array_like
+        Frequencies of the lines [rad/s].
+    amplitude : array_like
+        Their amplitudes (SI, multiplied by ``scale`` for the axis).
+    omega_mesh : float
+        The mesh frequency [rad/s]: lines at its multiples are drawn as mesh harmonics.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+    ylabel : str
+        The amplitude axis label, with its unit.
+    scale : float
+        Factor from SI to the axis unit.
+    label : str, optional
+        Legend prefix (e.g. a bearing's name).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
+    ax = get_ax(ax)
+    w = np.asarray(omegas, dtype=float)
+    f = w / (2 * np.pi)
+    a = np.asarray(amplitude, dtype=float) * scale
+    order = w / omega_mesh
+    mesh = np.abs(order - np.round(order)) < 1e-6
+    prefix = f"{label}: " if label else ""
+    ax.vlines(f[~mesh], 0, a[~mesh], color="C1", lw=1.0, label=f"{prefix}sidebands and shaft orders")
+    ax.vlines(f[mesh], 0, a[mesh], color="C0", lw=2.0, label=f"{prefix}mesh harmonics")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel(ylabel)
+    ax.set_ylim(bottom=0)
+    ax.legend(fontsize=8)
+    return ax

@@ -171,11 +171,14 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
             frame.insert(1, x_col, frame["base_frequency [Hz]"] * 2 * math.pi * per_rad)
         return frame, res.jumps(), x_col, per_rad
     from nlgrd.nonlinear.geared import geared_sweep
+    from nlgrd.nonlinear.shaft_orders import shaft_order_sweep
 
     gp = system.gear_pairs[0]
     mesh_per_pinion = gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
     per_rad = 30 / math.pi / mesh_per_pinion if rpm else 1 / (2 * math.pi)
-    res = geared_sweep(
+    # teeth that differ: the sweep over their period (shaft orders and sidebands)
+    sweeper = geared_sweep if gp.error_period == 1 else shaft_order_sweep
+    res = sweeper(
         system,
         omegas=values / per_rad,
         H=analysis["harmonics"],

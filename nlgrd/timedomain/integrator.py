@@ -64,6 +64,10 @@ class FETimeResponse:
         All DOFs over the last period [SI], when ``store_dofs``.
     state : tuple of ndarray
         (q, q', q'') at the end, to continue a sweep.
+    poincare : ndarray (periods,)
+        δ at the start of every period integrated (the Poincaré section θ = 0 mod 2π) [m]:
+        a fixed point for a mesh-periodic orbit, ν points for period ν, a closed curve for
+        a torus.
     """
 
     omega: float
@@ -73,6 +77,7 @@ class FETimeResponse:
     difference: float
     q: NDArray | None
     state: tuple
+    poincare: NDArray | None = None
 
     def dof(self, index: int) -> NDArray:
         """Time history of one DOF over the last period."""
@@ -329,6 +334,7 @@ def integrate_fe(
         return y_lin - apcw * g1, g1
 
     prev = None
+    section: list[float] = []
     diffs: list[float] = []
     converged = False
     scale0 = abs(F0 @ w) / (k_h * (w @ w)) if np.any(F0) else 0.0
@@ -342,6 +348,7 @@ def integrate_fe(
         else:
             ys, s_end = pmap.run(np.append(state, g), solve_link)
             state, g, cur = s_end[: 3 * N], float(s_end[-1]), ys[0]
+        section.append(float(cur[0]))
         if prev is not None:
             d = float(np.max(np.abs(cur - prev)) / (np.ptp(cur) + scale0 + 1e-300))
             diffs.append(d)
@@ -358,4 +365,5 @@ def integrate_fe(
     force = g_hist + c_m * (ddot_hist - edot_s)
     hist = TimeHistory(t, delta_hist.copy(), ddot_hist.copy(), e_s.copy(), edot_s.copy(), force)
     final = (state[:N].copy(), state[N : 2 * N].copy(), state[2 * N :].copy())
-    return FETimeResponse(omega, hist, converged, p, diffs[-1] if diffs else float("nan"), q_hist, final)
+    last = diffs[-1] if diffs else float("nan")
+    return FETimeResponse(omega, hist, converged, p, last, q_hist, final, np.array(section))

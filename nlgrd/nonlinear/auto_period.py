@@ -1,0 +1,237 @@
+"""Sweeps that answer beyond mesh-periodic motion (issue 12, items 2 and 6): the stable
+period-1 orbit where there is one, the stable period-2 orbit where period 1 has lost
+stability by period doubling, and where neither exists the point marked quasi-periodic
+(a complex pair left the unit circle) or as having no stable response.
+
+:func:`merge_periods` walks each sweep direction like the rig would: it stays on the
+period-2 branch while that branch is stable (a subcritical period-2 branch outlives the
+flip point, so the sweep keeps it until it ends, then falls back to period 1), and leaves
+period 1 only where period 1 is unstable. :func:`transitions` lists the changes of
+response along each sweep with their kind: period doubling, the end of a period-2
+branch, a Neimark-Sacker (torus) bifurcation, the loss of every stable response.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from nlgrd.nonlinear.results import SweepResult, response_kind
+from nlgrd.nonlinear.subharmonic import amplitudes, period_of, spread, subharmonic_mask
+
+
+@dataclass(frozen=True)
+class Transition:
+    """A change of the kind of response between two consecutive points of a sweep.
+
+    Attributes
+    ----------
+    direction : str
+        "up" or "down".
+    omega_from, omega_to : float
+        The last point of the old response and the first of the new [rad/s].
+    response_from, response_to : str
+        The response column's values at the two points.
+    kind : str
+        "period doubling", "period-2 branch ends", "Neimark-Sacker" (the orbit's complex
+        pair left the unit circle), "fold" (a real multiplier > 1: the branch ends) or
+        "stable again".
+    """
+
+    direction: str
+    omega_from: float
+    omega_to: float
+    response_from: str
+    response_to: str
+    kind: str
+
+
+def flip_unstable(result: SweepResult) -> NDArray:
+    """Points whose orbit lost stability by period doubling (dominant real μ < -1).
+
+    Parameters
+    ----------
+    result : SweepResult
+        A sweep with stability.
+
+    Returns
+    -------
+    ndarray of bool
+    """
+    mu = np.asarray(result.dominant_multiplier, dtype=complex)
+    with np.errstate(invalid="ignore"):
+        real = np.abs(mu.imag) <= 1e-6 * np.abs(mu)
+        return result.converged & ~result.stable & real & (mu.real < -1)
+
+
+def merge_periods(p1: SweepResult, p2: SweepResult) -> SweepResult:
+    """One response per point from a period-1 sweep and a period-2 sweep on the same grid.
+
+    Parameters
+    ----------
+    p1 : SweepResult
+        Period-1 sweep with stability (harmonics of ω, H₁ of them).
+    p2 : SweepResult
+        Period-2 sweep (:func:`nlgrd.nonlinear.subharmonic.period_sweep`) at the same
+        frequencies and directions, harmonics of ω/2.
+
+    Returns
+    -------
+    SweepResult
+        Harmonics of ω/2 for every point (period-1 orbits spread onto it), ``period`` 1 or 2,
+        ``subharmonic_amplitude`` the ω/2 content, ``amplitudes`` and metrics those of the
+        chosen orbit (amplitudes at the mesh harmonics); ``no_stable`` where neither is
+        stable (:attr:`SweepResult.secondary_frequency` then marks a torus).
+    """
+    H2 = p2.H
+    n = len(p1)
+    index2 = {(d, float(w)): i for i, (d, w) in enumerate(zip(p2.direction, p2.omega, strict=True))}
+    rows2 = np.array([index2[(d, float(w))] for d, w in zip(p1.direction, p1.omega, strict=True)])
+    found2 = np.array([c and period_of(z, 2) == 2 for z, c in zip(p2.harmonics, p2.converged, strict=True)])
+    found2 = found2[rows2]
+    ok1 = p1.converged & p1.stable & ~p1.no_stable
+    ok2 = found2 & p2.stable[rows2]
+    pick2 = np.zeros(n, dtype=bool)
+    for d in dict.fromkeys(p1.direction.tolist()):
+        on2 = False
+        for i in np.nonzero(p1.direction == d)[0]:
+            on2 = bool(ok2[i] and (on2 or not ok1[i]))
+            # neither stable: the unstable period-2 orbit tells what grows (a torus, period 4)
+            pick2[i] = on2 or (not ok1[i] and found2[i])
+    no_stable = np.where(pick2, ~ok2, p1.no_stable | (p1.converged & ~p1.stable))
+
+    def rows(a1, a2):
+        return np.where(pick2.reshape((-1,) + (1,) * (np.ndim(a1) - 1)), a2[rows2], a1)
+
+    width = max(p1.amplitudes.shape[1], (p2.amplitudes.shape[1] + 1) // 2)
+    amps = rows(_pad_columns(p1.amplitudes, width), _pad_columns(p2.amplitudes[:, ::2], width))
+    sub = np.zeros(n)
+    odd = subharmonic_mask(H2, 2)[1::2]  # the cosine slots of ω/2, 3ω/2, ...
+    for i in np.nonzero(pick2 & ~no_stable)[0]:
+        sub[i] = float(np.max(amplitudes(p2.harmonics[rows2[i]])[:, odd]))
+    return SweepResult(
+        p1.omega,
+        p1.direction,
+        rows(np.array([_on_base(z, H2) for z in p1.harmonics]), p2.harmonics),
+        rows(p1.converged, p2.converged),
+        rows(p1.residual, p2.residual),
+        rows(p1.iterations, p2.iterations),
+        rows(p1.stable, p2.stable),
+        rows(p1.floquet_max, p2.floquet_max),
+        {k: rows(v, p2.metrics[k]) for k, v in p1.metrics.items()},
+        amps,
+        f"{p1.source}; period 2 where period 1 is flip-unstable ({p2.source})",
+        rows(p1.branch_switch, p2.branch_switch),
+        rows(p1.harmonic_error, p2.harmonic_error),
+        p1.H_check,
+        no_stable,
+        rows(p1.dominant_multiplier, p2.dominant_multiplier),
+        p1.residual_kind,
+        np.where(pick2, 2, 1),
+        sub,
+        2,
+    )
+
+
+def _pad_columns(a: NDArray, width: int) -> NDArray:
+    return np.pad(a, ((0, 0), (0, width - a.shape[1])), constant_values=np.nan)
+
+
+def _on_base(z: NDArray, H2: int) -> NDArray:
+    """Period-1 harmonics (n, 2H₁+1) of ω as H2 harmonics of ω/2 (cut or padded)."""
+    s = spread(z, 2)[:, : 2 * H2 + 1]
+    return np.pad(s, ((0, 0), (0, 2 * H2 + 1 - s.shape[1])))
+
+
+def transitions(result: SweepResult) -> list[Transition]:
+    """The changes of response along each sweep direction, in sweep order, with their kind.
+
+    Parameters
+    ----------
+    result : SweepResult
+        A sweep with stability (e.g. from :func:`merge_periods`).
+
+    Returns
+    -------
+    list of Transition
+    """
+    kinds = response_kind(result)
+    out = []
+    for d in dict.fromkeys(result.direction.tolist()):
+        idx = np.nonzero((result.direction == d) & result.converged)[0]
+        for i, j in zip(idx[:-1], idx[1:], strict=True):
+            if kinds[i] == kinds[j]:
+                continue
+            out.append(
+                Transition(
+                    d,
+                    float(result.omega[i]),
+                    float(result.omega[j]),
+                    kinds[i],
+                    kinds[j],
+                    _kind(result, kinds, i, j),
+                )
+            )
+    return out
+
+
+def _kind(result: SweepResult, kinds: NDArray, i: int, j: int) -> str:
+    if result.period[j] > result.period[i] and not result.no_stable[j]:
+        return "period doubling"
+    if result.period[i] > 1 and result.period[j] < result.period[i] and not result.no_stable[j]:
+        return "period-2 branch ends"
+    if not result.no_stable[j]:
+        return "stable again"
+    mu = complex(result.dominant_multiplier[j])
+    if np.isfinite(result.secondary_frequency[j]):
+        return "Neimark-Sacker"
+    return "period doubling" if mu.real < -1 else "fold"
+
+
+def period_only(p2: SweepResult) -> SweepResult:
+    """A period-2 sweep as a response: its period-2 orbits, every other point not found.
+
+    Parameters
+    ----------
+    p2 : SweepResult
+        From :func:`nlgrd.nonlinear.subharmonic.period_sweep` with ν = 2.
+
+    Returns
+    -------
+    SweepResult
+        ``period`` 2, ``amplitudes`` at the mesh harmonics, ``subharmonic_amplitude`` the
+        ω/2 content; a point whose orbit fell back to period 1 or was not found is not
+        converged; an unstable one has ``no_stable``.
+    """
+    found = np.array([c and period_of(z, 2) == 2 for z, c in zip(p2.harmonics, p2.converged, strict=True)])
+    odd = subharmonic_mask(p2.H, 2)[1::2]
+    sub = np.array(
+        [
+            float(np.max(amplitudes(z)[:, odd])) if f else np.nan
+            for z, f in zip(p2.harmonics, found, strict=True)
+        ]
+    )
+    return SweepResult(
+        p2.omega,
+        p2.direction,
+        p2.harmonics,
+        found,
+        p2.residual,
+        p2.iterations,
+        p2.stable & found,
+        p2.floquet_max,
+        p2.metrics,
+        p2.amplitudes[:, ::2],
+        p2.source,
+        p2.branch_switch,
+        p2.harmonic_error,
+        p2.H_check,
+        found & ~p2.stable,
+        p2.dominant_multiplier,
+        p2.residual_kind,
+        np.full(len(p2), 2),
+        sub,
+        2,
+    )
