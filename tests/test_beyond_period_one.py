@@ -68,7 +68,7 @@ def test_every_speed_has_an_answer(kubo):
     assert qp["dte_rms [um]"].isna().all() and (qp["instability"] == "complex").all()
     mu = m.dominant_multiplier[m.no_stable]
     f2 = np.abs(np.angle(mu)) / (2 * np.pi) * m.omega[m.no_stable] / (2 * np.pi)
-    np.testing.assert_allclose(qp["secondary_frequency [Hz]"], f2, rtol=1e-12)
+    np.testing.assert_allclose(qp["secondary_frequency [Hz]"], f2, rtol=1e-7)  # written to 8 digits
     assert NO_STABLE not in kinds  # every speed answered here
     found = {(t.direction, t.kind) for t in transitions(m)}
     assert {("down", "period doubling"), ("down", "period-2 branch ends"), ("up", "Neimark-Sacker")} <= found

@@ -269,7 +269,9 @@ class GearMesh:
     def excitation(self, H: int = 30):
         """The LSTE as a :class:`~nlgrd.gear.lste_file.MeshExcitation`, mean removed [m].
 
-        From ``lste_file`` when given, else computed from the geometry.
+        From ``lste_file`` when given, else computed from the geometry. With errors that
+        differ from tooth to tooth, the mesh harmonics alone (:meth:`lste_harmonics` has
+        the revolution's).
         """
         from nlgrd.gear.lste_file import read_excitation
 
