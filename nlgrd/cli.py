@@ -407,6 +407,18 @@ def build_parser() -> argparse.ArgumentParser:
         "its ω/2 content and, where a complex pair of Floquet multipliers left the unit circle "
         "(quasi-periodic), the secondary frequency",
     )
+    sw.add_argument(
+        "--search-at",
+        default=None,
+        help="comma-separated speeds (the range's unit) at which to search, from many starts, for "
+        "orbits the sweep does not reach (isolated branches, subharmonics); each stable one found is "
+        "followed over the grid. Writes <out>_orbits.csv and <out>_branches.csv, drawn on the PNG",
+    )
+    sw.add_argument(
+        "--search-periods",
+        default="1,2,3",
+        help="periods sought by --search-at, in mesh periods (default 1,2,3; at most 6)",
+    )
     sw.add_argument("--no-stability", action="store_true", help="skip the Floquet stability of each point")
     sw.add_argument("--out", default="sweep.csv", help="CSV file (default sweep.csv)")
     sw.add_argument("--plot", default=None, help="PNG file (default: the CSV's name with .png)")

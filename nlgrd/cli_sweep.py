@@ -91,9 +91,20 @@ def cmd_sweep(args) -> int:
     png = output_file("--plot", args.plot, "sweep.png") if args.plot else out.with_suffix(".png")
     if png.resolve() == out.resolve():
         raise ModelError("--plot", f"the plot would overwrite the CSV {out}; give --out a .csv name")
+    search = None
+    if args.search_at is not None:
+        from nlgrd.cli_orbits import parse_search
+
+        if args.continuation:
+            raise ModelError("--search-at", "searches beside a sweep, not a --continuation")
+        search = parse_search(args, values)
     system = load_model(args.model)
     from nlgrd.cli_link_sweep import link_sweep_command, needs_links
 
+    if search is not None and (needs_links(system) or system.gear_pairs[0].error_period > 1):
+        raise ModelError(
+            "--search-at", "searches the orbits of one gear pair excited at its mesh period", args.model
+        )
     if needs_links(system):
         if not system.gear_pairs and not system.bearing_clearances:
             raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
@@ -130,14 +141,33 @@ def cmd_sweep(args) -> int:
         progress=_Progress("sweep"),
         period=args.period if args.period == "auto" else int(args.period),
     )
-    _write_sweep(res, quantity, out, png)
-    return _summary(args, res, unit, out, png, transitions)
+    found = None
+    if search is not None:
+        from nlgrd.cli_orbits import search_command
+
+        found = search_command(model, res, omegas, *search, unit)
+    _write_sweep(res, quantity, out, png, found=found)
+    status = _summary(args, res, unit, out, png, transitions)
+    if found is not None:
+        print(f"wrote {_beside(out, 'orbits')} and {_beside(out, 'branches')}")
+    return status
 
 
-def _write_sweep(res, quantity, out, png, extra=None) -> None:
+def _beside(out, name: str):
+    return out.with_name(f"{out.stem}_{name}.csv")
+
+
+def _write_sweep(res, quantity, out, png, extra=None, found=None) -> None:
     with Outputs() as files:
         files.csv(res.to_frame(), out)
         ax = res.plot(quantity=quantity)
+        if found is not None:
+            from nlgrd.cli_orbits import draw_branches
+
+            files.csv(found[0], _beside(out, "orbits"))
+            files.csv(found[1], _beside(out, "branches"))
+            draw_branches(ax, found[1], "mesh_frequency [Hz]", quantity)
+            ax.legend(fontsize=7)
         ax.figure.tight_layout()
         files.figure(ax.figure, png)
         if extra is not None:

@@ -151,6 +151,32 @@ def test_sweep_period_auto_and_one(tmp_path, capsys):
     assert (df1["period"].dropna() == 1).all()
 
 
+@pytest.mark.slow  # a 3-point FE sweep, the search for periods 1 and 2 and a period-2 branch: about 30 s
+def test_sweep_search_at_writes_the_orbits_the_sweep_does_not_reach(tmp_path, capsys):
+    """`--search-at`: at 9800 rpm a down sweep started at 9900 rpm is on the branch without
+    contact loss; the search finds that orbit (marked as the sweep's), the flip-unstable
+    contact-loss orbit and the stable period-2 orbit of tests/test_period_doubling_fe.py's
+    kind, which it follows and draws; the CSVs say which is which."""
+    out = tmp_path / "s.csv"
+    argv = ["sweep", str(KUBO), "--rpm", "9700:9900:3", "--direction", "down", "--harmonics", "13"]
+    assert main([*argv, "--search-at", "9800", "--search-periods", "1,2", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "orbit at 9800.0 rpm: period 2, stable" in text and "(the sweep's)" in text
+    orbits = pd.read_csv(tmp_path / "s_orbits.csv")
+    mine = orbits[orbits["on the sweep"]]
+    assert len(mine) == 1 and mine["period"].iloc[0] == 1 and mine["stable"].iloc[0]
+    sweep = pd.read_csv(out).round({"pinion_speed [rpm]": 6}).set_index("pinion_speed [rpm]")
+    assert mine["dte_rms [um]"].iloc[0] == pytest.approx(sweep.loc[9800.0, "dte_rms [um]"], rel=1e-6)
+    two = orbits[(orbits["period"] == 2) & orbits["stable"]]
+    assert len(two) == 1 and not two["on the sweep"].iloc[0]
+    assert (orbits.loc[~orbits["stable"], "floquet_max [-]"] > 1).all()
+    branches = pd.read_csv(tmp_path / "s_branches.csv")
+    at = branches[branches["converged"] & np.isclose(branches["pinion_speed [rpm]"], 9800.0)]
+    assert set(at["response"]) == {"period 2"} and set(branches["branch"]) == {"period 2 from 9800.0 rpm"}
+    assert at["dte_rms [um]"].iloc[0] == pytest.approx(two["dte_rms [um]"].iloc[0], rel=1e-9)
+    assert (tmp_path / "s.png").stat().st_size > 0
+
+
 @pytest.mark.parametrize(
     "argv, key",
     [
@@ -158,6 +184,11 @@ def test_sweep_period_auto_and_one(tmp_path, capsys):
         (["--rpm", "1000:2000:5", "--harmonics", "0"], "--harmonics"),
         (["--hz", "a:b:c"], "--hz"),
         ([], "--rpm"),
+        (["--rpm", "1000:2000:5", "--search-at", "2500"], "--search-at"),
+        (["--rpm", "1000:2000:5", "--search-at", "1500,x"], "--search-at"),
+        (["--rpm", "1000:2000:5", "--search-at", "1500", "--search-periods", "0,2"], "--search-periods"),
+        (["--rpm", "1000:2000:5", "--search-at", "1500", "--search-periods", "1.5"], "--search-periods"),
+        (["--rpm", "1000:2000", "--continuation", "--search-at", "1500"], "--search-at"),
     ],
 )
 def test_sweep_bad_options_are_one_line(argv, key, tmp_path, capsys):

@@ -29,6 +29,7 @@ from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.floquet import floquet_multipliers
 from nlgrd.nonlinear.geared import build_geared_model
 from nlgrd.nonlinear.harmonics import analyse
+from nlgrd.nonlinear.orbit_search import same_motion, search_orbits
 from nlgrd.nonlinear.subharmonic import amplitudes, branch_off, period_of, spread
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.timedomain.geared import start_from_harmonics, time_response
@@ -89,3 +90,21 @@ def test_period_two_orbit_against_converged_time_integration(kubo_down):
     print("HB", hb, "TD", td, "Richardson", extrapolated)
     assert abs(td[1][0] / hb[0] - 1) < 1e-2 and abs(extrapolated[0] / hb[0] - 1) < 5e-3
     assert abs(td[1][1] / hb[1] - 1) < 1e-4
+
+
+@pytest.mark.slow  # 24 perturbed starts for each period, about 30 s
+def test_search_from_perturbed_starts_finds_the_orbits_of_the_down_sweep(kubo_down):
+    """At 3055.6 Hz the orbit search (perturbed starts, no knowledge of the critical mode)
+    finds the down sweep's flip-unstable period-1 orbit and the period-2 orbit that
+    :func:`branch_off` starts from the critical mode (checked against time integration
+    above), each as the same motion: the two constructions agree to Newton's tolerance."""
+    m1, m2, p1 = kubo_down
+    i = int(np.argmin(np.abs(p1.omega - TWO_PI * 3055.6)))
+    w = float(p1.omega[i])
+    found = search_orbits(lambda nu: m1.reduced if nu == 1 else m2.reduced, w, 13, (1, 2))
+    s2 = branch_off(m2.reduced.at(w / 2, 26), p1.harmonics[i], 2)
+    one = [o for o in found if o.period == 1 and same_motion(o.harmonics, p1.harmonics[i], 1)]
+    two = [o for o in found if o.period == 2 and same_motion(o.harmonics, s2.harmonics, 2)]
+    assert len(one) == 1 and not one[0].stable and one[0].dominant_multiplier.real < -1.1
+    assert len(two) == 1
+    assert all(o.period in (1, 2) for o in found)

@@ -380,3 +380,33 @@ def test_index_page_lists_every_figure_with_its_caption_and_settings(tmp_path):
     assert "built in fast mode" in page and "<td>nlgrd</td>" in page
     assert str(tmp_path) not in page
     assert page == index_html(tmp_path, fast=True, parts=("models",), root=ROOT)
+
+
+def test_period_two_points_are_drawn_ringed_and_lost_points_marked_by_kind():
+    """The response kinds a ``period="auto"`` sweep writes: a period-2 orbit is a response
+    (drawn at its value, ringed, counted), a quasi-periodic point and one without a stable
+    response are not (bottom-edge marks of their own, counted; their value is NaN as
+    SweepResult.to_frame writes it)."""
+    frame = sweep_frame(n=6)
+    kinds = [
+        "periodic",
+        "period 2",
+        "period 2",
+        "quasi-periodic",
+        "no stable mesh-periodic response",
+        "periodic",
+    ]
+    frame["response"] = pd.array(kinds + ["periodic"] * 6, dtype="string")
+    lost = frame.index[:6][[3, 4]]
+    frame.loc[lost, Y] = np.nan
+    ax = plot_sweep_frame(frame, X, Y, label="FE")
+    (ring,) = by_label(ax, "FE up: period 2 (2)")
+    assert ring.get_transform() == ax.transData
+    np.testing.assert_allclose(ring.get_ydata(), frame.loc[[1, 2], Y])
+    (quasi,) = by_label(ax, "FE up: quasi-periodic (1)")
+    (none,) = by_label(ax, "FE up: no stable periodic response (1)")
+    np.testing.assert_allclose(quasi.get_xdata(), frame.loc[[3], X])
+    np.testing.assert_allclose(none.get_xdata(), frame.loc[[4], X])
+    for mark in (quasi, none):
+        assert mark.get_transform() != ax.transData
+    assert not any("period 2" in ln.get_label() and "down" in ln.get_label() for ln in ax.get_lines())

@@ -18,6 +18,7 @@ model.md §2).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,7 +26,7 @@ from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError, check_positive
 from nlgrd.gear.geometry import GearGeometry
-from nlgrd.gear.modifications import GearErrors, ProfileModification
+from nlgrd.gear.modifications import GearErrors, GearRunout, ProfileModification
 
 
 @dataclass(frozen=True)
@@ -76,6 +77,11 @@ class GearMesh:
         (:func:`~nlgrd.gear.transmission_error.loaded_static_transmission_error`). A
         sequence: the real Fourier harmonics [1, a_1, b_1, ...] of ρ(θ) in the mesh angle,
         ρ_0 = 1, ρ > 0 throughout. See :meth:`mesh_law`.
+    runout : GearRunout, optional
+        Eccentricity and phase of the pinion and of the gear (``[gear_pairs.runout]`` in a
+        model file): adds e_m cos(θ / z_m + φ_m) to the LSTE, so the excitation repeats
+        once per revolution of the member (:attr:`error_period`); see
+        :class:`~nlgrd.gear.modifications.GearRunout` for the model and its conventions.
 
     Notes
     -----
@@ -100,6 +106,7 @@ class GearMesh:
     lste_points: int = 256
     errors: GearErrors | None = None
     stiffness_variation: str | tuple[float, ...] | None = None
+    runout: GearRunout | None = None
 
     def __post_init__(self):
         for key in ("pinion_shaft", "pinion_node", "gear_shaft", "gear_node", "input_node", "output_node"):
@@ -126,6 +133,8 @@ class GearMesh:
             raise ModelError("lste_points", f"must be an integer >= 16, got {self.lste_points!r}")
         if self.driver not in ("pinion", "gear"):
             raise ModelError("driver", f"must be 'pinion' or 'gear', got {self.driver!r}")
+        if self.runout is not None and not isinstance(self.runout, GearRunout):
+            raise ModelError("runout", f"must be a GearRunout, got {type(self.runout).__name__}")
         self._check_stiffness_variation()
 
     def _check_stiffness_variation(self) -> None:
@@ -281,39 +290,55 @@ class GearMesh:
         return self.lste_result().excitation(H)
 
     @property
-    def error_period(self) -> int:
-        """Mesh cycles after which the excitation repeats [-]: 1, or with errors that differ
+    def tooth_period(self) -> int:
+        """Mesh cycles after which the tooth errors repeat [-]: 1, or with errors that differ
         from tooth to tooth z_1, z_2 or the hunting period (:meth:`GearErrors.hunting_cycles`);
         1 with an ``lste_file`` (a mesh cycle's LSTE)."""
         if self.errors is None or self.lste_file:
             return 1
         return self.errors.hunting_cycles(self.geometry)
 
+    @property
+    def error_period(self) -> int:
+        """Mesh cycles after which the excitation repeats [-]: the lcm of
+        :attr:`tooth_period` and the runout's (z_m of each member with runout,
+        :meth:`GearRunout.cycles`)."""
+        n = self.tooth_period
+        return n if self.runout is None else math.lcm(n, self.runout.cycles(self.geometry))
+
     def lste_harmonics(self, H: int = 30) -> NDArray:
-        """Real harmonics [0, a_1, b_1, ...] of the LSTE, mean removed, over
+        """Real harmonics [0, a_1, b_1, ...] of the LSTE, mean removed, runout included, over
         :attr:`error_period` N mesh cycles: N H harmonics of ω/N (the mesh harmonics at
         multiples of N, shaft orders and sidebands between) [m]."""
-        N = self.error_period
-        if N == 1:
+        N, n = self.error_period, self.tooth_period
+        if n == 1:
             ex = self.excitation(H)
-            return np.concatenate([[0.0], np.column_stack([ex.a, ex.b]).reshape(-1)])
-        out = _real_harmonics(self.lste_result().lste, N * H, "lste_points")
-        out[0] = 0.0
+            out = np.zeros(2 * N * ex.a.size + 1)
+            out[2 * N - 1 :: 2 * N], out[2 * N :: 2 * N] = ex.a, ex.b
+        else:
+            out = _real_harmonics(np.tile(self.lste_result().lste, N // n), N * H, "lste_points")
+            out[0] = 0.0
+        if self.runout is not None:
+            out += self.runout.harmonics(self.geometry, N, (out.size - 1) // 2)
         return out
 
     def stiffness_harmonics(self, H: int = 30) -> NDArray | None:
-        """Real harmonics [1, a_1, b_1, ...] of ρ(θ) = k(θ)/k_h: from the load sharing N H of
-        ω/N as :meth:`lste_harmonics`, all that were given otherwise (of the mesh
-        frequency); None for the constant k_h."""
+        """Real harmonics [1, a_1, b_1, ...] of ρ(θ) = k(θ)/k_h over :attr:`error_period` N
+        mesh cycles, in harmonics of ω/N as :meth:`lste_harmonics`: N H from the load
+        sharing, all that were given otherwise (the given harmonic k of the mesh frequency
+        at k N); None for the constant k_h."""
         v = self.stiffness_variation
+        N = self.error_period
         if v is None:
             return None
         if v == "load_sharing":
-            k = self.lste_result().mesh_stiffness
-            out = _real_harmonics(k / np.mean(k), self.error_period * H, "lste_points")
+            k = np.tile(self.lste_result().mesh_stiffness, N // self.tooth_period)
+            out = _real_harmonics(k / np.mean(k), N * H, "lste_points")
             out[0] = 1.0
             return out
-        return np.array(v)
+        out = np.zeros(N * (len(v) - 1) + 1)
+        out[0], out[2 * N - 1 :: 2 * N], out[2 * N :: 2 * N] = v[0], v[1::2], v[2::2]
+        return out
 
     def damping_coefficient(self, system) -> float:
         """Mesh damping coefficient c_m [N s/m]."""

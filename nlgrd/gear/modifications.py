@@ -189,3 +189,97 @@ class GearErrors:
         p = np.ptp(arr["spacing_pinion"]) > 0 or np.ptp(arr["profile_slope_pinion"]) > 0
         g = np.ptp(arr["spacing_gear"]) > 0 or np.ptp(arr["profile_slope_gear"]) > 0
         return math.lcm(z1 if p else 1, z2 if g else 1)
+
+
+@dataclass(frozen=True)
+class GearRunout:
+    """Runout of the pinion and of the gear: each member's geometric centre (that of its
+    base circle) turns about its shaft axis at a distance e: a once-per-revolution
+    transmission error, whose modulation of the mesh gives sidebands at the mesh
+    harmonics ± the member's shaft order (Smith 2003, "Gear Noise and Vibration", 2nd ed.,
+    Marcel Dekker; the projection on the line of action after Velex & Maatar 1996, J.
+    Sound Vib. 191:629).
+
+    The offset's component along the line of action moves the member's flanks towards or
+    away from its mate, the same for every tooth pair in contact, so it adds
+
+        e_r(θ) = e_p cos(θ_p + φ_p) + e_g cos(θ_g + φ_g)
+
+    to the LSTE e (the approach δ of the shaft centres at which the mesh carries W_0; see
+    :mod:`nlgrd.gear.transmission_error`), θ_m = θ / z_m the member's rotation since
+    mesh phase θ = 0 [rad]. The phase φ_m is counted in the member's sense of rotation
+    from β_m, the direction along the line of action pointing away from the mate (the
+    direction in which a shift of the member's centre opens the mesh), to the offset at
+    θ = 0: at θ_m + φ_m = 0 the member is offset furthest from its mate, the teeth meet
+    latest and e_r = e_m is largest. The change of backlash with the runout's component
+    along the line of centres (2 sin α_w times it) and the phase modulation by its
+    component across the line of action are neglected (first order in e / r_b).
+
+    Parameters
+    ----------
+    pinion, gear : tuple of float
+        (e, φ) of the member: eccentricity e >= 0 [m] and phase φ [rad].
+    """
+
+    pinion: tuple[float, float] = (0.0, 0.0)
+    gear: tuple[float, float] = (0.0, 0.0)
+
+    def __post_init__(self):
+        for key in ("pinion", "gear"):
+            value = getattr(self, key)
+            try:
+                arr = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                raise ModelError(key, f"must be [eccentricity, phase], got {value!r}") from None
+            if arr.shape != (2,):
+                raise ModelError(
+                    key, f"must be [eccentricity, phase] (2 numbers), got shape {np.shape(value)}"
+                )
+            check_finite(key, arr)
+            if arr[0] < 0:
+                raise ModelError(key, f"the eccentricity must be >= 0 m, got {arr[0]!r}")
+            object.__setattr__(self, key, (float(arr[0]), float(arr[1])))
+
+    def cycles(self, geometry: GearGeometry) -> int:
+        """Mesh cycles after which the runout repeats [-]: lcm of z_m over the members
+        with e_m > 0 (1 for none).
+
+        Parameters
+        ----------
+        geometry : GearGeometry
+            The pair (its tooth counts).
+
+        Returns
+        -------
+        int
+        """
+        z1, z2 = geometry.teeth
+        return math.lcm(z1 if self.pinion[0] > 0 else 1, z2 if self.gear[0] > 0 else 1)
+
+    def harmonics(self, geometry: GearGeometry, N: int, H: int) -> NDArray:
+        """Real harmonics [0, a_1, b_1, ...] of e_r over N mesh cycles, H of θ / N [m].
+
+        Parameters
+        ----------
+        geometry : GearGeometry
+            The pair (its tooth counts).
+        N : int
+            Mesh cycles of the period, a multiple of :meth:`cycles` [-].
+        H : int
+            Number of harmonics of θ / N [-].
+
+        Returns
+        -------
+        ndarray (2H+1,)
+        """
+        out = np.zeros(2 * H + 1)
+        for (e, phi), z in ((self.pinion, geometry.teeth_pinion), (self.gear, geometry.teeth_gear)):
+            if e == 0:
+                continue
+            if N % z:
+                raise ModelError("runout", f"a period of {N} mesh cycles is no whole revolution of {z} teeth")
+            j = N // z  # θ_m = θ / z = j θ / N
+            if j <= H:  # e cos(j ϑ + φ) = e cos φ cos jϑ - e sin φ sin jϑ
+                out[2 * j - 1] += e * np.cos(phi)
+                out[2 * j] -= e * np.sin(phi)
+        return out

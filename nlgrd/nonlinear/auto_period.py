@@ -13,7 +13,7 @@ branch, a Neimark-Sacker (torus) bifurcation, the loss of every stable response.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -180,7 +180,8 @@ def transitions(result: SweepResult) -> list[Transition]:
 def _kind(result: SweepResult, kinds: NDArray, i: int, j: int) -> str:
     if result.period[j] > result.period[i] and not result.no_stable[j]:
         return "period doubling"
-    if result.period[i] > 1 and result.period[j] < result.period[i] and not result.no_stable[j]:
+    stable_i, stable_j = not result.no_stable[i], not result.no_stable[j]
+    if stable_i and stable_j and result.period[j] < result.period[i]:
         return "period-2 branch ends"
     if not result.no_stable[j]:
         return "stable again"
@@ -190,48 +191,40 @@ def _kind(result: SweepResult, kinds: NDArray, i: int, j: int) -> str:
     return "period doubling" if mu.real < -1 else "fold"
 
 
-def period_only(p2: SweepResult) -> SweepResult:
-    """A period-2 sweep as a response: its period-2 orbits, every other point not found.
+def period_only(p2: SweepResult, nu: int = 2) -> SweepResult:
+    """A period-ν sweep as a response: its period-ν orbits, every other point not found.
 
     Parameters
     ----------
     p2 : SweepResult
-        From :func:`nlgrd.nonlinear.subharmonic.period_sweep` with ν = 2.
+        From :func:`nlgrd.nonlinear.subharmonic.period_sweep` or
+        :func:`~nlgrd.nonlinear.subharmonic.follow_period` with this ν.
+    nu : int
+        Mesh periods of its orbits [-].
 
     Returns
     -------
     SweepResult
-        ``period`` 2, ``amplitudes`` at the mesh harmonics, ``subharmonic_amplitude`` the
-        ω/2 content; a point whose orbit fell back to period 1 or was not found is not
-        converged; an unstable one has ``no_stable``.
+        ``period`` ν, ``amplitudes`` at the mesh harmonics, ``subharmonic_amplitude`` the
+        largest component at a base harmonic that is not a multiple of ν; a point whose
+        orbit fell back to a shorter period or was not found is not converged; an unstable
+        one has ``no_stable``.
     """
-    found = np.array([c and period_of(z, 2) == 2 for z, c in zip(p2.harmonics, p2.converged, strict=True)])
-    odd = subharmonic_mask(p2.H, 2)[1::2]
+    found = np.array([c and period_of(z, nu) == nu for z, c in zip(p2.harmonics, p2.converged, strict=True)])
+    odd = subharmonic_mask(p2.H, nu)[1::2]
     sub = np.array(
         [
-            float(np.max(amplitudes(z)[:, odd])) if f else np.nan
+            float(np.max(amplitudes(z)[:, odd], initial=0.0)) if f else np.nan
             for z, f in zip(p2.harmonics, found, strict=True)
         ]
     )
-    return SweepResult(
-        p2.omega,
-        p2.direction,
-        p2.harmonics,
-        found,
-        p2.residual,
-        p2.iterations,
-        p2.stable & found,
-        p2.floquet_max,
-        p2.metrics,
-        p2.amplitudes[:, ::2],
-        p2.source,
-        p2.branch_switch,
-        p2.harmonic_error,
-        p2.H_check,
-        found & ~p2.stable,
-        p2.dominant_multiplier,
-        p2.residual_kind,
-        np.full(len(p2), 2),
-        sub,
-        2,
+    return replace(
+        p2,
+        converged=found,
+        stable=p2.stable & found,
+        amplitudes=p2.amplitudes[:, ::nu],
+        no_stable=found & ~p2.stable,
+        period=np.full(len(p2), nu),
+        subharmonic_amplitude=sub,
+        base=nu,
     )

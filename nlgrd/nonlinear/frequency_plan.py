@@ -21,7 +21,9 @@ class FrequencyPlan:
     speed ratio s at |s| Ω, the mesh of a pinion with N_p teeth on a shaft of ratio s_p at
     N_p |s_p| Ω (Ω the reference shaft speed). :meth:`for_system` chooses the longest
     base that makes all of them harmonics: the mesh frequency for one mesh or an idler
-    train, their greatest common divisor for a multi-stage train.
+    train, their greatest common divisor for a multi-stage train; a shaft order when a
+    gear pair's excitation repeats only every N mesh cycles (tooth errors that differ,
+    runout: :attr:`~nlgrd.gear.mesh.GearMesh.error_period`).
 
     Parameters
     ----------
@@ -80,7 +82,9 @@ class FrequencyPlan:
         Parameters
         ----------
         system : RotorSystem
-            Its gear pairs' mesh orders N_p |s_p| count.
+            Its gear pairs' mesh orders N_p |s_p| count, divided by their
+            :attr:`~nlgrd.gear.mesh.GearMesh.error_period` (teeth that differ, runout: the
+            excitation repeats only after that many mesh cycles).
         shaft_orders : sequence of float
             Further excitations, e.g. |s| of a shaft with unbalance [-].
 
@@ -90,8 +94,8 @@ class FrequencyPlan:
             "shaft" without meshes, "mesh" when all excitations sit at one mesh
             frequency, else "common".
         """
-        meshes = [
-            Fraction(g.geometry.teeth_pinion)
+        meshes = [  # a mesh's excitation repeats every error_period mesh cycles
+            Fraction(g.geometry.teeth_pinion, g.error_period)
             * Fraction(abs(system.shafts[g.pinion_shaft].speed_ratio)).limit_denominator(10**6)
             for g in system.gear_pairs
         ]

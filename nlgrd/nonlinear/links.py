@@ -343,6 +343,12 @@ class GearMeshLink:
         Returns
         -------
         GearMeshLink
+
+        Raises
+        ------
+        ModelError
+            ``plan`` when ``order`` is not a multiple of the gear pair's
+            :attr:`~nlgrd.gear.mesh.GearMesh.error_period`.
         """
         from nlgrd.rotor.assembly import assemble
 
@@ -352,6 +358,14 @@ class GearMeshLink:
             raise ModelError("order", f"a positive integer, got {order!r}")
         order = int(order)
         gp = system.gear_pairs[index]
+        N = gp.error_period
+        if order % N:
+            raise ModelError(
+                "plan",
+                f"the excitation of gear_pairs[{index}] (tooth errors that differ or runout) repeats "
+                f"every {N} mesh cycles, so the mesh must sit at a multiple of harmonic {N} of the "
+                f"base frequency; it sits at {order} (take the base from FrequencyPlan.for_system)",
+            )
         link = assemble(system).meshes[index]
         mesh = gear_mesh_force(gp, link.stiffness, link.damping, 30, order=order)
         return cls(name or f"mesh{index}", mesh, np.asarray(link.w, dtype=float), index, order)

@@ -292,9 +292,78 @@ def period_sweep(
     )
 
 
-def _period_pass(order, direction, *, model, H, nu, flips, stability, tol, max_iter, pool=None) -> dict:
+@single_blas_thread
+def follow_period(
+    model: ReducedModel,
+    omegas: ArrayLike,
+    H: int,
+    nu: int,
+    omega_start: float,
+    start: ArrayLike,
+    directions: str = "both",
+    *,
+    stability: bool = True,
+    tol: float = 1e-10,
+    max_iter: int = 50,
+) -> SweepResult:
+    """Follow a period-ν orbit found at ``omega_start`` (e.g. by
+    :func:`nlgrd.nonlinear.orbit_search.search_orbits`) over a grid by natural continuation,
+    up and/or down from it, until Newton fails or the orbit falls back onto a shorter period.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model on the base ω / ν.
+    omegas : array_like
+        Mesh frequencies [rad/s]; the start is added to the grid.
+    H : int
+        Harmonics of the base [-].
+    nu : int
+        Mesh periods of the orbit [-].
+    omega_start : float
+        Mesh frequency of the start [rad/s].
+    start : array_like (n, 2H+1)
+        The orbit there: real harmonics of ω_start/ν [m].
+    directions : {"both", "up", "down"}
+        "up": the grid points at and above ``omega_start``, "down" those at and below.
+    stability : bool
+        Floquet multipliers over ν mesh periods.
+    tol, max_iter : float, int
+        Newton's tolerance (relative residual) and iteration limit.
+
+    Returns
+    -------
+    SweepResult
+        As :func:`period_sweep`; past the branch's end the points are not converged.
+    """
+    nu = _check_period(nu)
+    w0 = float(omega_start)
+    grid = np.unique(np.append(np.asarray(omegas, dtype=float), w0))
+    pool = {w0: (np.atleast_2d(np.asarray(start, dtype=float)), True)}
+    kw = dict(model=model, H=H, nu=nu, flips={}, stability=stability, tol=tol, max_iter=max_iter, pool=pool)
+    rows = []
+    for d in ("up", "down") if directions == "both" else (directions,):
+        if d not in ("up", "down"):
+            raise ModelError("directions", f"'up', 'down' or 'both', got {directions!r}")
+        order = grid[grid >= w0] if d == "up" else grid[grid <= w0][::-1]
+        rows += [(w, d, *r) for w, r in _period_pass(order, d, stop=True, **kw).items()]
+    cols = list(zip(*rows, strict=True))
+    n = len(rows)
+    return assemble_result(
+        *cols[:8],
+        f"harmonic balance, period {nu} (H={H} of the base ω/{nu})",
+        [False] * n,
+        [False] * n,
+        cols[8],
+    )
+
+
+def _period_pass(
+    order, direction, *, model, H, nu, flips, stability, tol, max_iter, pool=None, stop=False
+) -> dict:
     """One sweep of :func:`period_sweep`: {ω: (harmonics, converged, residual, iterations,
-    max |μ|, metrics, dominant μ)} in sweep order."""
+    max |μ|, metrics, dominant μ)} in sweep order; with ``stop``, no orbit past the first
+    point without one (the end of a followed branch)."""
     mesh = model.mesh
     out: dict[float, tuple] = {}
     z = None
@@ -303,7 +372,9 @@ def _period_pass(order, direction, *, model, H, nu, flips, stability, tol, max_i
         base = w / nu
         problem = model.at(base, H)
         starts = [z] if z is not None else []
-        if pool is not None and pool.get(w, (None, False))[1]:
+        if stop and out and z is None:
+            starts = []
+        elif pool is not None and pool.get(w, (None, False))[1]:
             starts.append(pool[w][0])
         sol = None
         for start in starts:

@@ -39,6 +39,10 @@ FLOQUET = "floquet_max [-]"
 #: The "response" column's value at a point with a periodic response (any other value,
 #: nlgrd.nonlinear.metrics.NO_STABLE in the written tables, marks a point without one).
 PERIODIC = "periodic"
+#: ... of a point whose period-1 orbit lost stability to a complex pair of multipliers.
+QUASI_PERIODIC = "quasi-periodic"
+#: ... of a point where no stable periodic response was found.
+NO_STABLE = "no stable mesh-periodic response"
 
 
 def _stability(frame: pd.DataFrame) -> np.ndarray:
@@ -143,15 +147,28 @@ def plot_sweep_frame(
             alpha=alpha,
         )
         mark_not_converged(ax, xv[~conv], colour, name, not_converged)
-        if "response" in part:  # converged, but the orbit is unstable and no stable one was found
-            resp = part["response"].astype(str).to_numpy()
-            lost = conv & (resp != PERIODIC) & (resp != "<NA>") & (resp != "nan")
-            mark_not_converged(ax, xv[lost], colour, name, "no stable periodic response", marker="1")
+        if "response" in part:
+            _mark_responses(ax, part["response"].astype(str).to_numpy(), conv, xv, yv, colour, name, ms)
     if ylim is not None:
         ax.set_ylim(*[lim if lim is not None else cur for lim, cur in zip(ylim, ax.get_ylim(), strict=True)])
     ax.set_xlabel(x)
     ax.set_ylabel(y)
     return ax
+
+
+def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms) -> None:
+    """Period-ν points ringed where they are drawn; points without a stable periodic
+    response (quasi-periodic, or none found) marked on the bottom edge, each kind counted."""
+    resp = np.asarray(resp, dtype=str)
+    period = np.char.startswith(resp, "period ")
+    for kind in sorted(set(resp[conv & period])):
+        at = conv & (resp == kind) & np.isfinite(yv)
+        ax.plot(xv[at], yv[at], "o", ms=2.2 * ms, mfc="none", mec=colour, mew=0.8, ls="none",
+                label=f"{name}: {kind} ({int(at.sum())})")  # fmt: skip
+    lost = conv & ~period & ~np.isin(resp, (PERIODIC, "<NA>", "nan"))
+    quasi = resp == QUASI_PERIODIC
+    mark_not_converged(ax, xv[lost & quasi], colour, name, "quasi-periodic", marker="2")
+    mark_not_converged(ax, xv[lost & ~quasi], colour, name, "no stable periodic response", marker="1")
 
 
 def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
@@ -186,11 +203,18 @@ def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
             "stable": np.asarray(result.stable, dtype=object),
             FLOQUET: np.full(n, np.nan) if fm is None else np.asarray(fm, dtype=float),
             "value": np.asarray(result.metrics[quantity], dtype=float) * scale,
-            "response": np.where(
-                getattr(result, "no_stable", np.zeros(n, dtype=bool)), "no stable response", PERIODIC
-            ),
+            "response": _responses(result),
         }
     )
+
+
+def _responses(result) -> np.ndarray:
+    """The "response" column of a sweep's table (periodic, period ν, quasi-periodic, no
+    stable response), "periodic" for results without one."""
+    if hasattr(result, "period") and hasattr(result, "to_frame"):
+        return result.to_frame()["response"].astype(str).to_numpy(object)
+    no_stable = getattr(result, "no_stable", np.zeros(len(result.omega), dtype=bool))
+    return np.where(no_stable, NO_STABLE, PERIODIC)
 
 
 def plot_sweep(
