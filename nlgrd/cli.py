@@ -359,15 +359,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sw.add_argument(
         "model",
-        help="model file (TOML); several [[gear_pairs]] or [[bearing_clearances]] make it a link "
-        "sweep (base frequency of the common period, columns <link>.<quantity>)",
+        help="model file (TOML); several [[gear_pairs]], [[bearing_clearances]] or [[unbalance]] make "
+        "it a link sweep (base frequency of the common period, columns <link>.<quantity>)",
     )
     rng = sw.add_mutually_exclusive_group()
     rng.add_argument(
         "--rpm", help="pinion speed range START:STOP:COUNT [rpm]; with --continuation START:STOP[:COUNT]"
     )
     rng.add_argument(
-        "--hz", help="mesh frequency range START:STOP:COUNT [Hz]; with --continuation START:STOP[:COUNT]"
+        "--hz",
+        help="mesh frequency range (a link sweep: base frequency) START:STOP:COUNT [Hz]; with "
+        "--continuation START:STOP[:COUNT]",
     )
     sw.add_argument(
         "--harmonics",

@@ -1,4 +1,4 @@
-"""``nlgrd sweep`` of a model with several gear meshes or bearing clearances: a link sweep
+"""``nlgrd sweep`` of a model with several gear meshes, bearing clearances or unbalance: a link sweep
 (:func:`nlgrd.nonlinear.link_model.link_sweep`), every link's outputs in columns
 ``<link>.<quantity>``, and a figure of one of them."""
 
@@ -42,7 +42,8 @@ def link_sweep_command(args, system, values, out, png) -> int:
     args : argparse.Namespace
         The options of ``nlgrd sweep``.
     system : RotorSystem
-        The model (several meshes or a bearing clearance).
+        The model (several meshes, a bearing clearance or an unbalance, which
+        :func:`~nlgrd.nonlinear.link_model.build_link_model` takes from it).
     values : ndarray
         The range: shaft speeds [rpm] (``--rpm``) or base frequencies [Hz] (``--hz``).
     out, png : Path
@@ -59,7 +60,9 @@ def link_sweep_command(args, system, values, out, png) -> int:
     from nlgrd.nonlinear.link_model import build_link_model, link_sweep
 
     if args.continuation:
-        raise ModelError("--continuation", "not available yet for models with several meshes or clearances")
+        raise ModelError(
+            "--continuation", "not available yet for link models (several meshes, clearances, unbalance)"
+        )
     model = build_link_model(system)
     plan = model.receptance.plan
     if args.rpm is not None:

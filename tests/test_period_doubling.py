@@ -33,11 +33,13 @@ from scipy.integrate import solve_ivp
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.auto_period import merge_periods, transitions
+from nlgrd.nonlinear.floquet import floquet_multipliers
 from nlgrd.nonlinear.force_laws import BacklashMesh, ContactStop
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.harmonics import analyse, evaluate
+from nlgrd.nonlinear.results import dominant_multiplier
 from nlgrd.nonlinear.sdof import SDOFGearPair
-from nlgrd.nonlinear.subharmonic import amplitudes, period_of, period_sweep, spread
+from nlgrd.nonlinear.subharmonic import amplitudes, period_continuation, period_of, period_sweep, spread
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.timedomain.sdof import integrate
 
@@ -95,6 +97,39 @@ def test_period_two_branch_against_time_integration(runs):
     # where the period-1 orbit is still stable no period-2 orbit is reported
     first = both[0]
     assert not p2.converged[: first - 1].any()
+
+
+@pytest.mark.slow
+def test_period_two_branch_by_continuation_ends_where_time_integration_does(runs):
+    """Pseudo-arc-length continuation of the period-2 branch from its orbit at 1.30 ω_n.
+    Down: its ω/2 content falls to zero at the period-doubling frequency (the curve turns
+    there onto the orbit shifted by one mesh period, the same motion), in the grid
+    interval where time integration starts to double. Up: the branch folds, stable before
+    the fold and unstable after (a real multiplier > 1: the saddle-node of period-2
+    orbits), in the grid interval where time integration still settles on period 2 below
+    and on nothing periodic above (1.38-1.39 ω_n). One grid step is the issue's tolerance."""
+    _, p2, td = runs
+    i = int(np.argmin(np.abs(GRID - 1.30 * WN)))
+    model2 = PAIR.subharmonic(2).reduced_model()
+    doubled = np.array([c and h > 1e-3 for c, h, _ in td])
+    first, last = int(np.argmax(doubled)), len(doubled) - 1 - int(np.argmax(doubled[::-1]))
+    down = period_continuation(model2, 2, GRID[i], 1.10 * WN, H2, p2.harmonics[i], ds_max=0.01)
+    k = int(np.argmin(down.curve.subharmonic_amplitude))
+    w_pd = down.omega[k]
+    assert down.curve.subharmonic_amplitude[k] < 0.01 * down.curve.subharmonic_amplitude[0]
+    assert GRID[first - 1] <= w_pd <= GRID[first], w_pd / WN
+    assert down.turning_omegas[0] == pytest.approx(w_pd, rel=1e-3)  # the turn is the bifurcation
+    up = period_continuation(model2, 2, GRID[i], 2.0 * WN, H2, p2.harmonics[i], ds_max=0.01)
+    (w_fold,) = up.turning_omegas[:1]
+    assert GRID[last] <= w_fold <= GRID[last + 1], w_fold / WN
+    j = up.turning_indices[0]
+    assert up.stable[: j - 1].all() and not up.stable[j + 2 :].any()
+    w = up.omega[j + 2] / 2
+    ss = model2.linear_state_space(w)
+    _, mu = dominant_multiplier(floquet_multipliers(ss, model2.nonlinearities, up.curve.harmonics[j + 2], w))
+    assert abs(mu.imag) < 1e-9 and mu.real > 1
+    assert (up.curve.period == 2).all() and (up.curve.base == 2)
+    print(f"period-2 branch by continuation: doubling at {w_pd / WN:.4f}, fold at {w_fold / WN:.4f} ω_n")
 
 
 @pytest.mark.slow

@@ -23,6 +23,7 @@ Checks
   legal.
 - A damping ratio is at most 1 (critical damping); a loss factor at most 2 (η = 2ζ).
 - The static mesh deflection W_0 / k_h is less than the tooth depth.
+- An unbalance sits on a shaft that turns (speed ratio not 0).
 - An LSTE file is readable and its peak-to-peak value is below the tooth depth and
   below 100 times the backlash.
 """
@@ -60,12 +61,18 @@ def check_model(system: RotorSystem) -> None:
     ------
     ModelError
         For the first check that fails (repeated shaft names, an unsupported group of shafts,
-        a damping ratio above 1 or loss factor above 2, a static mesh deflection above the
-        tooth depth), naming the key path.
+        a damping ratio above 1 or loss factor above 2, an unbalance on a shaft that does not
+        turn, a static mesh deflection above the tooth depth), naming the key path.
     """
     _check_shaft_names(system)
     _check_support(system)
     _check_damping(system)
+    for i, u in enumerate(system.unbalance):
+        if system.shafts[u.shaft].speed_ratio == 0:
+            raise ModelError(
+                f"unbalance[{i}].shaft",
+                f"shaft {u.shaft} does not turn (speed_ratio = 0): no unbalance force",
+            )
     for i, g in enumerate(system.gear_pairs):
         if _is_gear_mesh(g):
             _check_static_deflection(g, f"gear_pairs[{i}]")

@@ -57,6 +57,11 @@ Format, version 1::
     stiffness = 1.0e10
     exponent = 1.5
 
+    [[unbalance]]                    # nlgrd.rotor.loads.Unbalance: m e [kg m] >= 0 turning
+    shaft = 1                        # with its shaft, a load of the link analyses
+    node = 4
+    amount = 1.0e-4                  # phase [rad]: its angle from y at t = 0; default 0
+
 Rules:
 
 - Element entries may carry ``count = N`` (1 <= N <= 100 000): N identical
@@ -568,13 +573,8 @@ def _plural(hint: Any) -> str:
 def _toml_type(value: Any) -> str:
     if isinstance(value, bool):
         return "boolean"
-    for kind, name in (
-        (int, "integer"),
-        (float, "float"),
-        (str, "string"),
-        (ARRAY, "array"),
-        (dict, "table"),
-    ):
+    kinds = ((int, "integer"), (float, "float"), (str, "string"), (ARRAY, "array"), (dict, "table"))
+    for kind, name in kinds:
         if isinstance(value, kind):
             return name
     return "datetime" if hasattr(value, "isoformat") else type(value).__name__

@@ -25,29 +25,10 @@ from nlgrd.nonlinear.links import GearMeshLink
 from nlgrd.nonlinear.results import SweepResult
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.rotor.assembly import assemble
+from nlgrd.rotor.loads import Unbalance  # re-exported: moved to nlgrd.rotor (the model file holds it)
 from nlgrd.rotor.system import RotorSystem
 
 _UY, _UZ = 1, 2
-
-
-@dataclass(frozen=True)
-class Unbalance:
-    """A mass unbalance m e at a node, rotating with its shaft (forward, y towards z).
-
-    Parameters
-    ----------
-    shaft, node : int
-        Where it sits.
-    amount : float
-        m e [kg m].
-    phase : float
-        Angle of the unbalance at t = 0 from the y axis [rad].
-    """
-
-    shaft: int
-    node: int
-    amount: float
-    phase: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -131,7 +112,7 @@ def build_link_model(
     links: Sequence = (),
     *,
     plan: FrequencyPlan | None = None,
-    unbalance: Sequence[Unbalance] = (),
+    unbalance: Sequence[Unbalance] | None = None,
     gravity: tuple[float, float] | None = None,
     method: str = "auto",
     max_frequency: float | None = None,
@@ -152,8 +133,9 @@ def build_link_model(
     plan : FrequencyPlan, optional
         Base frequency and speed; default :meth:`FrequencyPlan.for_system` (the mesh
         frequency for one mesh, the shaft speed for a rotor without gears).
-    unbalance : sequence of Unbalance
-        Unbalances, each at harmonic |s| Ω of its shaft (s its speed ratio).
+    unbalance : sequence of Unbalance, optional
+        Unbalances, each at harmonic |s| Ω of its shaft (s its speed ratio); default the
+        system's own ``unbalance`` (a model file's ``[[unbalance]]``), ``()`` for none.
     gravity : tuple of float, optional
         Acceleration of gravity (g_y, g_z) on every node [m/s^2], e.g. (-9.81, 0).
     method : {"auto", "poles", "direct", "modal"}
@@ -166,6 +148,7 @@ def build_link_model(
     -------
     LinkModel
     """
+    unbalance = system.unbalance if unbalance is None else tuple(unbalance)
     unb_orders = [abs(system.shafts[u.shaft].speed_ratio) for u in unbalance]
     plan = plan or FrequencyPlan.for_system(system, unb_orders)
     links = list(links) + list(system.bearing_clearances)
@@ -361,7 +344,8 @@ def link_sweep(
 
 
 def needs_links(system) -> bool:
-    """Whether ``system`` needs the link path (several meshes or a bearing clearance).
+    """Whether ``system`` needs the link path (several meshes, a bearing clearance or an
+    unbalance).
 
     Parameters
     ----------
@@ -372,4 +356,4 @@ def needs_links(system) -> bool:
     -------
     bool
     """
-    return len(system.gear_pairs) != 1 or bool(system.bearing_clearances)
+    return len(system.gear_pairs) != 1 or bool(system.bearing_clearances) or bool(system.unbalance)

@@ -135,6 +135,10 @@ class MeshReceptance:
                 "bearing_clearances",
                 "the mesh receptance models no bearing clearance: use nlgrd.nonlinear.link_model",
             )
+        if system.unbalance:
+            raise ModelError(
+                "unbalance", "the mesh receptance models no unbalance: use nlgrd.nonlinear.link_model"
+            )
         self.system = system
         self.model: LinearModel = assemble(system, mesh_stiffness=False, mesh_damping=True)
         self.W = np.column_stack([m.w for m in self.model.meshes])

@@ -18,15 +18,18 @@ period-2 branch leaves (:func:`branch_off`).
 
 from __future__ import annotations
 
+import dataclasses as dc
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.continuation import continuation
 from nlgrd.nonlinear.floquet import floquet_multipliers
 from nlgrd.nonlinear.harmonic_balance import HarmonicSolution, ReducedModel, ReducedProblem
 from nlgrd.nonlinear.harmonics import n_harmonics
 from nlgrd.nonlinear.metrics import MeshMetrics, metrics_from_harmonics
-from nlgrd.nonlinear.results import SweepResult, assemble_result, dominant_multiplier
+from nlgrd.nonlinear.results import ContinuationResult, SweepResult, assemble_result, dominant_multiplier
 from nlgrd.nonlinear.solvers import solve
 from nlgrd.nonlinear.sweep import sweep_orders
 from nlgrd.threads import single_blas_thread
@@ -356,6 +359,61 @@ def follow_period(
         [False] * n,
         cols[8],
     )
+
+
+def period_continuation(
+    model: ReducedModel,
+    nu: int,
+    omega_start: float,
+    omega_end: float,
+    H: int,
+    z0: ArrayLike,
+    **kwargs,
+) -> ContinuationResult:
+    """Pseudo-arc-length continuation of a period-ν branch in mesh frequency, through its
+    folds (:func:`nlgrd.nonlinear.continuation.continuation` on the base ω/ν).
+
+    Where the branch was born by period doubling the curve reaches the period-1 orbit (its
+    subharmonic content goes to zero at the bifurcation) and comes back on the orbit
+    shifted by one mesh period, which is the same motion: a turning point there is the
+    period-doubling frequency, not a fold.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model on the base ω / ν.
+    nu : int
+        Mesh periods of the orbits [-].
+    omega_start, omega_end : float
+        Mesh frequencies [rad/s]: the curve starts at ``omega_start`` from ``z0``.
+    H : int
+        Harmonics of the base [-].
+    z0 : array_like (n, 2H+1)
+        Start of Newton at ``omega_start``: real harmonics of ω_start/ν [m].
+    **kwargs
+        Further options of :func:`~nlgrd.nonlinear.continuation.continuation`.
+
+    Returns
+    -------
+    ContinuationResult
+        Frequencies and turning points as mesh frequencies [rad/s]; per point ``period``
+        (:func:`period_of`), ``subharmonic_amplitude`` (largest component at a base
+        harmonic that is not a multiple of ν [m]) and the mesh-harmonic amplitudes.
+    """
+    nu = _check_period(nu)
+    c = continuation(model, omega_start / nu, omega_end / nu, H, z0, **kwargs)
+    z = c.curve.harmonics
+    odd = subharmonic_mask(H, nu)[1::2]
+    curve = dc.replace(
+        c.curve,
+        omega=c.curve.omega * nu,
+        amplitudes=c.curve.amplitudes[:, ::nu],
+        period=np.array([period_of(zz, nu) for zz in z]),
+        subharmonic_amplitude=np.array([float(np.max(amplitudes(zz)[:, odd], initial=0.0)) for zz in z]),
+        base=nu,
+        source=f"pseudo-arc-length continuation, period {nu} (H={H} of the base ω/{nu})",
+    )
+    return dc.replace(c, curve=curve, turning_omegas=c.turning_omegas * nu)
 
 
 def _period_pass(

@@ -14,6 +14,7 @@ from nlgrd.errors import ModelError
 from nlgrd.rotor.bearing import Bearing
 from nlgrd.rotor.coupling import Coupling
 from nlgrd.rotor.disk import Disk
+from nlgrd.rotor.loads import Unbalance
 from nlgrd.rotor.shaft import Shaft
 
 #: Names of the six DOFs of every node, in order. ASCII aliases: tx, ty, tz.
@@ -129,6 +130,9 @@ class RotorSystem:
         them.
     name : str
         Label.
+    unbalance : tuple of Unbalance
+        Mass unbalances (:class:`nlgrd.rotor.loads.Unbalance`), loads of the link analyses
+        (:func:`nlgrd.nonlinear.link_model.build_link_model`).
     """
 
     shafts: tuple[Shaft, ...]
@@ -138,14 +142,23 @@ class RotorSystem:
     gear_pairs: tuple[Any, ...] = field(default=())
     bearing_clearances: tuple[Any, ...] = field(default=())
     name: str = ""
+    unbalance: tuple[Unbalance, ...] = ()
 
     def __post_init__(self):
-        for key in ("shafts", "disks", "bearings", "couplings", "gear_pairs", "bearing_clearances"):
+        for key in (
+            "shafts",
+            "disks",
+            "bearings",
+            "couplings",
+            "gear_pairs",
+            "bearing_clearances",
+            "unbalance",
+        ):
             object.__setattr__(self, key, tuple(getattr(self, key)))
         if not self.shafts:
             raise ModelError("shafts", "a system needs at least one shaft")
         dm = self.dofs
-        for group in ("disks", "bearings", "bearing_clearances"):
+        for group in ("disks", "bearings", "bearing_clearances", "unbalance"):
             for i, part in enumerate(getattr(self, group)):
                 self._check_node(dm, f"{group}[{i}]", part.shaft, part.node)
         for i, c in enumerate(self.couplings):
@@ -197,8 +210,8 @@ def refined(system: RotorSystem, factor: int) -> RotorSystem:
     """``system`` with every shaft element split into ``factor`` equal elements.
 
     Every part stays where it was: node n becomes node ``factor`` n for disks, bearings,
-    couplings, gear pairs (and their input and output nodes) and bearing clearances
-    (and their housings). For mesh-convergence studies and model-size scaling.
+    couplings, gear pairs (and their input and output nodes), bearing clearances
+    (and their housings) and unbalances. For mesh-convergence studies and model-size scaling.
 
     Parameters
     ----------
@@ -244,4 +257,5 @@ def refined(system: RotorSystem, factor: int) -> RotorSystem:
         couplings=tuple(rep(c, node_a=node(c.node_a), node_b=node(c.node_b)) for c in system.couplings),
         gear_pairs=gears,
         bearing_clearances=clearances,
+        unbalance=tuple(rep(u, node=node(u.node)) for u in system.unbalance),
     )

@@ -56,6 +56,8 @@ UNITS = {
     "inner_diameter": "m",
     "length": "m",
     "unbalance": "kg m",
+    "amount": "kg m",  # unbalance[i].amount
+    "phase": "rad",  # unbalance[i].phase
 }
 
 _PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[(?:\d+|\*)\])*)")
