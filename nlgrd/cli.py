@@ -30,6 +30,7 @@ import traceback
 import warnings
 from pathlib import Path
 
+from nlgrd.cli_orbits import DEFAULT_PERIODS
 from nlgrd.cli_study import add_parsers as add_study_parsers
 from nlgrd.cli_sweep import cmd_sweep
 from nlgrd.errors import ModelError
@@ -418,7 +419,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sw.add_argument(
         "--search-periods",
-        default="1,2,3",
+        default=DEFAULT_PERIODS,
         help="periods sought by --search-at, in mesh periods (default 1,2,3; at most 6)",
     )
     sw.add_argument("--no-stability", action="store_true", help="skip the Floquet stability of each point")

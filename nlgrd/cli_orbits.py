@@ -17,6 +17,21 @@ from nlgrd.errors import ModelError
 DEFAULT_PERIODS = "1,2,3"
 #: Longest period searched [mesh periods]: the period-ν model has ν H harmonics.
 MAX_PERIOD = 6
+#: Columns of ``<out>_orbits.csv``.
+ORBIT_COLUMNS = (
+    "search at",
+    "mesh_frequency [Hz]",
+    "pinion_speed [rpm]",
+    "period",
+    "stable",
+    "floquet_max [-]",
+    "on the sweep",
+    "dte_rms [um]",
+    "force_max [N]",
+    "dslr [-]",
+    "amplitude [um]",
+    "start",
+)
 
 
 def parse_search(args, values: np.ndarray) -> tuple[np.ndarray, tuple[int, ...]]:
@@ -136,15 +151,7 @@ def search_command(model, res, omegas, at, periods, unit) -> tuple[pd.DataFrame,
                 )
     if not rows:
         print("orbit search: nothing converged at the speeds given")
-    columns = [
-        "search at",
-        "mesh_frequency [Hz]",
-        "pinion_speed [rpm]",
-        "period",
-        "stable",
-        "floquet_max [-]",
-    ]
-    orbits = pd.DataFrame(rows, columns=columns + list(rows[0])[6:] if rows else columns)
+    orbits = pd.DataFrame(rows, columns=list(ORBIT_COLUMNS))
     branches = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=["branch"])
     return orbits, branches
 

@@ -278,21 +278,7 @@ def period_sweep(
             up = sweep_orders(np.asarray(omegas, dtype=float), "up")[0][1]
             passes["up"] = _period_pass(up, "up", pool=passes["down"], **kw)
     rows = [(w, d, *r) for d, p in passes.items() for w, r in p.items()]
-    cols = list(zip(*rows, strict=True))
-    return assemble_result(
-        cols[0],
-        cols[1],
-        cols[2],
-        cols[3],
-        cols[4],
-        cols[5],
-        cols[6],
-        cols[7],
-        f"harmonic balance, period {nu} (H={H} of the base ω/{nu})",
-        [False] * len(rows),
-        [False] * len(rows),
-        cols[8],
-    )
+    return _assemble(rows, H, nu)
 
 
 @single_blas_thread
@@ -350,14 +336,15 @@ def follow_period(
             raise ModelError("directions", f"'up', 'down' or 'both', got {directions!r}")
         order = grid[grid >= w0] if d == "up" else grid[grid <= w0][::-1]
         rows += [(w, d, *r) for w, r in _period_pass(order, d, stop=True, **kw).items()]
+    return _assemble(rows, H, nu)
+
+
+def _assemble(rows: list, H: int, nu: int) -> SweepResult:
+    """A SweepResult from the rows (ω, direction, *pass values) of :func:`_period_pass`."""
     cols = list(zip(*rows, strict=True))
-    n = len(rows)
+    no = [False] * len(rows)
     return assemble_result(
-        *cols[:8],
-        f"harmonic balance, period {nu} (H={H} of the base ω/{nu})",
-        [False] * n,
-        [False] * n,
-        cols[8],
+        *cols[:8], f"harmonic balance, period {nu} (H={H} of the base ω/{nu})", no, no, cols[8]
     )
 
 
