@@ -12,7 +12,8 @@ The command line never prints a traceback:
   file in its own folder, which then replaces the output (``os.replace``), so Ctrl-C or
   a failure leaves the previous files or none, never a partial one;
 - exit status 0 on success, 1 when the computation failed or fell short (e.g. a
-  continuation that did not cover the range; the part computed is written), 2 on bad
+  continuation that did not cover the range; the part computed is written; ``sweep
+  --period N`` that found no period-N orbit: nothing is written), 2 on bad
   input (one line ``nlgrd: error: FILE: KEY: message``), 130 on Ctrl-C (one line);
 - any unexpected exception is one line ``nlgrd: error: TYPE: message``; with the
   environment variable ``NLGRD_DEBUG=1`` its traceback is printed first.
@@ -243,6 +244,13 @@ def cmd_lste(args) -> int:
         print(f"the dynamics use k_h = {k_h:.4g} N/m (the model's mesh_stiffness{note})")
     else:
         print(f"the dynamics use k_h = {k_h:.4g} N/m (computed from the geometry at W_0)")
+    if mesh.stiffness_file:
+        shape = mesh.stiffness_shape()
+        lo, hi = shape.extremes
+        mean = "" if shape.mean is None else f"; the file's mean {shape.mean:.4g} N/m is not used"
+        print(
+            f"and k(θ) = k_h ρ(θ), ρ {lo:.3f} to {hi:.3f} from the stiffness_file {mesh.stiffness_file}{mean}"
+        )
     print(f"wrote {csv} and {png}")
     return 0
 
@@ -402,13 +410,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sw.add_argument(
         "--period",
-        choices=["auto", "1", "2"],
         default="auto",
+        metavar="{auto,1,2,...,6}",
         help="orbits of how many mesh periods: auto (default) gives the mesh-periodic response where it "
         "is stable and the period-doubled one where it has lost stability by period doubling; 1 the "
-        "mesh-periodic orbits only; 2 the period-2 branches alone. The CSV has each point's period, "
-        "its ω/2 content and, where a complex pair of Floquet multipliers left the unit circle "
-        "(quasi-periodic), the secondary frequency",
+        "mesh-periodic orbits only; 2 the period-2 branches alone; N = 3 to 6 the period-N orbits "
+        "(no sweep reaches them) searched for at the --search-at speeds (default 5 grid speeds "
+        "evenly spread over the range), each followed over the grid (H mesh harmonics: --harmonics, "
+        "default 9); exit status 1, nothing written, when none is found. The CSV has each point's "
+        "period, its ω/ν content and, where a complex pair of Floquet multipliers left the unit "
+        "circle (quasi-periodic), the secondary frequency",
     )
     sw.add_argument(
         "--search-at",
@@ -419,8 +430,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sw.add_argument(
         "--search-periods",
-        default=DEFAULT_PERIODS,
-        help="periods sought by --search-at, in mesh periods (default 1,2,3; at most 6)",
+        default=None,
+        help=f"periods sought by --search-at, in mesh periods (default {DEFAULT_PERIODS}; at most 6)",
     )
     sw.add_argument("--no-stability", action="store_true", help="skip the Floquet stability of each point")
     sw.add_argument("--out", default="sweep.csv", help="CSV file (default sweep.csv)")

@@ -1,12 +1,28 @@
-"""``nlgrd sweep --search-at``: orbits the sweep does not reach, searched for at chosen speeds
-(:func:`nlgrd.nonlinear.orbit_search.search_orbits`) and followed over the sweep's grid.
+"""``nlgrd sweep --search-at`` and ``--period N``: orbits the sweep does not reach, searched
+for at chosen speeds (:func:`nlgrd.nonlinear.orbit_search.search_orbits`) and followed over
+the sweep's grid (:func:`~nlgrd.nonlinear.orbit_search.follow_orbit`).
 
-Outputs beside the sweep's CSV: ``<out>_orbits.csv`` (every orbit found, one row each, with
-whether the sweep has it) and ``<out>_branches.csv`` (the branch of each stable orbit the
-sweep does not have, followed up and down over the grid), drawn on the sweep's figure.
+``--search-at``: outputs beside the sweep's CSV, ``<out>_orbits.csv`` (every orbit found, one
+row each, with whether the sweep has it) and ``<out>_branches.csv`` (the branch of each stable
+orbit the sweep does not have, followed up and down over the grid), drawn on the sweep's
+figure.
+
+``--period N``, N >= 3 (orbits no sweep reaches: nothing branches onto them from period 1):
+no period-1 sweep; the period-N orbits (of no shorter period) are searched for at the
+``--search-at`` speeds, or at :data:`DEFAULT_SEARCH_POINTS` speeds of the grid evenly spread
+over the range, with ``--harmonics`` (default :data:`PERIOD_HARMONICS`) mesh harmonics, N H
+of ω/N. Each one found and not on a branch already followed is followed over the grid
+(``<out>_branches.csv``; the orbits file's "on the sweep" then says "on a branch already
+followed"), and :func:`merge_branches` makes them the sweep's CSV, one row per grid point
+and direction: period N, the ω/N content, stability per point, an unstable orbit flagged as
+no stable response (not drawn as the response), a point without a period-N orbit as not
+converged; the harmonic error is estimated against the next H of the ladder. When no
+period-N orbit is found at all, nothing is written and the command exits with status 1.
 """
 
 from __future__ import annotations
+
+import dataclasses as dc
 
 import numpy as np
 import pandas as pd
@@ -17,6 +33,12 @@ from nlgrd.errors import ModelError
 DEFAULT_PERIODS = "1,2,3"
 #: Longest period searched [mesh periods]: the period-ν model has ν H harmonics.
 MAX_PERIOD = 6
+#: ``--period N`` without ``--search-at``: search at this many grid speeds, evenly spread.
+DEFAULT_SEARCH_POINTS = 5
+#: ``--period N`` without ``--harmonics``: mesh harmonics (N H of the base ω/N) [-]; the
+#: single-DOF pair's period-3 orbit agrees with time integration to 1e-6 at 9
+#: (tests/test_orbit_search.py).
+PERIOD_HARMONICS = 9
 #: Columns of ``<out>_orbits.csv``.
 ORBIT_COLUMNS = (
     "search at",
@@ -63,14 +85,13 @@ def parse_search(args, values: np.ndarray) -> tuple[np.ndarray, tuple[int, ...]]
         raise ModelError(
             "--search-at", f"speeds within the sweep's range {lo:g}-{hi:g}, got {args.search_at!r}"
         )
+    text = DEFAULT_PERIODS if args.search_periods is None else args.search_periods
     try:
-        periods = tuple(int(t) for t in str(args.search_periods).split(","))
+        periods = tuple(int(t) for t in str(text).split(","))
     except ValueError:
-        raise ModelError(
-            "--search-periods", f"comma-separated whole numbers, got {args.search_periods!r}"
-        ) from None
+        raise ModelError("--search-periods", f"comma-separated whole numbers, got {text!r}") from None
     if any(not 1 <= p <= MAX_PERIOD for p in periods):
-        raise ModelError("--search-periods", f"periods from 1 to {MAX_PERIOD}, got {args.search_periods!r}")
+        raise ModelError("--search-periods", f"periods from 1 to {MAX_PERIOD}, got {text!r}")
     return at, periods
 
 
@@ -98,34 +119,49 @@ def search_command(model, res, omegas, at, periods, unit) -> tuple[pd.DataFrame,
         The orbits found, and the followed branches (columns of
         :meth:`SweepResult.to_frame` with "branch" and the pinion speed).
     """
-    from nlgrd.nonlinear.orbit_search import follow_orbit, geared_model_of, search_orbits
+    from nlgrd.nonlinear.orbit_search import geared_model_of
 
     H = int(np.max(res.mesh.H)) // int(res.mesh.base)
-    model_of = geared_model_of(model)
-    rows, frames = [], []
-    for value in at:
-        w = float(unit.omega(value))
-        found = search_orbits(model_of, w, H, periods)
+
+    def on_sweep(o, w: float, branches) -> bool:
         here = np.nonzero(
             np.isclose(res.mesh.omega, w, rtol=1e-12) & res.mesh.converged & ~res.mesh.no_stable
         )[0]
-        for o in found:
-            on_sweep = o.metrics is not None and any(
-                int(res.mesh.period[i]) == o.period
-                and np.isclose(res.mesh.metrics["dte_rms"][i], o.metrics.dte_rms, rtol=1e-6)
-                and np.isclose(res.mesh.metrics["force_max"][i], o.metrics.force_max, rtol=1e-6)
-                for i in here
-            )
+        return o.metrics is not None and any(
+            int(res.mesh.period[i]) == o.period
+            and np.isclose(res.mesh.metrics["dte_rms"][i], o.metrics.dte_rms, rtol=1e-6)
+            and np.isclose(res.mesh.metrics["force_max"][i], o.metrics.force_max, rtol=1e-6)
+            for i in here
+        )
+
+    orbits, branches, _ = _search_and_follow(
+        geared_model_of(model), model.pinion_rpm, omegas, at, periods, H, unit, on_sweep, "the sweep's"
+    )
+    if orbits.empty:
+        print("orbit search: nothing converged at the speeds given")
+    return orbits, branches
+
+
+def _search_and_follow(model_of, pinion_rpm, omegas, at, periods, H, unit, known, words, every=False):
+    """Search at each speed, print each orbit, follow the stable ones (``every``: all) that
+    ``known(orbit, omega, branches)`` does not have; the orbits, branches and (label, result)."""
+    from nlgrd.nonlinear.orbit_search import follow_orbit, search_orbits
+
+    rows, frames, followed = [], [], []
+    for value in at:
+        w = float(unit.omega(value))
+        for o in search_orbits(model_of, w, H, periods):
+            seen = known(o, w, followed)
             m = o.metrics
             rows.append(
                 {
                     "search at": value,
                     "mesh_frequency [Hz]": w / (2 * np.pi),
-                    "pinion_speed [rpm]": float(model.pinion_rpm(w)),
+                    "pinion_speed [rpm]": float(pinion_rpm(w)),
                     "period": o.period,
                     "stable": o.stable,
                     "floquet_max [-]": o.floquet_max,
-                    "on the sweep": on_sweep,
+                    "on the sweep": seen,
                     "dte_rms [um]": np.nan if m is None else m.dte_rms * 1e6,
                     "force_max [N]": np.nan if m is None else m.force_max,
                     "dslr [-]": np.nan if m is None else m.dslr,
@@ -136,24 +172,224 @@ def search_command(model, res, omegas, at, periods, unit) -> tuple[pd.DataFrame,
             state = "stable" if o.stable else f"unstable, max |mu| {o.floquet_max:.3g}"
             print(
                 f"orbit at {unit(w)} {unit.name}: period {o.period}, {state}, "
-                f"RMS DTE {rows[-1]['dte_rms [um]']:.4g} um" + ("" if not on_sweep else " (the sweep's)")
+                f"RMS DTE {rows[-1]['dte_rms [um]']:.4g} um" + ("" if not seen else f" ({words})")
             )
-            if o.stable and not on_sweep:
+            if (o.stable or every) and not seen:
                 branch = follow_orbit(model_of, o, omegas, H)
+                label = f"period {o.period} from {unit(w)} {unit.name}"
+                if every:  # unstable ones too: say which
+                    label += ", stable there" if o.stable else ", unstable there"
+                same = sum(lb.split(" (")[0] == label for lb, _ in followed)
+                label += f" ({same + 1})" if same else ""
                 f = branch.to_frame()
-                f.insert(0, "branch", f"period {o.period} from {unit(w)} {unit.name}")
-                f.insert(1, "pinion_speed [rpm]", model.pinion_rpm(branch.omega))
+                f.insert(0, "branch", label)
+                f.insert(1, "pinion_speed [rpm]", pinion_rpm(branch.omega))
                 frames.append(f)
+                followed.append((label, branch))
                 span = branch.omega[branch.converged]
-                print(
-                    f"  followed: period {o.period} from {unit(span.min())} to {unit(span.max())} "
-                    f"{unit.name}, {int(branch.stable.sum())} stable points"
+                reach = (
+                    f"from {unit(span.min())} to {unit(span.max())} {unit.name}" if span.size else "nowhere"
                 )
-    if not rows:
-        print("orbit search: nothing converged at the speeds given")
+                print(f"  followed: period {o.period} {reach}, {int(branch.stable.sum())} stable points")
     orbits = pd.DataFrame(rows, columns=list(ORBIT_COLUMNS))
     branches = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=["branch"])
-    return orbits, branches
+    return orbits, branches, followed
+
+
+def parse_period(text: str) -> str | int:
+    """The ``--period`` option: "auto" or a whole number of mesh periods from 1 to :data:`MAX_PERIOD`.
+
+    Parameters
+    ----------
+    text : str
+        The option's value.
+
+    Returns
+    -------
+    str or int
+        "auto", or the period [mesh periods].
+
+    Raises
+    ------
+    ModelError
+        Anything else.
+    """
+    if text == "auto":
+        return text
+    try:
+        nu = int(text)
+    except ValueError:
+        nu = 0
+    if not 1 <= nu <= MAX_PERIOD or str(nu) != str(text).strip():
+        raise ModelError(
+            "--period", f"auto or a whole number of mesh periods 1 to {MAX_PERIOD}, got {text!r}"
+        )
+    return nu
+
+
+def default_search(values: np.ndarray, count: int = DEFAULT_SEARCH_POINTS) -> np.ndarray:
+    """Speeds of the grid at which ``--period N`` searches without ``--search-at``.
+
+    Parameters
+    ----------
+    values : ndarray
+        The sweep's grid (the range's unit).
+    count : int
+        How many, evenly spread from the lowest to the highest [-].
+
+    Returns
+    -------
+    ndarray
+        ``count`` grid values (all when the grid has fewer), ascending.
+    """
+    grid = np.unique(np.asarray(values, dtype=float))
+    return grid[np.unique(np.round(np.linspace(0, grid.size - 1, min(count, grid.size))).astype(int))]
+
+
+def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
+    """``--period N``: search at ``at`` for period-ν orbits, follow each new one over the grid
+    and merge the branches into one response per grid point and direction (module notes).
+
+    Parameters
+    ----------
+    model : GearedModel
+        The period-ν model (``build_geared_model(..., period=nu)`` with ν H harmonics).
+    omegas : ndarray
+        The grid's mesh frequencies [rad/s].
+    at : ndarray
+        Search speeds, in the unit of ``unit``.
+    nu : int
+        The period ν [mesh periods].
+    H : int
+        Mesh harmonics (ν H of the base) [-].
+    unit : callable
+        Mesh frequency [rad/s] to text in the range's unit; ``unit.omega`` the inverse.
+    directions : {"both", "up", "down"}
+        Sweep directions of the response.
+
+    Returns
+    -------
+    (GearedSweepResult or None, DataFrame, DataFrame)
+        The response (None when no period-ν orbit was found), the orbits found and the
+        followed branches (as :func:`search_command`'s).
+    """
+    from nlgrd.nonlinear.bearing_loads import bearing_response
+    from nlgrd.nonlinear.geared import GearedSweepResult, build_geared_model
+    from nlgrd.nonlinear.harmonic_convergence import check_harmonics, next_harmonics
+    from nlgrd.nonlinear.orbit_search import same_motion
+
+    def on_branch(o, w: float, followed) -> bool:
+        return any(
+            same_motion(b.harmonics[i], o.harmonics, nu)
+            for _, b in followed
+            for i in np.nonzero(np.isclose(b.omega, w, rtol=1e-12) & b.converged)[0]
+        )
+
+    orbits, frames, followed = _search_and_follow(
+        lambda _: model.reduced,
+        model.pinion_rpm,
+        omegas,
+        at,
+        (nu,),
+        H,
+        unit,
+        on_branch,
+        "on a branch already followed",
+        every=True,
+    )
+    if not followed:
+        return None, orbits, frames
+    res = merge_branches([b for _, b in followed], omegas, directions)
+    on_base = dc.replace(res, omega=res.omega / nu)  # the frequencies the model's receptances take
+    H_check = next_harmonics(H)
+    fine = model.cache.get(
+        ("period", nu, nu * H_check),
+        lambda: build_geared_model(
+            model.system, model.max_mesh_frequency, nu * H_check, model.receptance.method, period=nu
+        ),
+    )
+    check = check_harmonics(fine.reduced, on_base, nu * H_check, jumps=False)
+    res = dc.replace(res, harmonic_error=check.error, H_check=check.H_check)
+    names = [
+        b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(model.system.bearings)
+    ]
+    out = GearedSweepResult(res, bearing_response(model, on_base), model.pinion_rpm(res.omega), names, H)
+    return out, orbits, frames
+
+
+def merge_branches(branches: list, omegas, directions: str = "both"):
+    """One response per grid point and sweep direction from followed branches of one period.
+
+    Each direction is walked like a slow sweep: it stays on the branch of the previous point
+    while that branch has a stable orbit here, else takes the first branch with one; where
+    none is stable, an unstable orbit (``no_stable``: kept, not the response); where no
+    branch reaches, the point is not converged.
+
+    Parameters
+    ----------
+    branches : list of SweepResult
+        From :func:`~nlgrd.nonlinear.orbit_search.follow_orbit`, one period, one H.
+    omegas : array_like
+        The grid [rad/s].
+    directions : {"both", "up", "down"}
+        "up": the grid ascending; "down": descending; "both": up, then down.
+
+    Returns
+    -------
+    SweepResult
+        One row per grid point and direction; ``branch_switch`` where the branch changes.
+    """
+    blank = _take(branches[0], [0])
+    blank = dc.replace(
+        blank,
+        harmonics=np.full_like(blank.harmonics, np.nan),
+        converged=np.zeros(1, bool),
+        stable=np.zeros(1, bool),
+        no_stable=np.zeros(1, bool),
+    )
+    pool = _concat([*branches, blank])
+    owner = np.concatenate([np.full(len(b), k) for k, b in enumerate(branches)] + [[-1]])
+    grid = np.unique(np.asarray(omegas, dtype=float))
+    rows, names, at, switch = [], [], [], []
+    for d in ("up", "down") if directions == "both" else (directions,):
+        cur = None
+        for w in grid if d == "up" else grid[::-1]:
+            here = np.nonzero(np.isclose(pool.omega, w, rtol=1e-12) & pool.converged)[0]
+            stable = [int(i) for i in here if pool.stable[i]]
+            mine = [i for i in (stable or here.tolist()) if owner[i] == cur]
+            pick = mine[0] if mine else (stable or here.tolist() or [len(pool) - 1])[0]
+            switch.append(cur is not None and owner[pick] not in (-1, cur))
+            cur = owner[pick] if owner[pick] >= 0 else cur
+            rows.append(pick)
+            names.append(d)
+            at.append(w)
+    out = _take(pool, rows)
+    return dc.replace(out, omega=np.array(at), direction=np.array(names), branch_switch=np.array(switch))
+
+
+def _take(res, index):
+    """The rows ``index`` of a SweepResult (every per-point array and metric)."""
+    n = len(res)
+
+    def pick(v):
+        if isinstance(v, dict):
+            return {k: pick(x) for k, x in v.items()}
+        return v[index] if isinstance(v, np.ndarray) and v.ndim and v.shape[0] == n else v
+
+    return dc.replace(res, **{f.name: pick(getattr(res, f.name)) for f in dc.fields(res)})
+
+
+def _concat(results: list):
+    """SweepResults of one kind and H, one after the other."""
+
+    def cat(values):
+        if isinstance(values[0], dict):
+            return {k: np.concatenate([v[k] for v in values]) for k in values[0]}
+        return np.concatenate(values) if isinstance(values[0], np.ndarray) else values[0]
+
+    return dc.replace(
+        results[0], **{f.name: cat([getattr(r, f.name) for r in results]) for f in dc.fields(results[0])}
+    )
 
 
 def draw_branches(ax, branches: pd.DataFrame, x: str, quantity: str) -> None:

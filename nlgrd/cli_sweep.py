@@ -91,20 +91,22 @@ def cmd_sweep(args) -> int:
     png = output_file("--plot", args.plot, "sweep.png") if args.plot else out.with_suffix(".png")
     if png.resolve() == out.resolve():
         raise ModelError("--plot", f"the plot would overwrite the CSV {out}; give --out a .csv name")
-    search = None
-    if args.search_at is not None:
-        from nlgrd.cli_orbits import parse_search
+    from nlgrd.cli_orbits import default_search, parse_period, parse_search
 
+    period, search = parse_period(args.period), None
+    if args.search_at is not None:
         if args.continuation:
             raise ModelError("--search-at", "searches beside a sweep, not a --continuation")
         search = parse_search(args, values)
+    if period != "auto" and period >= 3:
+        _check_period_options(args, period)
+        search = (search[0] if search is not None else default_search(values), (period,))
     system = load_model(args.model)
     from nlgrd.cli_link_sweep import link_sweep_command, needs_links
 
     if search is not None and (needs_links(system) or system.gear_pairs[0].error_period > 1):
-        raise ModelError(
-            "--search-at", "searches the orbits of one gear pair excited at its mesh period", args.model
-        )
+        key = "--search-at" if args.search_at is not None else "--period"
+        raise ModelError(key, "searches the orbits of one gear pair excited at its mesh period", args.model)
     if needs_links(system):
         if not system.gear_pairs and not system.bearing_clearances:
             raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
@@ -119,13 +121,15 @@ def cmd_sweep(args) -> int:
     from nlgrd.nonlinear.auto_period import transitions
 
     if gp.error_period > 1:  # teeth that differ: the revolution's shaft orders and sidebands
-        if args.continuation or args.period not in ("auto", str(gp.error_period)):
+        if args.continuation or period not in ("auto", gp.error_period):
             raise ModelError(
                 "--period",
                 f"the gear errors repeat every {gp.error_period} mesh periods: a sweep over that "
                 "period only (no --continuation, --period auto)",
             )
         return _shaft_order_command(args, system, omegas, unit, quantity, out, png)
+    if period != "auto" and period >= 3:
+        return _period_command(args, system, omegas, unit, quantity, out, png, search)
     model = build_geared_model(system, float(omegas.max()), H=args.harmonics or LADDER[-1])
     if args.continuation:
         return _continuation(args, system, model, unit, omegas, count, quantity, out, png)
@@ -139,7 +143,7 @@ def cmd_sweep(args) -> int:
         model=model,
         stability=not args.no_stability,
         progress=_Progress("sweep"),
-        period=args.period if args.period == "auto" else int(args.period),
+        period=period,
     )
     found = None
     if search is not None:
@@ -151,6 +155,65 @@ def cmd_sweep(args) -> int:
     if found is not None:
         print(f"wrote {_beside(out, 'orbits')} and {_beside(out, 'branches')}")
     return status
+
+
+def _check_period_options(args, period: int) -> None:
+    """``--period N`` (N >= 3) searches and follows: no continuation, stability needed."""
+    if args.continuation:
+        raise ModelError(
+            "--period", f"period-{period} orbits are searched and followed, not traced by --continuation"
+        )
+    if args.no_stability:
+        raise ModelError(
+            "--period", f"period-{period} orbits need their Floquet stability: drop --no-stability"
+        )
+    if args.search_periods is not None:
+        raise ModelError("--search-periods", f"--period {period} searches period {period} only")
+
+
+def _period_command(args, system, omegas, unit, quantity, out, png, search) -> int:
+    """``--period N``, N >= 3: the period-N orbits searched for, followed over the grid and
+    written as the sweep (:func:`nlgrd.cli_orbits.period_search`); exit 1 when none is found."""
+    import numpy as np
+
+    from nlgrd.cli_orbits import PERIOD_HARMONICS, period_search
+    from nlgrd.nonlinear.geared import build_geared_model
+    from nlgrd.nonlinear.harmonic_convergence import OUTPUT_RTOL
+    from nlgrd.nonlinear.orbit_search import N_STARTS
+
+    at, (nu,) = search
+    H = args.harmonics or PERIOD_HARMONICS
+    model = build_geared_model(system, float(omegas.max()), nu * H, period=nu)
+    where = ", ".join(f"{v:g}" for v in at) + f" {unit.name}"
+    print(f"period {nu}: searching at {where} ({N_STARTS} starts each, H = {H})")
+    res, orbits, branches = period_search(model, omegas, at, nu, H, unit, args.direction)
+    if res is None:
+        print(
+            f"nlgrd: error: no period-{nu} orbit found at {where} (H = {H}); nothing written: try other "
+            "--search-at speeds",
+            file=sys.stderr,
+        )
+        return 1
+    _write_sweep(res, quantity, out, png, found=(orbits, branches))
+    m = res.mesh
+    ok = m.converged & ~m.no_stable
+    print(
+        f"period {nu}: {len(m)} points ({args.direction}), H = {H}, "
+        f"a stable period-{nu} orbit at {int(ok.sum())}"
+    )
+    for label, mask in (
+        (f"no stable period-{nu} orbit (unstable only; NaN outputs)", m.converged & m.no_stable),
+        (f"no period-{nu} branch reaches (not converged)", ~m.converged),
+    ):
+        if np.any(mask):
+            print(f"{label} at {unit.name}: " + ", ".join(unit(w) for w in np.atleast_1d(m.omega[mask])))
+    worst = np.nanmax(m.harmonic_error[ok], initial=0.0)
+    print(
+        f"estimated harmonic error at most {worst:.2g} (against H = {m.H_check // nu})"
+        + (f": above {OUTPUT_RTOL:g}, raise --harmonics" if worst > OUTPUT_RTOL else "")
+    )
+    print(f"wrote {out}, {png}, {_beside(out, 'orbits')} and {_beside(out, 'branches')}")
+    return 0
 
 
 def _beside(out, name: str):

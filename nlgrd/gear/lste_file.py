@@ -10,6 +10,7 @@ e is 1-periodic in φ. All amplitudes are in m along the line of action.
 
 File formats
 ------------
+(Read by :mod:`nlgrd.gear.sample_tables`, which the mesh-stiffness files share.)
 Samples (CSV, one header row, ``#`` starts a comment): a phase column and a value
 column, names case-insensitive:
 
@@ -41,9 +42,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
+from nlgrd.gear.sample_tables import read_harmonic_table, read_periodic_samples, read_table
 
 TOML_VERSION = 1
 _UNIT_SCALE = {"m": 1.0, "um": 1e-6}
+_STE_COLUMNS = {"ste_m": 1.0, "ste_um": 1e-6}
 
 
 def _frozen(a: ArrayLike) -> NDArray:
@@ -271,48 +274,6 @@ def resample(
 
 
 # --------------------------------------------------------------------------- reading
-def _read_csv(path: Path):
-    import pandas as pd
-
-    try:
-        frame = pd.read_csv(path, comment="#", skipinitialspace=True)
-    except FileNotFoundError:
-        raise
-    except Exception as exc:  # pandas raises several parser errors
-        raise ModelError("", f"cannot read CSV: {exc}", file=str(path)) from exc
-    frame.columns = [str(c).strip().lower() for c in frame.columns]
-    return frame
-
-
-def _column(frame, name: str, path: Path) -> NDArray:
-    raw = frame[name]
-    values = np.asarray(raw.to_numpy(), dtype=object)
-    out = np.empty(values.size)
-    for i, x in enumerate(values):
-        try:
-            out[i] = float(x)
-        except (TypeError, ValueError):
-            raise ModelError(name, f"row {i + 1}: not a number ({x!r})", file=str(path)) from None
-    bad = ~np.isfinite(out)
-    if np.any(bad):
-        rows = (np.flatnonzero(bad) + 1).tolist()[:5]
-        raise ModelError(name, f"non-finite values (NaN, inf or empty) in data rows {rows}", file=str(path))
-    return out
-
-
-def _pick(frame, options: tuple[str, ...], what: str, path: Path) -> str:
-    found = [c for c in options if c in frame.columns]
-    if not found:
-        raise ModelError(
-            " or ".join(options),
-            f"missing {what} column: need one of {list(options)}, found {list(frame.columns)}",
-            file=str(path),
-        )
-    if len(found) > 1:
-        raise ModelError(found[1], f"give one {what} column, found {found}", file=str(path))
-    return found[0]
-
-
 def read_lste_samples(
     path: str | Path, teeth_pinion: int | None = None, periodic_rtol: float = 1e-3
 ) -> tuple[NDArray, NDArray]:
@@ -339,50 +300,8 @@ def read_lste_samples(
     ModelError
         When the file, its columns or its samples break the rules of the module notes.
     """
-    path = Path(path)
-    frame = _read_csv(path)
-    pcol = _pick(frame, ("phase", "roll_angle"), "phase", path)
-    vcol = _pick(frame, ("ste_m", "ste_um"), "STE", path)
-    if len(frame) < 3:
-        raise ModelError(pcol, f"needs at least 3 samples, got {len(frame)}", file=str(path))
-    phase = _column(frame, pcol, path)
-    ste = _column(frame, vcol, path) * (1e-6 if vcol == "ste_um" else 1.0)
-    if pcol == "roll_angle":
-        if teeth_pinion is None:
-            raise ModelError(
-                "teeth_pinion", "a roll_angle column needs the pinion tooth count", file=str(path)
-            )
-        phase = phase * int(teeth_pinion) / (2 * np.pi)
-    step = np.diff(phase)
-    if np.any(step <= 0):
-        row = int(np.flatnonzero(step <= 0)[0]) + 2
-        raise ModelError(
-            pcol, f"must increase strictly (unsorted or repeated at data row {row})", file=str(path)
-        )
-    span = phase[-1] - phase[0]
-    tol = 1e-9
-    if abs(span - 1.0) <= tol:
-        ptp = np.ptp(ste)
-        if abs(ste[-1] - ste[0]) > periodic_rtol * ptp + 1e-300:
-            raise ModelError(
-                vcol,
-                f"not periodic: the last sample (one period after the first) is {ste[-1]!r}, "
-                f"the first {ste[0]!r}",
-                file=str(path),
-            )
-        phase, ste = phase[:-1], ste[:-1]
-    elif span > 1.0 + tol:
-        raise ModelError(pcol, f"spans {span:.6g} cycles: must cover exactly one mesh period", file=str(path))
-    else:
-        gap = phase[0] + 1.0 - phase[-1]
-        if gap > 1.5 * np.max(step):
-            raise ModelError(
-                pcol,
-                f"spans {span:.6g} cycles: the samples do not fill one mesh period "
-                f"(gap {gap:.3g} to the next period, largest step {np.max(step):.3g})",
-                file=str(path),
-            )
-    return phase - phase[0] + np.mod(phase[0], 1.0), ste
+    phase, ste, _ = read_periodic_samples(path, _STE_COLUMNS, "STE", teeth_pinion, periodic_rtol)
+    return phase, ste
 
 
 def read_lste_csv(
@@ -446,29 +365,8 @@ def read_fourier_csv(path: str | Path) -> MeshExcitation:
         On a missing column, mixed units, invalid or repeated harmonics, or a sine
         coefficient for harmonic 0.
     """
-    path = Path(path)
-    frame = _read_csv(path)
-    if "harmonic" not in frame.columns:
-        raise ModelError("harmonic", f"missing harmonic column, found {list(frame.columns)}", file=str(path))
-    acol = _pick(frame, ("a_m", "a_um"), "cosine-coefficient", path)
-    bcol = _pick(frame, ("b_m", "b_um"), "sine-coefficient", path)
-    if (acol == "a_um") != (bcol == "b_um"):
-        raise ModelError(bcol, f"units of {acol} and {bcol} differ", file=str(path))
-    scale = 1e-6 if acol == "a_um" else 1.0
-    harm = _column(frame, "harmonic", path)
-    if np.any(harm < 0) or np.any(harm != np.round(harm)):
-        raise ModelError("harmonic", "must hold integers >= 0", file=str(path))
-    harm = harm.astype(int)
-    if len(np.unique(harm)) != harm.size:
-        raise ModelError("harmonic", "repeated harmonic numbers", file=str(path))
-    a = _column(frame, acol, path) * scale
-    b = _column(frame, bcol, path) * scale
-    H = int(harm.max()) if harm.size else 0
-    aa, bb = np.zeros(H + 1), np.zeros(H + 1)
-    aa[harm], bb[harm] = a, b
-    if bb[0] != 0:
-        raise ModelError(bcol, "harmonic 0 (the mean) cannot have a sine coefficient", file=str(path))
-    return MeshExcitation(aa[0], aa[1:], bb[1:])
+    a, b, _ = read_harmonic_table(path, _UNIT_SCALE)
+    return MeshExcitation(a[0], a[1:], b[1:])
 
 
 def read_fourier_toml(path: str | Path) -> MeshExcitation:
@@ -542,8 +440,7 @@ def read_excitation(path: str | Path, **kwargs) -> MeshExcitation:
     path = Path(path)
     if path.suffix.lower() == ".toml":
         return read_fourier_toml(path)
-    frame = _read_csv(path)
-    if "harmonic" in frame.columns:
+    if "harmonic" in read_table(path).columns:
         return read_fourier_csv(path)
     return read_lste_csv(path, **kwargs)
 

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from nlgrd.errors import ModelError, check_positive
 from nlgrd.gear.geometry import GearGeometry
 from nlgrd.gear.modifications import GearErrors, GearRunout, ProfileModification
+from nlgrd.gear.stiffness_file import read_stiffness_file, rho_samples
 
 
 @dataclass(frozen=True)
@@ -77,6 +78,13 @@ class GearMesh:
         (:func:`~nlgrd.gear.transmission_error.loaded_static_transmission_error`). A
         sequence: the real Fourier harmonics [1, a_1, b_1, ...] of ρ(θ) in the mesh angle,
         ρ_0 = 1, ρ > 0 throughout. See :meth:`mesh_law`.
+    stiffness_file : str, optional
+        File of k(θ) over one mesh cycle (CSV of samples in N/m or of ρ, or of Fourier
+        coefficients; :mod:`nlgrd.gear.stiffness_file`), relative to the model file: its
+        shape ρ = k / mean(k) times the model's k_h, as a ``stiffness_variation`` of the same
+        harmonics (H of them from samples, as from the load sharing); the mean of a file in
+        N/m is checked against k_h, not used. The phase is the LSTE's mesh phase. Excludes
+        ``stiffness_variation``.
     runout : GearRunout, optional
         Eccentricity and phase of the pinion and of the gear (``[gear_pairs.runout]`` in a
         model file): adds e_m cos(θ / z_m + φ_m) to the LSTE, so the excitation repeats
@@ -107,6 +115,7 @@ class GearMesh:
     errors: GearErrors | None = None
     stiffness_variation: str | tuple[float, ...] | None = None
     runout: GearRunout | None = None
+    stiffness_file: str | None = None
 
     def __post_init__(self):
         for key in ("pinion_shaft", "pinion_node", "gear_shaft", "gear_node", "input_node", "output_node"):
@@ -139,6 +148,14 @@ class GearMesh:
 
     def _check_stiffness_variation(self) -> None:
         v = self.stiffness_variation
+        if self.stiffness_file is not None:
+            if not isinstance(self.stiffness_file, str) or not self.stiffness_file.strip():
+                raise ModelError("stiffness_file", f"must name a file, got {self.stiffness_file!r}")
+            if v is not None:
+                raise ModelError(
+                    "stiffness_file",
+                    f"give stiffness_file ({self.stiffness_file}) or stiffness_variation ({v!r}), not both",
+                )
         if v is None or v == "load_sharing":
             return
         if isinstance(v, str) or not np.iterable(v):
@@ -154,9 +171,7 @@ class GearMesh:
                 "stiffness_variation",
                 f"real harmonics [1, a1, b1, ...]: odd length, finite, mean 1; got {list(rho)}",
             )
-        theta = np.linspace(0, 2 * np.pi, 64 * rho.size, endpoint=False)
-        k = np.arange(1, rho.size // 2 + 1)[:, None] * theta
-        if np.min(rho[0] + rho[1::2] @ np.cos(k) + rho[2::2] @ np.sin(k)) <= 0:
+        if np.min(rho_samples(rho)) <= 0:
             raise ModelError("stiffness_variation", "k_h ρ(θ) must stay positive over the mesh cycle")
         object.__setattr__(self, "stiffness_variation", tuple(float(r) for r in rho))
 
@@ -322,12 +337,35 @@ class GearMesh:
             out += self.runout.harmonics(self.geometry, N, (out.size - 1) // 2)
         return out
 
+    def stiffness_shape(self, H: int = 30):
+        """The shape ρ = k / mean(k) of the ``stiffness_file`` (read anew each call).
+
+        Parameters
+        ----------
+        H : int
+            Harmonics taken from a file of samples [-].
+
+        Returns
+        -------
+        StiffnessShape or None
+            :class:`~nlgrd.gear.stiffness_file.StiffnessShape`; None without a file.
+
+        Raises
+        ------
+        ModelError
+            For an unusable file, naming its column and the file.
+        """
+        if not self.stiffness_file:
+            return None
+        return read_stiffness_file(self.stiffness_file, H, teeth_pinion=self.geometry.teeth_pinion)
+
     def stiffness_harmonics(self, H: int = 30) -> NDArray | None:
         """Real harmonics [1, a_1, b_1, ...] of ρ(θ) = k(θ)/k_h over :attr:`error_period` N
         mesh cycles, in harmonics of ω/N as :meth:`lste_harmonics`: N H from the load
-        sharing, all that were given otherwise (the given harmonic k of the mesh frequency
-        at k N); None for the constant k_h."""
-        v = self.stiffness_variation
+        sharing, H mesh harmonics from a ``stiffness_file`` of samples, all that were given
+        otherwise (the given harmonic k of the mesh frequency at k N); None for the
+        constant k_h."""
+        v = self.stiffness_variation if not self.stiffness_file else self.stiffness_shape(H).rho
         N = self.error_period
         if v is None:
             return None

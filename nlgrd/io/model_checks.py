@@ -3,7 +3,7 @@
 The model classes check their own fields (a negative diameter, a node out of range).
 What only the whole model shows, or what is legal but physically absurd, is checked
 here, by :func:`check_model` (run by :func:`nlgrd.io.model_file.model_from_dict`) and
-:func:`check_lste_files` (run by :func:`nlgrd.io.model_file.load_model`, which knows where
+:func:`check_gear_files` (run by :func:`nlgrd.io.model_file.load_model`, which knows where
 the files are). Each check raises one :class:`~nlgrd.errors.ModelError` naming the key
 path, e.g. ``gear_pairs[0].torque``.
 
@@ -26,6 +26,8 @@ Checks
 - An unbalance sits on a shaft that turns (speed ratio not 0).
 - An LSTE file is readable and its peak-to-peak value is below the tooth depth and
   below 100 times the backlash.
+- A mesh-stiffness file is readable and usable (:mod:`nlgrd.gear.stiffness_file`), and
+  the mean of a file in N/m is within a factor 10 of the k_h the dynamics use.
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ import numpy as np
 from nlgrd.errors import ModelError
 from nlgrd.rotor.system import RotorSystem
 
-__all__ = ["check_model", "check_lste_files", "tooth_depth"]
+__all__ = ["check_model", "check_gear_files", "check_lste_files", "check_stiffness_files", "tooth_depth"]
 
 #: An LSTE fluctuation this many times the total backlash is refused. Real LSTEs are a
 #: few um against backlashes of tens to hundreds of um; a factor 100 (two orders of
@@ -126,6 +128,72 @@ def check_lste_files(system: RotorSystem) -> None:
                 f"the LSTE in {path} fluctuates by {pp * 1e6:.4g} um peak to peak, {pp / backlash:.0f} "
                 f"times the backlash ({backlash * 1e6:.4g} um; at most {LSTE_BACKLASH_FACTOR:g} times "
                 "is accepted): check the unit (ste_m or ste_um)",
+            )
+
+
+def check_gear_files(system: RotorSystem) -> None:
+    """Raise :class:`ModelError` for an unusable ``lste_file`` or ``stiffness_file`` of a gear pair.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model, built, with the files' paths as they are to be opened.
+
+    Raises
+    ------
+    ModelError
+        From :func:`check_lste_files` or :func:`check_stiffness_files`.
+    """
+    check_lste_files(system)
+    check_stiffness_files(system)
+
+
+def check_stiffness_files(system: RotorSystem) -> None:
+    """Raise :class:`ModelError` for an unreadable or implausible ``stiffness_file`` of a gear pair.
+
+    Relative paths are taken from the current directory, as by :func:`check_lste_files`.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model, built; only its gear meshes with a ``stiffness_file`` are checked.
+
+    Raises
+    ------
+    ModelError
+        ``gear_pairs[i].stiffness_file``: when a file cannot be read or used (its message
+        names the file and the column), or the mean of a file in N/m is more than
+        :data:`~nlgrd.gear.stiffness_file.MEAN_FACTOR` times above or below the mesh's k_h.
+    """
+    from nlgrd.gear.stiffness_file import MEAN_FACTOR
+
+    for i, g in enumerate(system.gear_pairs):
+        path = getattr(g, "stiffness_file", None)
+        if not path or not _is_gear_mesh(g):
+            continue
+        key = f"gear_pairs[{i}].stiffness_file"
+        try:
+            shape = g.stiffness_shape()
+        except ModelError as exc:
+            detail = f"{exc.key}: {exc.message}" if exc.key else exc.message
+            raise ModelError(key, f"cannot use {path}: {detail}") from None
+        except OSError as exc:
+            raise ModelError(key, f"cannot read {path}: {exc.strerror or exc}") from None
+        except (ValueError, LookupError, TypeError) as exc:
+            raise ModelError(key, f"cannot read {path}: {type(exc).__name__}: {exc}") from None
+        if shape.mean is None:
+            continue
+        try:
+            k_h = g.stiffness()
+        except ModelError:
+            continue  # refused elsewhere with its own message
+        if not 1 / MEAN_FACTOR <= shape.mean / k_h <= MEAN_FACTOR:
+            source = "mesh_stiffness" if g.mesh_stiffness is not None else "computed from the geometry"
+            raise ModelError(
+                key,
+                f"the stiffness in {path} has the mean {shape.mean:.4g} N/m, {shape.mean / k_h:.3g} times "
+                f"the k_h = {k_h:.4g} N/m of the dynamics ({source}; at most a factor {MEAN_FACTOR:g} is "
+                "accepted): check the unit (N/m); only the file's shape k / mean(k) is used, with k_h",
             )
 
 

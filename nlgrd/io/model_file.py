@@ -100,7 +100,7 @@ from typing import Any
 import numpy as np
 
 from nlgrd.errors import ModelError
-from nlgrd.io.model_checks import check_lste_files, check_model
+from nlgrd.io.model_checks import check_gear_files, check_model
 from nlgrd.io.toml_format import ARRAY, toml_key, toml_value
 from nlgrd.rotor.materials import Material
 from nlgrd.rotor.shaft import Shaft
@@ -161,10 +161,9 @@ def load_model(path: str | os.PathLike) -> RotorSystem:
     Raises
     ------
     ModelError
-        For any bad input (unreadable file, TOML syntax, unknown or missing keys,
-        wrong types, values the model classes refuse, a physically absurd model, an
-        unreadable or implausible ``lste_file``; see :mod:`nlgrd.io.model_checks`), naming
-        the file and the key.
+        For any bad input (unreadable file, TOML syntax, unknown or missing keys, wrong types,
+        values the model classes refuse, a physically absurd model, an unreadable or implausible
+        ``lste_file`` or ``stiffness_file``; see :mod:`nlgrd.io.model_checks`), naming the file and the key.
     """
     name = os.fspath(path)
     try:
@@ -180,7 +179,7 @@ def load_model(path: str | os.PathLike) -> RotorSystem:
 
 
 def model_from_file_data(data: Mapping[str, Any], file: str) -> RotorSystem:
-    """:func:`model_from_dict`, with ``lste_file`` paths relative to ``file`` and checked.
+    """:func:`model_from_dict`, with the gear pairs' file paths relative to ``file`` and checked.
 
     Parameters
     ----------
@@ -196,20 +195,20 @@ def model_from_file_data(data: Mapping[str, Any], file: str) -> RotorSystem:
     system = model_from_dict(data, file=file)
     system = _resolve_lste_files(system, os.path.dirname(os.path.abspath(file)))
     try:
-        check_lste_files(system)
+        check_gear_files(system)
     except ModelError as exc:
         raise ModelError(_one_line(exc.key), _one_line(exc.message), file) from None
     return system
 
 
 def _resolve_lste_files(system: RotorSystem, base: str) -> RotorSystem:
-    """Make relative ``lste_file`` paths of gear pairs relative to the model file's folder."""
+    """Make relative ``lste_file`` and ``stiffness_file`` paths relative to the model file's folder."""
     pairs = []
     changed = False
     for g in system.gear_pairs:
-        path = getattr(g, "lste_file", None)
-        if path and not os.path.isabs(path):
-            g = dataclasses.replace(g, lste_file=os.path.join(base, path))
+        paths = {k: p for k in ("lste_file", "stiffness_file") if (p := getattr(g, k, None))}
+        if paths := {k: os.path.join(base, p) for k, p in paths.items() if not os.path.isabs(p)}:
+            g = dataclasses.replace(g, **paths)
             changed = True
         pairs.append(g)
     return dataclasses.replace(system, gear_pairs=tuple(pairs)) if changed else system

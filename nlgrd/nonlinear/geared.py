@@ -309,7 +309,8 @@ def geared_sweep(
         (:func:`nlgrd.nonlinear.subharmonic.period_sweep` from the critical mode, with
         2 H_max harmonics of ω/2; :func:`nlgrd.nonlinear.auto_period.merge_periods`); without
         ``stability`` nothing is known of that, and it is 1. 1: mesh-periodic orbits only.
-        2: the period-2 branches alone (needs ``stability``).
+        2: the period-2 branches alone (needs ``stability``). Orbits of 3 or more mesh periods
+        are found by :func:`nlgrd.nonlinear.orbit_search.search_orbits` instead.
 
     Returns
     -------
@@ -320,13 +321,21 @@ def geared_sweep(
     Raises
     ------
     ModelError
-        Both or neither of ``omegas`` and ``rpm``, frequencies not positive and finite, or
-        a ``model`` built for a lower frequency or H.
+        Both or neither of ``omegas`` and ``rpm``, frequencies not positive and finite, a
+        ``period`` other than 1, 2 or "auto", or a ``model`` built for a lower frequency or H.
     """
     if (rpm is None) == (omegas is None):
         raise ModelError("rpm", "give either pinion speeds (rpm) or mesh frequencies, not both")
     if period not in (1, 2, "auto"):
-        raise ModelError("period", f"1, 2 or 'auto', got {period!r}")
+        more = isinstance(period, int) and not isinstance(period, bool) and period >= 3
+        raise ModelError(
+            "period",
+            "orbits of 3 or more mesh periods are not reached by a sweep: search for them with "
+            "nlgrd.nonlinear.orbit_search.search_orbits and follow them with follow_orbit (as nlgrd "
+            f"sweep --period N does), got {period!r}"
+            if more
+            else f"1, 2 or 'auto', got {period!r}",
+        )
     if period == 2 and not stability:
         raise ModelError("period", "period doubling is found from the Floquet multipliers: needs stability")
     if model is None:

@@ -4,7 +4,7 @@ A :class:`TaskSpec` holds everything a task needs as picklable plain data (the c
 model file's content, the analysis, the parameters), so a Dask worker in another
 process or on another machine rebuilds the model itself: no closure, no cache and no
 open file crosses a process boundary. Its :attr:`~TaskSpec.key` is a SHA-256 of the
-model data, the analysis, the content of any LSTE file the model reads, and the nlgrd
+model data, the analysis, the content of any LSTE or stiffness file the model reads, and the nlgrd
 version: results stored under it are never mixed with those of another model or
 library version.
 
@@ -85,12 +85,13 @@ def _canonical(obj: Any) -> str:
 
 
 def _file_digests(data: dict, model_file: str) -> dict[str, str]:
-    """SHA-256 of every LSTE file the model data names (relative to the model file)."""
+    """SHA-256 of every LSTE and stiffness file the model data names (relative to the model file)."""
     out = {}
     base = os.path.dirname(os.path.abspath(model_file))
     for g in data.get("gear_pairs", []) or []:
-        name = g.get("lste_file") if isinstance(g, dict) else None
-        if isinstance(name, str):
+        for name in (g.get(k) for k in ("lste_file", "stiffness_file")) if isinstance(g, dict) else ():
+            if not isinstance(name, str):
+                continue
             path = os.path.join(base, name)
             try:
                 with open(path, "rb") as fh:
@@ -108,7 +109,7 @@ def task_key(model_data: dict, model_file: str, analysis: dict) -> str:
     model_data : dict
         The task's model file content.
     model_file : str
-        The base model file (for LSTE files named relative to it).
+        The base model file (for LSTE and stiffness files named relative to it).
     analysis : dict
         The analysis.
 
