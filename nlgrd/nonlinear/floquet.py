@@ -150,13 +150,26 @@ class _Prepared:
         b = mesh_block(ss.M, ss.D, ss.K, ss.W)
         M, D, K, W = ss.M[np.ix_(b, b)], ss.D[np.ix_(b, b)], ss.K[np.ix_(b, b)], ss.W[b]
         N = M.shape[0]
-        try:
-            cf = sla.cho_factor(M, check_finite=False)
-            X = sla.cho_solve(cf, np.column_stack([K, D, W]), check_finite=False)
-        except (np.linalg.LinAlgError, sla.LinAlgError):
-            X = np.linalg.solve(M, np.column_stack([K, D, W]))
+
+        def solver():  # M⁻¹ with M⁻¹K, M⁻¹W: the same at every speed of a sweep (shared cache)
+            try:
+                cf = sla.cho_factor(M, check_finite=False)
+                solve = lambda B: sla.cho_solve(cf, B, check_finite=False)  # noqa: E731
+                X = solve(np.column_stack([K, W]))
+            except (np.linalg.LinAlgError, sla.LinAlgError):
+                solve = lambda B: np.linalg.solve(M, B)  # noqa: E731
+                X = solve(np.column_stack([K, W]))
+            return solve, X[:, :N], X[:, N:]
+
+        if ss.cache is None:
+            solve, self.MK, self.MW = solver()
+        else:
+            h = hashlib.blake2b(b.tobytes(), digest_size=20)
+            for A in (M, K, W):
+                h.update(np.ascontiguousarray(A).tobytes())
+            solve, self.MK, self.MW = ss.cache.get(("m-solve", h.digest()), solver)
         self.N, self.Wt = N, W.T
-        self.MK, self.MD, self.MW = X[:, :N], X[:, N : 2 * N], X[:, 2 * N :]
+        self.MD = solve(D)
         self.side = np.zeros(0, dtype=complex)
         if not b.all():
             r = ~b

@@ -168,7 +168,7 @@ def psd_to_tolerance(A: NDArray, rtol: float = CERTIFICATE_RTOL) -> bool:
     return sla.lapack.dpotrf(S, lower=0, clean=0, overwrite_a=1)[1] == 0
 
 
-def free_modes(K: NDArray, D: NDArray, W: NDArray) -> NDArray | None:
+def free_modes(K: NDArray, D: NDArray, W: NDArray, null: tuple | None = None) -> NDArray | None:
     """Orthonormal basis of the free rigid-body directions (K φ = D φ = Wᵀ φ = 0), or None
     when this fast test cannot decide (the caller runs ``rigid_body_modes``).
 
@@ -188,11 +188,41 @@ def free_modes(K: NDArray, D: NDArray, W: NDArray) -> NDArray | None:
         Damping matrix [N s/m, N m s/rad].
     W : ndarray (N, n_nl)
         Projection onto the nonlinear coordinates y = Wᵀ q.
+    null : tuple, optional
+        ``stiffness_null_space(K)`` when the caller has it (it depends on K alone).
 
     Returns
     -------
     ndarray (N, r) or None
         Orthonormal columns spanning the free modes (r = 0: none), or None when undecided.
+    """
+    ok, Q = stiffness_null_space(K) if null is None else null
+    if not ok or Q.shape[1] == 0:
+        return Q if ok else None
+    blocks = [(A @ Q) / s for A in (K, D, W.T) if (s := float(np.linalg.norm(A))) > 0]
+    _, sv, vt = np.linalg.svd(np.vstack(blocks))
+    sv = np.concatenate([sv, np.zeros(vt.shape[0] - sv.size)])
+    if np.any((sv > CONSTRAINT_RTOL) & (sv <= 100 * CONSTRAINT_RTOL)):
+        return None
+    return Q @ vt[sv <= CONSTRAINT_RTOL].T
+
+
+def stiffness_null_space(K: NDArray) -> tuple[bool, NDArray | None]:
+    """The first step of :func:`free_modes`, which depends on K alone (a sweep's state
+    spaces share it): (True, orthonormal basis of the null space of sym K, possibly
+    empty) or (False, None) when undecided.
+
+    Parameters
+    ----------
+    K : ndarray (N, N)
+        Stiffness matrix of the linear part, without the nonlinear elements [N/m, N m/rad].
+
+    Returns
+    -------
+    ok : bool
+        False when :func:`psd_null_space` cannot decide.
+    basis : ndarray (N, r) or None
+        Orthonormal columns (r = 0 when sym K is positive definite to the tolerance).
     """
     Ks = (K + K.T) / 2
     n = Ks.shape[0]
@@ -202,17 +232,11 @@ def free_modes(K: NDArray, D: NDArray, W: NDArray) -> NDArray | None:
         Kt = Ks / np.outer(d, d)
         tau = RIGID_BODY_RTOL * max(float(np.max(np.sum(np.abs(Kt), axis=1))), 1.0)
         if sla.lapack.dpotrf(Kt - tau * np.eye(n), lower=0, clean=0, overwrite_a=1)[1] == 0:
-            return np.zeros((n, 0))
+            return True, np.zeros((n, 0))
     ok, Z = psd_null_space(Ks, RIGID_BODY_RTOL)
     if not ok or Z.shape[1] == 0:
-        return None
-    Q = np.linalg.qr(Z)[0]
-    blocks = [(A @ Q) / s for A in (K, D, W.T) if (s := float(np.linalg.norm(A))) > 0]
-    _, sv, vt = np.linalg.svd(np.vstack(blocks))
-    sv = np.concatenate([sv, np.zeros(vt.shape[0] - sv.size)])
-    if np.any((sv > CONSTRAINT_RTOL) & (sv <= 100 * CONSTRAINT_RTOL)):
-        return None
-    return Q @ vt[sv <= CONSTRAINT_RTOL].T
+        return False, None
+    return True, np.linalg.qr(Z)[0]
 
 
 def mesh_block(M: NDArray, D: NDArray, K: NDArray, W: NDArray) -> NDArray[np.bool_]:

@@ -19,23 +19,21 @@ are removed by a bordered solve with the constraint Rᵀ M q = 0, so the mean
 deflection is the one M-orthogonal to them; a static load with a component on such a
 mode is an error.
 
-Two ways to get h_k = Wᵀ Z_k⁻¹ W:
-
+Three ways to get h_k = Wᵀ Z_k⁻¹ W:
 - ``"direct"``: a sparse LU factorisation of Z_k per harmonic and frequency (exact),
   restricted to the connected components of Z's sparsity graph that hold a mesh or an
   output DOF (axial bars, say, never couple to a spur mesh);
-- ``"poles"`` (the default up to ``POLES_LIMIT`` DOFs): the pole-residue form below of
+- ``"poles"`` (the default up to ``POLES_LIMIT`` DOFs, and up to ``POLES_LATE_LIMIT``
+  after ``POLES_AFTER`` frequencies solved directly): the pole-residue form below of
   the whole model (no truncation), made of Z'_k = Z_k + W diag(k_h) Wᵀ, which is
   regular at ω = 0 where a mesh is a shaft's only torsional support, and turned back by
   the Sherman-Morrison-Woodbury identity h_k = h'_k (I - K h'_k)⁻¹ (the shift of
   :mod:`nlgrd.nonlinear.link_poles`); rigid-body modes that move no mesh leave the basis
   as in ``"modal"``. A harmonic whose form fails its check is solved directly;
-- ``"modal"``: Galerkin projection on a basis of the lowest undamped modes of the
-  linear system (meshes at k_h) up to a cut-off frequency, enriched with the static
-  and dynamic attachment vectors K_r⁻¹ W and Z(iω_j)⁻¹ W (modal summation with
-  residual correction, in projected form so gyroscopic, non-proportional,
-  circulatory and hysteretic terms stay coupled). Rigid-body modes that move no mesh
-  are left out of the basis (they are decoupled from W exactly).
+- ``"modal"``: Galerkin projection on the lowest undamped modes (meshes at k_h) up to a
+  cut-off frequency and the attachment vectors K_r⁻¹ W and Z(iω_j)⁻¹ W (modal summation
+  with residual correction, projected so that gyroscopic, non-proportional, circulatory
+  and hysteretic terms stay coupled); rigid-body modes that move no mesh are left out.
 
 Along a sweep the speed follows the mesh frequency (Ω = s ω), so without tabulated
 bearings the reduced Z_k(ω) = A_0 + ω A_1 + ω² A_2 is a quadratic matrix polynomial in ω
@@ -43,8 +41,7 @@ bearings the reduced Z_k(ω) = A_0 + ω A_1 + ω² A_2 is a quadratic matrix pol
 C; A_2 = -k² M + i k s G). One eigendecomposition of its companion linearisation per
 harmonic then gives the pole-residue form h_k(ω) = Σ_j R_j / (ω - λ_j) and dh_k/dω =
 -Σ_j R_j / (ω - λ_j)² (Tisseur & Meerbergen 2001, SIAM Rev. 43:235, §3.4): per point
-a few vector products, independent of the model size. Tabulated bearings keep the
-dense per-frequency solve.
+a few vector products, independent of the model size (not with tabulated bearings).
 """
 
 from __future__ import annotations
@@ -68,11 +65,13 @@ from nlgrd.rotor.system import RotorSystem
 #: Above this many DOFs ``method="auto"`` uses the modal basis.
 DIRECT_LIMIT = 3000
 #: Up to this many DOFs reached by a mesh, ``method="auto"`` uses the pole-residue form of
-#: the whole model (one eigendecomposition per harmonic: 60 ms at 83 DOFs, 250 ms at 132).
+#: the whole model (one eigendecomposition per harmonic: 60 ms at 83 DOFs, 250 ms at 210).
 POLES_LIMIT = 100
-#: Pole-residue receptances are checked against a direct solve of the reduced Z_k at one
-#: frequency per harmonic; above POLE_CHECK_RTOL (nlgrd.nonlinear.pole_residue) the
-#: harmonic falls back to it.
+#: Up to this many, "auto" solves directly for POLES_AFTER frequencies (a short sweep),
+#: then turns to the pole-residue form (a long sweep, where it costs less than the
+#: direct solves it replaces). Each form is checked against a direct solve (pole_residue).
+POLES_LATE_LIMIT = 300
+POLES_AFTER = 200
 
 
 @dataclass(frozen=True)
@@ -109,7 +108,8 @@ class MeshReceptance:
     method : {"auto", "poles", "direct", "modal"}
         How h_k is computed (see module docstring); "auto": "poles" up to
         ``POLES_LIMIT`` DOFs (those a mesh reaches) without tabulated bearings, "direct"
-        up to ``DIRECT_LIMIT``, "modal" above.
+        up to ``DIRECT_LIMIT`` (turning to "poles" after ``POLES_AFTER`` frequencies up
+        to ``POLES_LATE_LIMIT`` DOFs), "modal" above.
     max_frequency : float, optional
         Highest excitation frequency the modal basis must serve [rad/s] (H times the
         highest mesh frequency); required for ``"modal"``.
@@ -149,10 +149,14 @@ class MeshReceptance:
         s_p = abs(system.shafts[g0.pinion_shaft].speed_ratio)
         self.period = int(period)  # they are taken at ω_mesh / period
         self.speed_per_mesh_frequency = period / (g0.geometry.teeth_pinion * s_p)
+        #: direct solves left before "auto" turns to the pole-residue form (None: never)
+        self._poles_after = None
         if method == "auto":
             n = self.model.n_dofs
-            small = len(self._mesh_component()) <= POLES_LIMIT and not self.model.tabulated_bearings
-            method = "poles" if small else ("direct" if n <= DIRECT_LIMIT else "modal")
+            n_mesh = 0 if self.model.tabulated_bearings else len(self._mesh_component())
+            method = "poles" if 0 < n_mesh <= POLES_LIMIT else ("direct" if n <= DIRECT_LIMIT else "modal")
+            if method == "direct" and n_mesh <= POLES_LATE_LIMIT:
+                self._poles_after = POLES_AFTER
         if method not in ("poles", "direct", "modal"):
             raise ModelError("method", f"must be 'auto', 'poles', 'direct' or 'modal', got {method!r}")
         self.method = method
@@ -434,6 +438,9 @@ class MeshReceptance:
         dh_k/dω (continuation, jumps) is computed only when ``derivative`` is asked for.
         """
         key = float(omega)
+        if self._poles_after is not None and self._poles_after <= 0:
+            self._poles_after, self.method = None, "poles"
+            self._build_full_basis()
         hit = self._solve_cache.get(key)
         if hit is not None and (hit[2] is not None or not derivative):
             if hit[0].shape[0] >= H:
@@ -476,6 +483,8 @@ class MeshReceptance:
                     dh[k - 1] = -cw @ (Yg * g[:, None])
                 self._unshift(slice(k - 1, k), h, U, dh if derivative else None)
             elif self.method == "direct":
+                if self._poles_after is not None and k == start:
+                    self._poles_after -= 1
                 keep, sel, Z, rows, cols, Wk, out = self._restricted()
                 Z.data = self.model.dynamic_stiffness_data(w, speed)[sel]
                 lu = spla.splu(Z, permc_spec="MMD_AT_PLUS_A")
@@ -498,8 +507,7 @@ class MeshReceptance:
                     dh[k - 1] = -x.T @ (self._dZ(k, omega, speed, True) @ y)
         if len(self._solve_cache) > 20000:
             self._solve_cache.clear()
-        out = [h, U, dh]
-        self._solve_cache[key] = out
+        out = self._solve_cache[key] = [h, U, dh]
         return out
 
     def receptance(self, omega: float, H: int) -> NDArray:

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.floquet import FloquetCache
 from nlgrd.nonlinear.linear_algebra import free_modes as _free_modes
+from nlgrd.nonlinear.linear_algebra import stiffness_null_space
 from nlgrd.rotor.rigid_body import complement, rigid_body_modes
 
 
@@ -81,7 +82,11 @@ class LinearStateSpace:
         see a free mode that a projected basis holds as one of its vectors (the stability
         basis of a free drive train, Kubo's rig), whose stiffness diagonal is rounding.
         """
-        F = _free_modes(self.K, self.D, self.W)
+        null = None
+        if self.cache is not None:  # K alone: the same at every speed of a sweep
+            key = ("k-null", hashlib.blake2b(np.ascontiguousarray(self.K).tobytes(), digest_size=20).digest())
+            null = self.cache.get(key, lambda: stiffness_null_space(self.K))
+        F = _free_modes(self.K, self.D, self.W, null)
         if F is None:
             Ksym = (self.K + self.K.T) / 2
             return rigid_body_modes(Ksym, self.M, constraints=(self.K, self.D, self.W.T))
