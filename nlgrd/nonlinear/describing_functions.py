@@ -104,6 +104,11 @@ def _value_and_slope(z: NDArray, theta: NDArray) -> tuple[NDArray, NDArray]:
     return z[0] + c @ a + s @ b, c @ (k * b) - s @ (k * a)
 
 
+#: Finest grid of the sampled crossing search; the companion matrix (of size 4D for D
+#: harmonics: seconds above D ~ 500) only when it cannot certify a near-tangency.
+MAX_CROSSING_SAMPLES = 2**20
+
+
 def _plain_newton(z: NDArray, t: NDArray, level: NDArray, lo: NDArray, hi: NDArray) -> NDArray | None:
     """Three unguarded Newton steps from the chord estimates ``t`` of crossings bracketed in
     [lo, hi]; the roots when every last step is below 1e-9 (quadratic convergence: the
@@ -225,8 +230,8 @@ def contact_intervals(x: ArrayLike, b: float, crossings: str = "auto") -> Contac
     (``crossings="auto"``); when the certificate fails (near-tangency) or with
     ``crossings="companion"``, they are the unit-circle roots of the associated
     polynomials (companion matrix), polished by Newton. Before that the grid is refined
-    eightfold once (cheaper than the companion matrix, of size 2D for D harmonics). Each
-    interval's state is decided at its midpoint.
+    8 and 64 fold (up to ``MAX_CROSSING_SAMPLES`` samples; cheaper than the companion
+    matrix, of size 2D for D harmonics). Each interval's state is decided at its midpoint.
 
     Parameters
     ----------
@@ -261,9 +266,13 @@ def contact_intervals(x: ArrayLike, b: float, crossings: str = "auto") -> Contac
     levels = (b, -b) if b > 0 else (0.0,)
     breaks = None
     if crossings == "auto":  # a near-tangency usually clears on a finer grid
-        breaks = _sampled_crossings(x, levels)
-        if breaks is None:
-            breaks = _sampled_crossings(x, levels, refine=8)
+        n0 = default_aft_samples(n_harmonics(x))
+        for refine in (1, 8, 64):
+            if refine > 1 and n0 * refine > MAX_CROSSING_SAMPLES:
+                break
+            breaks = _sampled_crossings(x, levels, refine=refine)
+            if breaks is not None:
+                break
     if breaks is None:
         breaks = np.concatenate([_companion_crossings(x, lv) for lv in levels])
     breaks = np.sort(breaks)
