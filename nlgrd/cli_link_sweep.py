@@ -1,6 +1,7 @@
 """``nlgrd sweep`` of a model with several gear meshes, bearing clearances or unbalance: a link sweep
 (:func:`nlgrd.nonlinear.link_model.link_sweep`), every link's outputs in columns
-``<link>.<quantity>``, and a figure of one of them."""
+``<link>.<quantity>``, each point's period, ω/2 content and bifurcations as on the one-mesh
+path (``--period``), and a figure of one of them."""
 
 from __future__ import annotations
 
@@ -56,6 +57,7 @@ def link_sweep_command(args, system, values, out, png) -> int:
     """
     import numpy as np
 
+    from nlgrd.cli_orbits import parse_period
     from nlgrd.io.command_line import pyplot
     from nlgrd.nonlinear.link_model import build_link_model, link_sweep
 
@@ -71,7 +73,12 @@ def link_sweep_command(args, system, values, out, png) -> int:
         omegas = 2 * math.pi * np.asarray(values, dtype=float)
     column, label = _quantity(args.quantity, model)
     res = link_sweep(
-        model, omegas, H=args.harmonics, directions=args.direction, stability=not args.no_stability
+        model,
+        omegas,
+        H=args.harmonics,
+        directions=args.direction,
+        stability=not args.no_stability,
+        period=parse_period(args.period),
     )
     H = res.result.H
     frame = res.to_frame()
@@ -99,5 +106,38 @@ def link_sweep_command(args, system, values, out, png) -> int:
         f"{harmonics_line(r)}, "
         f"{bad} not converged, {lost} without a stable periodic response"
     )
+    _periods(r, unit=(60 * plan.speed_per_base, "rpm") if args.rpm is not None else (1.0, "Hz"))
     print(f"wrote {out} and {png}")
     return 0
+
+
+def _periods(r, unit: tuple[float, str]) -> None:
+    """Print the period-2 points, the quasi-periodic ones and the bifurcations along each
+    sweep (:func:`nlgrd.nonlinear.auto_period.transitions`), in the range's unit."""
+    import numpy as np
+
+    from nlgrd.nonlinear.auto_period import transitions
+
+    scale, name = unit
+
+    def show(w) -> str:
+        return f"{w / (2 * np.pi) * scale:.1f}"
+
+    two = r.omega[(r.period == 2) & ~r.no_stable & r.converged]
+    if two.size:
+        print(f"period 2 (period doubled) at {name}: " + ", ".join(show(w) for w in two))
+    torus = np.isfinite(r.secondary_frequency)
+    if np.any(torus):
+        print(
+            f"quasi-periodic (a complex pair of multipliers left the unit circle; NaN outputs) at {name} "
+            "(secondary frequency Hz): "
+            + ", ".join(
+                f"{show(w)} ({f / (2 * np.pi):.0f})"
+                for w, f in zip(r.omega[torus], r.secondary_frequency[torus], strict=True)
+            )
+        )
+    for t in transitions(r):
+        print(
+            f"{t.kind} ({t.direction}): {show(t.omega_from)} -> {show(t.omega_to)} {name}, "
+            f"{t.response_from} -> {t.response_to}"
+        )

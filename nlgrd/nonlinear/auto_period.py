@@ -13,13 +13,20 @@ branch, a Neimark-Sacker (torus) bifurcation, the loss of every stable response.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
+from nlgrd.errors import ModelError
+from nlgrd.nonlinear.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.harmonic_convergence import check_harmonics, with_harmonic_error
 from nlgrd.nonlinear.results import SweepResult, response_kind
-from nlgrd.nonlinear.subharmonic import amplitudes, period_of, spread, subharmonic_mask
+from nlgrd.nonlinear.subharmonic import amplitudes, period_of, period_sweep, spread, subharmonic_mask
+
+#: The values of ``period`` a sweep takes (orbits of 3 or more periods are searched for).
+PERIODS = (1, 2, "auto")
 
 
 @dataclass(frozen=True)
@@ -66,6 +73,105 @@ def flip_unstable(result: SweepResult) -> NDArray:
         return result.converged & ~result.stable & real & (mu.real < -1)
 
 
+def check_period(period, stability: bool) -> None:
+    """Raise ModelError unless ``period`` is 1, 2 or "auto", and 2 has ``stability``.
+
+    Parameters
+    ----------
+    period : object
+        The ``period`` option of a sweep.
+    stability : bool
+        Whether the sweep computes Floquet multipliers.
+    """
+    if period not in PERIODS or isinstance(period, bool):
+        more = isinstance(period, int) and not isinstance(period, bool) and period >= 3
+        raise ModelError(
+            "period",
+            "orbits of 3 or more mesh periods are not reached by a sweep: search for them with "
+            "nlgrd.nonlinear.orbit_search.search_orbits and follow them with follow_orbit (as nlgrd "
+            f"sweep --period N does), got {period!r}"
+            if more
+            else f"1, 2 or 'auto', got {period!r}",
+        )
+    if period == 2 and not stability:
+        raise ModelError("period", "period doubling is found from the Floquet multipliers: needs stability")
+
+
+def beyond_period_one(
+    p1: SweepResult,
+    period: int | str,
+    period_two_model: Callable[[], ReducedModel],
+    omegas: ArrayLike,
+    directions: str,
+    H_check: int,
+    rtol: float,
+    *,
+    tol: float = 1e-10,
+    max_iter: int = 50,
+) -> tuple[SweepResult, SweepResult | None]:
+    """The period-2 sweep where ``p1`` is flip-unstable, merged with it or alone.
+
+    The period-2 branches start from the critical mode where a period-1 orbit has a real
+    multiplier < -1 (:func:`~nlgrd.nonlinear.subharmonic.period_sweep`, 2 H₁ harmonics of
+    ω/2: as fine as period 1), with their own harmonic error estimate against
+    ``H_check`` harmonics of ω/2 (points above ``rtol`` are not converged); with
+    ``period`` "auto" they are merged with ``p1`` (:func:`merge_periods`). The same for
+    every model: the single-mesh FE model, a link model, the single-DOF pair.
+
+    Parameters
+    ----------
+    p1 : SweepResult
+        The period-1 sweep with stability (frequencies of the base ω).
+    period : {"auto", 2}
+        "auto": merged, and ``p1`` itself when no point is flip-unstable; 2: the period-2
+        branches alone (:func:`period_only`).
+    period_two_model : callable () -> ReducedModel
+        The model on the base ω/2 (every excitation at even harmonics), built only when needed.
+    omegas : array_like
+        The base frequencies ω of ``p1`` [rad/s].
+    directions : {"both", "up", "down"}
+        Sweep directions.
+    H_check : int
+        Harmonics of ω/2 of the error estimate [-] (> 2 H₁).
+    rtol : float
+        Largest accepted estimated relative error of the period-2 outputs [-].
+    tol, max_iter : float, int
+        Newton's tolerance (relative residual) and iteration limit.
+
+    Returns
+    -------
+    result : SweepResult
+        The answer: ``p1``, the merged sweep, or the period-2 branches alone.
+    p2 : SweepResult or None
+        The period-2 sweep (frequencies ω, harmonics of ω/2, its error estimate), None when
+        not run.
+    """
+    if period == "auto" and not np.any(flip_unstable(p1)):
+        return p1, None
+    model2 = period_two_model()
+    p2 = period_sweep(model2, omegas, 2 * p1.H, 2, p1, directions, tol=tol, max_iter=max_iter)
+    on_base = replace(p2, omega=p2.omega / 2)  # the frequencies model2 takes
+    check = check_harmonics(model2, on_base, H_check, tol=tol, jumps=False)
+    p2 = replace(with_harmonic_error(on_base, check, rtol), omega=p2.omega)
+    return (period_only(p2) if period == 2 else merge_periods(p1, p2)), p2
+
+
+def rows_of(p1: SweepResult, p2: SweepResult) -> NDArray:
+    """For each point of ``p1``, the row of ``p2`` at the same frequency and direction.
+
+    Parameters
+    ----------
+    p1, p2 : SweepResult
+        Sweeps on the same grid and directions.
+
+    Returns
+    -------
+    ndarray of int
+    """
+    index2 = {(d, float(w)): i for i, (d, w) in enumerate(zip(p2.direction, p2.omega, strict=True))}
+    return np.array([index2[(d, float(w))] for d, w in zip(p1.direction, p1.omega, strict=True)], dtype=int)
+
+
 def merge_periods(p1: SweepResult, p2: SweepResult) -> SweepResult:
     """One response per point from a period-1 sweep and a period-2 sweep on the same grid.
 
@@ -87,8 +193,7 @@ def merge_periods(p1: SweepResult, p2: SweepResult) -> SweepResult:
     """
     H2 = p2.H
     n = len(p1)
-    index2 = {(d, float(w)): i for i, (d, w) in enumerate(zip(p2.direction, p2.omega, strict=True))}
-    rows2 = np.array([index2[(d, float(w))] for d, w in zip(p1.direction, p1.omega, strict=True)])
+    rows2 = rows_of(p1, p2)
     found2 = np.array([c and period_of(z, 2) == 2 for z, c in zip(p2.harmonics, p2.converged, strict=True)])
     found2 = found2[rows2]
     ok1 = p1.converged & p1.stable & ~p1.no_stable

@@ -75,6 +75,25 @@ class FrequencyPlan:
             )
         return int(r)
 
+    def subharmonic(self, nu: int) -> FrequencyPlan:
+        """The plan of orbits of ``nu`` base periods: the base ω/ν, every excitation at ν
+        times its harmonic here (a mesh at m at ν m), the shaft speed unchanged.
+
+        Parameters
+        ----------
+        nu : int
+            Base periods per period of the new base [-], >= 1.
+
+        Returns
+        -------
+        FrequencyPlan
+            ``speed_per_base`` ν times this one's; the name with "/ν" appended (ν > 1).
+        """
+        if int(nu) != nu or nu < 1:
+            raise ModelError("period", f"a whole number of base periods >= 1, got {nu!r}")
+        nu = int(nu)
+        return FrequencyPlan(self.speed_per_base * nu, self.name if nu == 1 else f"{self.name}/{nu}")
+
     @classmethod
     def for_system(cls, system: RotorSystem, shaft_orders: Sequence[float] = ()) -> FrequencyPlan:
         """The longest base making every mesh and every ``shaft_orders`` a harmonic.

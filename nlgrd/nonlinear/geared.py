@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.auto_period import flip_unstable, merge_periods, period_only
+from nlgrd.nonlinear.auto_period import beyond_period_one, check_period, rows_of
 from nlgrd.nonlinear.bearing_loads import BearingResponse, bearing_response
 from nlgrd.nonlinear.continuation import continuation
 from nlgrd.nonlinear.floquet import FloquetCache
@@ -31,18 +31,15 @@ from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.harmonic_convergence import (
     LADDER,
     OUTPUT_RTOL,
-    check_harmonics,
     converged_continuation,
     converged_sweep,
     next_harmonics,
-    with_harmonic_error,
 )
 from nlgrd.nonlinear.harmonics import real_to_complex
 from nlgrd.nonlinear.mesh_law import gear_mesh_force
 from nlgrd.nonlinear.receptance import MeshReceptance
 from nlgrd.nonlinear.results import ContinuationResult, SweepResult
 from nlgrd.nonlinear.state_space import LinearStateSpace
-from nlgrd.nonlinear.subharmonic import period_sweep
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.rotor.system import RotorSystem
 
@@ -326,18 +323,7 @@ def geared_sweep(
     """
     if (rpm is None) == (omegas is None):
         raise ModelError("rpm", "give either pinion speeds (rpm) or mesh frequencies, not both")
-    if period not in (1, 2, "auto"):
-        more = isinstance(period, int) and not isinstance(period, bool) and period >= 3
-        raise ModelError(
-            "period",
-            "orbits of 3 or more mesh periods are not reached by a sweep: search for them with "
-            "nlgrd.nonlinear.orbit_search.search_orbits and follow them with follow_orbit (as nlgrd "
-            f"sweep --period N does), got {period!r}"
-            if more
-            else f"1, 2 or 'auto', got {period!r}",
-        )
-    if period == 2 and not stability:
-        raise ModelError("period", "period doubling is found from the Floquet multipliers: needs stability")
+    check_period(period, stability)
     if model is None:
         top = np.max(omegas) if omegas is not None else None
         if top is None:
@@ -397,26 +383,27 @@ def geared_sweep(
 def _beyond_period_one(model: GearedModel, p1: SweepResult, omegas, directions, period, harmonic_rtol):
     """The period-2 sweep where ``p1`` is flip-unstable, merged (``period`` "auto") or alone
     (2), with its bearing recovery on the period-2 model."""
-    if period == "auto" and not np.any(flip_unstable(p1)):
-        return p1, bearing_response(model, p1)
-    H2, H_check = 2 * p1.H, 2 * next_harmonics(p1.H)  # as fine as period 1, and its check
-    model2 = model.cache.get(
-        ("period 2", H_check),
-        lambda: build_geared_model(
-            model.system, model.max_mesh_frequency, H_check, model.receptance.method, period=2
-        ),
+    H_check = 2 * next_harmonics(p1.H)  # the check of 2 H₁ harmonics of ω/2
+
+    def model2() -> GearedModel:
+        return model.cache.get(
+            ("period 2", H_check),
+            lambda: build_geared_model(
+                model.system, model.max_mesh_frequency, H_check, model.receptance.method, period=2
+            ),
+        )
+
+    res, p2 = beyond_period_one(
+        p1, period, lambda: model2().reduced, omegas, directions, H_check, harmonic_rtol
     )
-    p2 = period_sweep(model2.reduced, omegas, H2, 2, p1, directions)
-    on_base = dc.replace(p2, omega=p2.omega / 2)  # the frequencies model2's receptances take
-    check = check_harmonics(model2.reduced, on_base, H_check, jumps=False)
-    p2 = dc.replace(with_harmonic_error(on_base, check, harmonic_rtol), omega=p2.omega)
-    b2 = bearing_response(model2, on_base)
+    if p2 is None:
+        return p1, bearing_response(model, p1)
+    b2 = bearing_response(model2(), dc.replace(p2, omega=p2.omega / 2))  # on model2's base
     if period == 2:
-        return period_only(p2), b2
-    merged = merge_periods(p1, p2)
+        return res, b2
+    merged = res
     b1 = bearing_response(model, p1)
-    index2 = {(d, float(w)): i for i, (d, w) in enumerate(zip(p2.direction, p2.omega, strict=True))}
-    rows2 = [index2[(d, float(w))] for d, w in zip(p1.direction, p1.omega, strict=True)]
+    rows2 = rows_of(p1, p2)
     two = (merged.period == 2)[:, None]
     keys = BearingResponse.__dataclass_fields__
     return merged, BearingResponse(**{k: np.where(two, getattr(b2, k)[rows2], getattr(b1, k)) for k in keys})

@@ -4,19 +4,24 @@
 coordinates of its links (:mod:`nlgrd.nonlinear.link_reduction`) with unbalance and
 gravity as loads; :func:`link_sweep` runs the harmonic-balance sweep of
 :func:`nlgrd.nonlinear.sweep.sweep` on it, with Floquet stability, and writes every
-link's outputs in columns named ``<link>.<quantity>``.
+link's outputs in columns named ``<link>.<quantity>``. Where a period-1 orbit loses
+stability by period doubling it follows the period-2 orbits on :func:`period_model`, the
+same links on the base ω/2 (:mod:`nlgrd.nonlinear.auto_period`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.auto_period import beyond_period_one, check_period
 from nlgrd.nonlinear.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.harmonic_convergence import LADDER, OUTPUT_RTOL, converged_sweep, next_harmonics
@@ -47,6 +52,12 @@ class LinkModel:
         The harmonic-balance model on the link coordinates (base frequency ω [rad/s]).
     top_order : int
         The highest base harmonic an excitation sits at (a mesh's order, an unbalance's).
+    period : int
+        Base periods of the plan it was built on per period of its base: 1, or ν for the
+        model of :func:`period_model`, whose base is ω/ν [-].
+    loads : dict
+        The unbalance, gravity and reduction options it was built with (to build
+        :func:`period_model`).
     """
 
     system: RotorSystem
@@ -54,6 +65,13 @@ class LinkModel:
     receptance: LinkReceptance
     reduced: ReducedModel
     top_order: int = 1
+    period: int = 1
+    loads: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @cached_property
+    def cache(self) -> BoundedCache:
+        """Models derived from this one (:func:`period_model`)."""
+        return BoundedCache(4)
 
     def link_harmonics(self, harmonics: NDArray, name: str) -> NDArray:
         """The rows of the link ``name`` in the harmonics (d_total, 2H+1) of a point [m].
@@ -154,7 +172,49 @@ def build_link_model(
     links = list(links) + list(system.bearing_clearances)
     given = {lk.index for lk in links if isinstance(lk, GearMeshLink) and lk.index is not None}
     links += [lk for lk in gear_links(system, plan) if lk.index not in given]
-    links = tuple(links)
+    loads = dict(unbalance=unbalance, gravity=gravity, method=method, max_frequency=max_frequency)
+    return _reduce(system, tuple(links), plan, loads)
+
+
+def period_model(model: LinkModel, nu: int = 2) -> LinkModel:
+    """The model of orbits of ``nu`` base periods: the same links and loads on the base ω/ν.
+
+    Every excitation moves from base harmonic k to νk (a mesh at m to ν m, its LSTE
+    harmonic j at ν m j; an unbalance likewise; :meth:`FrequencyPlan.subharmonic`), the
+    response holds all harmonics of ω/ν; the components at harmonics that are not
+    multiples of ν are the subharmonic content (:mod:`nlgrd.nonlinear.subharmonic`). A
+    link moves by its ``subharmonic(nu)`` (a link without one does not depend on the base).
+    Kept in ``model.cache``.
+
+    Parameters
+    ----------
+    model : LinkModel
+        From :func:`build_link_model`.
+    nu : int
+        Base periods of the new base [-], >= 1.
+
+    Returns
+    -------
+    LinkModel
+        Solved at ω/ν for a base frequency ω of ``model`` (its ``period`` ν).
+    """
+    plan = model.receptance.plan.subharmonic(nu)  # checks nu
+    if int(nu) == 1:
+        return model
+
+    def make() -> LinkModel:
+        links = tuple(lk.subharmonic(int(nu)) if hasattr(lk, "subharmonic") else lk for lk in model.links)
+        loads = model.loads or dict(unbalance=(), gravity=None, method="auto", max_frequency=None)
+        return _reduce(model.system, links, plan, loads, model.period * int(nu))
+
+    return model.cache.get(("period", int(nu)), make)
+
+
+def _reduce(system: RotorSystem, links: tuple, plan: FrequencyPlan, loads: dict, period: int = 1):
+    """The LinkModel of ``links`` (all of them) on ``plan`` with the ``loads`` of
+    :func:`build_link_model`."""
+    unbalance, gravity = loads["unbalance"], loads["gravity"]
+    unb_orders = [abs(system.shafts[u.shaft].speed_ratio) for u in unbalance]
     names = [lk.name for lk in links]
     if len(set(names)) != len(names):
         raise ModelError("links", f"link names must be unique, got {names}")
@@ -185,8 +245,8 @@ def build_link_model(
         plan,
         static_force=static,
         harmonic_force=harmonic_force if unb else None,
-        method=method,
-        max_frequency=max_frequency,
+        method=loads["method"],
+        max_frequency=loads["max_frequency"],
         force_dofs=[i for iy, iz, *_ in unb for i in (iy, iz)],
     )
     laws = tuple(lk.law(tuple(range(sl.start, sl.stop))) for lk, sl in zip(links, rec.slices, strict=True))
@@ -212,7 +272,7 @@ def build_link_model(
         outputs=outputs,
     )
     orders = [lk.order for lk in links if isinstance(lk, GearMeshLink)] + [u[-1] for u in unb]
-    return LinkModel(system, links, rec, reduced, max(orders, default=1))
+    return LinkModel(system, links, rec, reduced, max(orders, default=1), period, dict(loads))
 
 
 @dataclass(frozen=True)
@@ -224,8 +284,9 @@ class LinkSweepResult:
     result : SweepResult
         The points (harmonics of all link coordinates, convergence, stability).
     links : pandas.DataFrame
-        One row per point: ``<link>.<quantity>`` columns; NaN where the point did not
-        converge or has no stable periodic response.
+        One row per point: ``<link>.<quantity>`` columns, over the point's whole period
+        (2T for a period-2 point); NaN where the point did not converge or has no stable
+        periodic response.
     """
 
     result: SweepResult
@@ -285,7 +346,13 @@ def metric_names(link) -> list[str]:
 
 
 def link_sweep(
-    model: LinkModel, omegas: NDArray, H: int | None = None, *, rtol: float = OUTPUT_RTOL, **options
+    model: LinkModel,
+    omegas: NDArray,
+    H: int | None = None,
+    *,
+    rtol: float = OUTPUT_RTOL,
+    period: int | str = 1,
+    **options,
 ) -> LinkSweepResult:
     """Harmonic-balance sweep of a link model with the links' outputs.
 
@@ -302,7 +369,22 @@ def link_sweep(
         ``top_order`` (so a mesh at base harmonic m gets 5 m, 7 m, ... harmonics), comparing
         every link's ``converged_outputs``; the result carries the estimate per point.
     rtol : float
-        With H chosen: the tolerance of the estimated relative error of the outputs [-].
+        The tolerance of the estimated relative error of the outputs [-] (with H chosen,
+        and of the period-2 points always).
+    period : {1, "auto", 2}
+        As :func:`nlgrd.nonlinear.geared.geared_sweep`, in base periods. 1 (default):
+        period-1 orbits only, every point's harmonics those of ω. "auto": the period-1
+        orbits where they are stable and, where one has lost stability by period doubling
+        (a real Floquet multiplier < -1), the stable period-2 orbit
+        (:func:`nlgrd.nonlinear.auto_period.beyond_period_one` on :func:`period_model`,
+        2 H harmonics of ω/2; ``nlgrd sweep``'s default); without ``stability`` it is 1.
+        2: the period-2 branches alone (needs ``stability``). The default is 1, not
+        geared_sweep's "auto", because with a period-2 point every point's harmonics are
+        of ω/2, which callers that start time integrations or recoveries from them on
+        the period-1 model do not expect (tests/link_comparison.py: the two-stage train
+        has a stable period-2 orbit at 358.25 Hz), and a period-2 sweep of a large model
+        costs many period-1 sweeps (the two-stage train's 34 points at H = 45: 20 s with
+        period 1, 360 s with "auto").
     **options
         Passed to :func:`nlgrd.nonlinear.sweep.sweep` (``directions``, ``tol``,
         ``stability`` (default True), ``jump``, ...).
@@ -310,13 +392,21 @@ def link_sweep(
     Returns
     -------
     LinkSweepResult
+        With period-2 points the harmonics are of ω/2 (period-1 ones spread onto it) and
+        the links' outputs are over the whole period 2T; ``result.period`` per point.
+
+    Raises
+    ------
+    ModelError
+        A ``period`` other than 1, 2 or "auto", or 2 without stability.
     """
     options.setdefault("stability", True)
     options.setdefault("jump", "auto")
+    check_period(period, options["stability"])
     omegas = np.asarray(omegas, dtype=float)
     top = float(np.max(np.abs(omegas))) if omegas.size else 0.0
+    ladder = [h * model.top_order for h in LADDER]
     if H is None:
-        ladder = [h * model.top_order for h in LADDER]
 
         def on_rung(h):  # a modal basis (large models) serves the check's H' too
             if top > 0:
@@ -329,13 +419,39 @@ def link_sweep(
         if top > 0:  # a modal basis (large models) serves H x the highest frequency
             model.receptance.prepare(H * top)
         res = sweep(model.reduced, omegas, H, mesh=None, **options)
+    p1, p2 = res, None
+    if period != 1 and options["stability"]:
+        H_check = 2 * next_harmonics(p1.H, ladder)  # of ω/2: the check of 2 H harmonics
+
+        def reduced2() -> ReducedModel:
+            two = period_model(model, 2)
+            if top > 0:
+                two.receptance.prepare(H_check * top / 2)
+            return two.reduced
+
+        res, p2 = beyond_period_one(
+            p1,
+            period,
+            reduced2,
+            omegas,
+            options.get("directions", "both"),
+            H_check,
+            rtol,
+            tol=options.get("tol", 1e-10),
+            max_iter=options.get("max_iter", 50),
+        )
+    two = period_model(model, 2) if p2 is not None else None
     rows = []
     for i in range(len(res)):
         row = {}
         ok = bool(res.converged[i]) and not bool(res.no_stable[i])
-        for link, sl in zip(model.links, model.receptance.slices, strict=True):
+        on_two = two is not None and int(res.period[i]) == 2
+        # a period-2 point over 2T on the base ω/2, a period-1 one on its own harmonics
+        links = two.links if on_two else model.links
+        z, w = (res.harmonics[i], res.omega[i] / 2) if on_two else (p1.harmonics[i], res.omega[i])
+        for link, sl in zip(links, model.receptance.slices, strict=True):
             if ok:
-                values = link.metrics(res.harmonics[i][sl], float(res.omega[i]))
+                values = link.metrics(z[sl], float(w))
             else:
                 values = dict.fromkeys(metric_names(link), np.nan)
             row.update({f"{link.name}.{k}": v for k, v in values.items()})

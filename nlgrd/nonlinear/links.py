@@ -19,6 +19,10 @@ The contract (:class:`NonlinearLink`):
   ``converged_outputs``, the names of those whose change with the number of harmonics
   estimates the truncation error (:mod:`nlgrd.nonlinear.harmonic_convergence`; all of
   them when a link has none).
+- ``subharmonic(nu)`` (optional): the same link on the base ω/ν of a period-ν model
+  (:func:`nlgrd.nonlinear.link_model.period_model`): whatever it holds in harmonics of
+  the base moves from harmonic k to νk. A link without it must not depend on the base
+  (a clearance: its law is the same at every instant) and is used as it is.
 
 The gear mesh with backlash (:class:`GearMeshLink`) and the bearing with radial clearance
 (:class:`BearingClearance`) are the two kinds; the solver treats them alike.
@@ -27,7 +31,7 @@ The gear mesh with backlash (:class:`GearMeshLink`) and the bearing with radial 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Protocol, runtime_checkable
 
@@ -37,10 +41,11 @@ from numpy.typing import NDArray
 from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError, check_positive
 from nlgrd.nonlinear.clearance import RadialClearanceLaw
-from nlgrd.nonlinear.force_laws import BacklashMesh
+from nlgrd.nonlinear.force_laws import BacklashMesh, ParametricMesh
 from nlgrd.nonlinear.harmonics import evaluate, real_to_complex, sample
 from nlgrd.nonlinear.mesh_law import gear_mesh_force
 from nlgrd.nonlinear.metrics import metrics_from_harmonics
+from nlgrd.nonlinear.subharmonic import spread
 from nlgrd.rotor.system import RotorSystem
 
 _UY, _UZ = 1, 2  # translational DOFs of a node in the y-z plane
@@ -253,6 +258,21 @@ class BearingClearance:
         """
         return np.zeros((H + 1, 2), dtype=complex)
 
+    def subharmonic(self, nu: int) -> BearingClearance:
+        """The link on the base ω/ν: the same (its law does not depend on the angle).
+
+        Parameters
+        ----------
+        nu : int
+            Base periods of the new base [-].
+
+        Returns
+        -------
+        BearingClearance
+            ``self``.
+        """
+        return self
+
     def orbit(self, harmonics: NDArray, n_samples: int = 512) -> NDArray:
         """(u_y, u_z) over one period, (2, n_samples) [m].
 
@@ -370,6 +390,28 @@ class GearMeshLink:
         mesh = gear_mesh_force(gp, link.stiffness, link.damping, 30, order=order)
         return cls(name or f"mesh{index}", mesh, np.asarray(link.w, dtype=float), index, order)
 
+    def subharmonic(self, nu: int) -> GearMeshLink:
+        """The link on the base ω/ν of a period-ν model: the mesh at harmonic ν m, its LSTE
+        (and a varying stiffness) harmonic k moved to νk (:func:`~nlgrd.nonlinear.subharmonic.spread`).
+
+        Parameters
+        ----------
+        nu : int
+            Base periods of the new base [-], >= 1.
+
+        Returns
+        -------
+        GearMeshLink
+            The same mesh force law in time, in harmonics of ω/ν.
+        """
+        if int(nu) != nu or nu < 1:
+            raise ModelError("period", f"a whole number of base periods >= 1, got {nu!r}")
+        nu = int(nu)
+        mesh = replace(self.mesh, lste=spread(self.mesh.lste, nu))
+        if isinstance(mesh, ParametricMesh):
+            mesh = replace(mesh, stiffness_variation=spread(mesh.stiffness_variation, nu))
+        return replace(self, mesh=mesh, order=self.order * nu)
+
     @property
     def excitation_harmonics(self) -> int:
         """The highest base harmonic of its LSTE [-]."""
@@ -403,8 +445,6 @@ class GearMeshLink:
         -------
         BacklashMesh
         """
-        from dataclasses import replace
-
         return replace(self.mesh, coord=int(coords[0]))
 
     def pointwise(self, y: NDArray, theta: float) -> tuple[NDArray, NDArray]:
