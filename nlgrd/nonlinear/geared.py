@@ -36,7 +36,7 @@ from nlgrd.nonlinear.harmonic_convergence import (
     next_harmonics,
 )
 from nlgrd.nonlinear.harmonics import real_to_complex
-from nlgrd.nonlinear.mesh_law import gear_mesh_force
+from nlgrd.nonlinear.mesh_law import gear_mesh_force, mesh_law
 from nlgrd.nonlinear.receptance import MeshReceptance
 from nlgrd.nonlinear.results import ContinuationResult, SweepResult
 from nlgrd.nonlinear.state_space import LinearStateSpace
@@ -499,7 +499,9 @@ def sdof_model(system: RotorSystem):
     Returns
     -------
     SDOFGearPair
-        m_eq [kg], k_h [N/m], b [m], W_0 [N], c_m [N s/m] and 30 LSTE harmonics [m].
+        m_eq [kg], k_h [N/m], b [m], W_0 [N], c_m [N s/m] and 30 LSTE harmonics [m]; with a
+        varying mesh stiffness its ρ(θ) and the effective unloaded error of
+        :func:`~nlgrd.nonlinear.mesh_law.mesh_law`.
 
     Raises
     ------
@@ -515,6 +517,15 @@ def sdof_model(system: RotorSystem):
     lste = np.empty(2 * len(ex.a) + 1)
     lste[0] = ex.e0
     lste[1::2], lste[2::2] = ex.a, ex.b
+    rho = np.ones(1)
+    if gp.stiffness_harmonics() is not None:
+        if gp.error_period != 1:
+            raise ModelError(
+                "stiffness_variation",
+                "the single-DOF model is mesh-periodic: a varying mesh stiffness with errors that "
+                f"repeat every {gp.error_period} mesh cycles needs the FE model (shaft_order_sweep)",
+            )
+        lste, rho = mesh_law(gp, 30)  # the effective unloaded error with k_h ρ(θ)
     return SDOFGearPair(
         mass=gp.equivalent_mass(system),
         mesh_stiffness=gp.stiffness(),
@@ -522,6 +533,7 @@ def sdof_model(system: RotorSystem):
         static_load=gp.static_load,
         lste=lste,
         damping=gp.damping_coefficient(system),
+        stiffness_variation=rho,
     )
 
 
