@@ -305,7 +305,7 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
     fine = model.cache.get(
         ("period", nu, nu * H_check),
         lambda: build_geared_model(
-            model.system, model.max_mesh_frequency, nu * H_check, model.receptance.method, period=nu
+            model.system, model.max_mesh_frequency, nu * H_check, model.receptance.requested_method, period=nu
         ),
     )
     check = check_harmonics(fine.reduced, on_base, nu * H_check, jumps=False)

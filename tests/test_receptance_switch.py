@@ -1,5 +1,5 @@
 """The "auto" receptance of a mid-size model: direct sparse solves for a short sweep, the
-pole-residue form once a sweep has solved ``POLES_AFTER`` frequencies (issue 10).
+pole-residue form once a sweep has solved ``POLES_AFTER`` new frequencies (issue 10).
 
 Reference: the same sweep with ``receptance="direct"`` (exact sparse LU per frequency).
 The pole-residue form is exact up to rounding of one eigendecomposition per harmonic
@@ -8,6 +8,7 @@ outputs leaves room for the Newton tolerance (1e-10) acting on slightly differen
 receptances, and is far below any physical difference (a 1e-3 change of the mesh damping
 moves the DTE RMS by ~1e-4)."""
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -28,13 +29,42 @@ def test_auto_turns_to_poles_after_a_short_sweep_with_the_direct_answers():
     assert rc.POLES_LIMIT < n_mesh <= rc.POLES_LATE_LIMIT  # the case this test is about
     assert auto.receptance.method == "direct"
     direct = build_geared_model(system, float(omegas.max()), H=5, receptance="direct")
+    probe = build_geared_model(system, float(omegas.max()), H=5).receptance
+    for w in omegas[: rc.POLES_AFTER]:  # POLES_AFTER new frequencies, each asked twice
+        probe.kappa(float(w), 5)
+        probe.kappa_derivative(float(w), 5)
+    assert probe.method == "direct" and probe.n_direct == rc.POLES_AFTER
+    probe.kappa(float(omegas[-1]), 5)  # the next new one: pole-residue form
+    assert probe.method == "poles" and probe.n_direct == rc.POLES_AFTER
+    assert probe.requested_method == "auto"
     kw = dict(H=5, stability=False, directions="up")
     a = geared_sweep(system, omegas, model=auto, **kw).mesh
-    d = geared_sweep(system, omegas, model=direct, **kw).mesh
-    assert auto.receptance.method == "poles"  # switched on the way
+    assert auto.receptance.method == "poles" and auto.receptance.n_direct == rc.POLES_AFTER
     assert max(auto.receptance.pole_check.values()) < 1e-8
+    d = geared_sweep(system, omegas, model=direct, **kw).mesh
+    assert direct.receptance.n_direct >= omegas.size and direct.receptance.method == "direct"
     assert np.array_equal(a.converged, d.converged) and a.converged.all()
     fa, fd = a.to_frame(), d.to_frame()
+    assert np.sum(fd["contact_loss_fraction [-]"] > 0) >= 20  # nonlinear points compared
     for col in ("dte_rms [um]", "force_max [N]", "dslr [-]"):
         ref = fd[col].to_numpy()
         assert np.max(np.abs(fa[col].to_numpy() - ref)) <= 1e-8 * np.max(np.abs(ref)), col
+
+
+def test_auto_stays_direct_with_tabulated_bearings():
+    """Bearings tabulated against speed keep the dense per-frequency path (the pole-residue
+    form needs Z_k quadratic in ω): "auto" must not turn to it."""
+    system = load_model(MODEL)
+    b = system.bearings[0]
+    tab = dataclasses.replace(
+        b,
+        kyy=(b.kyy, 1.01 * b.kyy),
+        kzz=(b.kzz, 1.01 * b.kzz),
+        speeds=(0.0, 1e4),
+    )
+    system = dataclasses.replace(system, bearings=(tab, *system.bearings[1:]))
+    m = build_geared_model(system, 2 * np.pi * 3000.0, H=2)
+    assert m.receptance.method == "direct" and m.receptance._poles_after is None
+    for w in 2 * np.pi * np.linspace(1000.0, 3000.0, rc.POLES_AFTER + 5):
+        m.receptance.kappa(float(w), 2)
+    assert m.receptance.method == "direct" and m.receptance.n_direct == rc.POLES_AFTER + 5

@@ -104,7 +104,7 @@ def _value_and_slope(z: NDArray, theta: NDArray) -> tuple[NDArray, NDArray]:
     return z[0] + c @ a + s @ b, c @ (k * b) - s @ (k * a)
 
 
-#: Finest grid of the sampled crossing search; the companion matrix (of size 4D for D
+#: Finest grid of the sampled crossing search; the companion matrix (of size 2D for D
 #: harmonics: seconds above D ~ 500) only when it cannot certify a near-tangency.
 MAX_CROSSING_SAMPLES = 2**20
 
@@ -112,7 +112,8 @@ MAX_CROSSING_SAMPLES = 2**20
 def _plain_newton(z: NDArray, t: NDArray, level: NDArray, lo: NDArray, hi: NDArray) -> NDArray | None:
     """Three unguarded Newton steps from the chord estimates ``t`` of crossings bracketed in
     [lo, hi]; the roots when every last step is below 1e-9 (quadratic convergence: the
-    error is then ~1e-18 rad) and inside its bracket, else None (the safeguarded loop)."""
+    error is then at the root's conditioning, as the safeguarded loop's) and inside its
+    bracket, else None (the safeguarded loop)."""
     step = np.zeros_like(t)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for _ in range(3):

@@ -389,7 +389,7 @@ def _beyond_period_one(model: GearedModel, p1: SweepResult, omegas, directions, 
         return model.cache.get(
             ("period 2", H_check),
             lambda: build_geared_model(
-                model.system, model.max_mesh_frequency, H_check, model.receptance.method, period=2
+                model.system, model.max_mesh_frequency, H_check, model.receptance.requested_method, period=2
             ),
         )
 
@@ -506,7 +506,8 @@ def sdof_model(system: RotorSystem):
     Raises
     ------
     ModelError
-        Not exactly one gear pair.
+        Not exactly one gear pair, or a varying mesh stiffness with errors that differ from
+        tooth to tooth (the single-DOF model is mesh-periodic).
     """
     from nlgrd.nonlinear.sdof import SDOFGearPair
 
@@ -521,7 +522,7 @@ def sdof_model(system: RotorSystem):
     if gp.stiffness_harmonics() is not None:
         if gp.error_period != 1:
             raise ModelError(
-                "stiffness_variation",
+                "stiffness_file" if gp.stiffness_file is not None else "stiffness_variation",
                 "the single-DOF model is mesh-periodic: a varying mesh stiffness with errors that "
                 f"repeat every {gp.error_period} mesh cycles needs the FE model (shaft_order_sweep)",
             )

@@ -197,6 +197,11 @@ def period_model(model: LinkModel, nu: int = 2) -> LinkModel:
     -------
     LinkModel
         Solved at ω/ν for a base frequency ω of ``model`` (its ``period`` ν).
+
+    Raises
+    ------
+    ModelError
+        ν not an integer >= 1, or ``model`` without the loads it was built with.
     """
     plan = model.receptance.plan.subharmonic(nu)  # checks nu
     if int(nu) == 1:
@@ -204,8 +209,9 @@ def period_model(model: LinkModel, nu: int = 2) -> LinkModel:
 
     def make() -> LinkModel:
         links = tuple(lk.subharmonic(int(nu)) if hasattr(lk, "subharmonic") else lk for lk in model.links)
-        loads = model.loads or dict(unbalance=(), gravity=None, method="auto", max_frequency=None)
-        return _reduce(model.system, links, plan, loads, model.period * int(nu))
+        if not model.loads:
+            raise ModelError("model", "a period-ν model needs the loads of its model (build_link_model)")
+        return _reduce(model.system, links, plan, model.loads, model.period * int(nu))
 
     return model.cache.get(("period", int(nu)), make)
 

@@ -279,7 +279,11 @@ def geared_model_of(model: GearedModel) -> Callable[[int], ReducedModel]:
         return model.cache.get(
             key,
             lambda: build_geared_model(
-                model.system, model.max_mesh_frequency, nu * model.H, model.receptance.method, period=nu
+                model.system,
+                model.max_mesh_frequency,
+                nu * model.H,
+                model.receptance.requested_method,
+                period=nu,
             ),
         ).reduced
 

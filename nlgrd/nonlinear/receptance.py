@@ -10,16 +10,14 @@ on the mesh coordinates Y = Wᵀ q only (Maliha, Doğruer & Özgüven 2004, Eq. 
 the compact form of model.md §3); every other coordinate follows linearly as
 Q_k = Z_k⁻¹ W (F_k - G_k).
 
-Mean (k = 0): with K_r = Z_0 + W diag(k_h) Wᵀ (the linear system with the meshes at
-their average stiffness), κ_0 = (Wᵀ K_r⁻¹ W)⁻¹ - diag(k_h) and F_0 = (Wᵀ K_r⁻¹ W)⁻¹ Wᵀ
-K_r⁻¹ F_static. When a free torsional rigid-body mode moves the mesh (a drive train
-held only by the mesh), Wᵀ K_r⁻¹ W = 1/k_h and κ_0 = 0: the mean mesh force equals the
-static load. Rigid-body modes that do not move any mesh (a closed four-square loop)
-are removed by a bordered solve with the constraint Rᵀ M q = 0, so the mean
-deflection is the one M-orthogonal to them; a static load with a component on such a
-mode is an error.
+Mean (k = 0): with K_r = Z_0 + W diag(k_h) Wᵀ (the meshes at k_h), κ_0 = (Wᵀ K_r⁻¹
+W)⁻¹ - diag(k_h) and F_0 = (Wᵀ K_r⁻¹ W)⁻¹ Wᵀ K_r⁻¹ F_static; κ_0 = 0 when a free
+torsional rigid-body mode moves the mesh (the mean mesh force is the static load).
+Rigid-body modes that move no mesh (a closed four-square loop) are removed by a bordered
+solve with Rᵀ M q = 0; a static load with a component on such a mode is an error.
 
 Three ways to get h_k = Wᵀ Z_k⁻¹ W:
+
 - ``"direct"``: a sparse LU factorisation of Z_k per harmonic and frequency (exact),
   restricted to the connected components of Z's sparsity graph that hold a mesh or an
   output DOF (axial bars, say, never couple to a spur mesh);
@@ -40,9 +38,8 @@ bearings the reduced Z_k(ω) = A_0 + ω A_1 + ω² A_2 is a quadratic matrix pol
 (A_0 = K + hysteretic part, whose whirl signs are constant for ω > 0; A_1 = s K_c + i k
 C; A_2 = -k² M + i k s G). One eigendecomposition of its companion linearisation per
 harmonic then gives the pole-residue form h_k(ω) = Σ_j R_j / (ω - λ_j) and dh_k/dω =
--Σ_j R_j / (ω - λ_j)² (Tisseur & Meerbergen 2001, SIAM Rev. 43:235, §3.4): per point
-a few vector products, independent of the model size (not with tabulated bearings).
-"""
+-Σ_j R_j / (ω - λ_j)² (Tisseur & Meerbergen 2001, SIAM Rev. 43:235, §3.4): per point a
+few vector products, independent of the model size."""
 
 from __future__ import annotations
 
@@ -67,9 +64,8 @@ DIRECT_LIMIT = 3000
 #: Up to this many DOFs reached by a mesh, ``method="auto"`` uses the pole-residue form of
 #: the whole model (one eigendecomposition per harmonic: 60 ms at 83 DOFs, 250 ms at 210).
 POLES_LIMIT = 100
-#: Up to this many, "auto" solves directly for POLES_AFTER frequencies (a short sweep),
-#: then turns to the pole-residue form (a long sweep, where it costs less than the
-#: direct solves it replaces). Each form is checked against a direct solve (pole_residue).
+#: Up to this many, "auto" solves POLES_AFTER new frequencies directly (a short sweep), then
+#: turns to the pole-residue form (a long sweep: cheaper than the solves it replaces).
 POLES_LATE_LIMIT = 300
 POLES_AFTER = 200
 
@@ -149,13 +145,14 @@ class MeshReceptance:
         s_p = abs(system.shafts[g0.pinion_shaft].speed_ratio)
         self.period = int(period)  # they are taken at ω_mesh / period
         self.speed_per_mesh_frequency = period / (g0.geometry.teeth_pinion * s_p)
-        #: direct solves left before "auto" turns to the pole-residue form (None: never)
-        self._poles_after = None
+        #: the method asked for (derived models are built with it), the frequencies solved
+        #: directly, and how many more before "auto" turns to the pole-residue form
+        self.requested_method, self.n_direct, self._poles_after = method, 0, None
         if method == "auto":
             n = self.model.n_dofs
             n_mesh = 0 if self.model.tabulated_bearings else len(self._mesh_component())
             method = "poles" if 0 < n_mesh <= POLES_LIMIT else ("direct" if n <= DIRECT_LIMIT else "modal")
-            if method == "direct" and n_mesh <= POLES_LATE_LIMIT:
+            if method == "direct" and 0 < n_mesh <= POLES_LATE_LIMIT:
                 self._poles_after = POLES_AFTER
         if method not in ("poles", "direct", "modal"):
             raise ModelError("method", f"must be 'auto', 'poles', 'direct' or 'modal', got {method!r}")
@@ -195,7 +192,7 @@ class MeshReceptance:
     # mean problem
     def _rigid_body_split(self) -> NDArray:
         """Rigid-body modes of the linear system with the meshes in (none move a mesh)."""
-        R = rigid_body_modes(self.model.K + self._mesh_stiffness(), self.model.M)
+        R = rigid_body_modes(self.model.stiffness(0.0) + self._mesh_stiffness(), self.model.M)
         check_balanced(R, self.static_force, "torque", "the static torques")
         return R
 
@@ -438,10 +435,11 @@ class MeshReceptance:
         dh_k/dω (continuation, jumps) is computed only when ``derivative`` is asked for.
         """
         key = float(omega)
-        if self._poles_after is not None and self._poles_after <= 0:
-            self._poles_after, self.method = None, "poles"
-            self._build_full_basis()
         hit = self._solve_cache.get(key)
+        if hit is None and self._poles_after is not None and self._poles_after <= 0:
+            self._poles_after, self.method = None, "poles"  # at the next new frequency
+            self._build_full_basis()
+            self._solve_cache.clear()  # one form per frequency
         if hit is not None and (hit[2] is not None or not derivative):
             if hit[0].shape[0] >= H:
                 return [hit[0][:H], hit[1][:H], None if hit[2] is None else hit[2][:H]]
@@ -483,8 +481,10 @@ class MeshReceptance:
                     dh[k - 1] = -cw @ (Yg * g[:, None])
                 self._unshift(slice(k - 1, k), h, U, dh if derivative else None)
             elif self.method == "direct":
-                if self._poles_after is not None and k == start:
-                    self._poles_after -= 1
+                if k == start and hit is None:  # a new frequency
+                    self.n_direct += 1
+                    if self._poles_after is not None:
+                        self._poles_after -= 1
                 keep, sel, Z, rows, cols, Wk, out = self._restricted()
                 Z.data = self.model.dynamic_stiffness_data(w, speed)[sel]
                 lu = spla.splu(Z, permc_spec="MMD_AT_PLUS_A")
