@@ -54,7 +54,7 @@ overlay measurements (none is shipped). The CSV curves it writes are then checke
 Each run also leaves what ``reports/index.html`` shows: a caption for every figure
 (``figures.json``) and the settings it used (``settings.json``); checked too.
 
-Total time about 1.5-2 minutes (three notebooks in fast mode).
+Total time about 3 minutes (three notebooks in fast mode, one BLAS thread: tests/conftest.py).
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ from nlgrd.nonlinear.harmonics import complex_to_real, real_to_complex
 #: Damped Newton gives up after this many failed line searches in a row, or when ||R||
 #: fell by less than 10 % over the last ``STALL_WINDOW`` iterations.
 STALL_LIMIT = 8
-STALL_WINDOW = 10
+STALL_WINDOW = 25
 
 
 def _newton(
