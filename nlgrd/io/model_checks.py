@@ -104,15 +104,8 @@ def check_lste_files(system: RotorSystem) -> None:
         if not path or not _is_gear_mesh(g):
             continue
         key = f"gear_pairs[{i}].lste_file"
-        try:
-            ex = read_excitation(path, teeth_pinion=g.geometry.teeth_pinion)
-        except ModelError as exc:
-            detail = f"{exc.key}: {exc.message}" if exc.key else exc.message
-            raise ModelError(key, f"cannot use {path}: {detail}") from None
-        except OSError as exc:
-            raise ModelError(key, f"cannot read {path}: {exc.strerror or exc}") from None
-        except (ValueError, LookupError, TypeError) as exc:
-            raise ModelError(key, f"cannot read {path}: {type(exc).__name__}: {exc}") from None
+        z1 = g.geometry.teeth_pinion
+        ex = _read_gear_file(key, path, lambda path=path, z1=z1: read_excitation(path, teeth_pinion=z1))
         pp = ex.peak_to_peak
         depth = tooth_depth(g.geometry)
         backlash = g.geometry.backlash
@@ -129,6 +122,19 @@ def check_lste_files(system: RotorSystem) -> None:
                 f"times the backlash ({backlash * 1e6:.4g} um; at most {LSTE_BACKLASH_FACTOR:g} times "
                 "is accepted): check the unit (ste_m or ste_um)",
             )
+
+
+def _read_gear_file(key: str, path, read):
+    """``read()``, its failures as one :class:`ModelError` naming ``key`` and ``path``."""
+    try:
+        return read()
+    except ModelError as exc:
+        detail = f"{exc.key}: {exc.message}" if exc.key else exc.message
+        raise ModelError(key, f"cannot use {path}: {detail}") from None
+    except OSError as exc:
+        raise ModelError(key, f"cannot read {path}: {exc.strerror or exc}") from None
+    except (ValueError, LookupError, TypeError) as exc:
+        raise ModelError(key, f"cannot read {path}: {type(exc).__name__}: {exc}") from None
 
 
 def check_gear_files(system: RotorSystem) -> None:
@@ -172,15 +178,7 @@ def check_stiffness_files(system: RotorSystem) -> None:
         if not path or not _is_gear_mesh(g):
             continue
         key = f"gear_pairs[{i}].stiffness_file"
-        try:
-            shape = g.stiffness_shape()
-        except ModelError as exc:
-            detail = f"{exc.key}: {exc.message}" if exc.key else exc.message
-            raise ModelError(key, f"cannot use {path}: {detail}") from None
-        except OSError as exc:
-            raise ModelError(key, f"cannot read {path}: {exc.strerror or exc}") from None
-        except (ValueError, LookupError, TypeError) as exc:
-            raise ModelError(key, f"cannot read {path}: {type(exc).__name__}: {exc}") from None
+        shape = _read_gear_file(key, path, g.stiffness_shape)
         if shape.mean is None:
             continue
         try:
