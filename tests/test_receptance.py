@@ -130,7 +130,7 @@ def test_direct_solves_only_the_components_that_reach_the_mesh(system):
     import scipy.sparse.csgraph as csg
 
     mr = MeshReceptance(system, method="direct")
-    keep = mr._restricted()[0]
+    keep = mr._direct().keep
     assert 0 < len(keep) < system.n_dofs
     Z = abs(mr.model.dynamic_stiffness(2 * np.pi * 1000.0, 10.0))
     dist = csg.shortest_path(Z, unweighted=True, indices=np.flatnonzero(mr.W[:, 0]))

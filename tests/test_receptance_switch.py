@@ -1,5 +1,6 @@
-"""The "auto" receptance of a mid-size model: direct sparse solves for a short sweep, the
-pole-residue form once a sweep has solved ``POLES_AFTER`` new frequencies (issue 10).
+"""The "auto" receptance of a mid-size model whose dynamic stiffness has a wide band:
+direct sparse solves for a short sweep, the pole-residue form once a sweep has solved
+``POLES_AFTER`` new frequencies (issue 10); with a narrow band, direct solves throughout.
 
 Reference: the same sweep with ``receptance="direct"`` (exact sparse LU per frequency).
 The pole-residue form is exact up to rounding of one eigendecomposition per harmonic
@@ -14,13 +15,17 @@ from pathlib import Path
 import numpy as np
 
 from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear import direct_receptance as dr
 from nlgrd.nonlinear import receptance as rc
 from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode, geared_sweep
 
 MODEL = Path(__file__).resolve().parents[1] / "data" / "models" / "two_shaft.toml"
 
 
-def test_auto_turns_to_poles_after_a_short_sweep_with_the_direct_answers():
+def test_auto_turns_to_poles_after_a_short_sweep_with_the_direct_answers(monkeypatch):
+    """Where Z's band is wide (sparse LU per frequency; here forced by lowering
+    BAND_LIMIT, as a model with many cross-couplings would have it)."""
+    monkeypatch.setattr(dr, "BAND_LIMIT", -1)
     system = load_model(MODEL)
     f = float(round(gear_pair_mode(system)[0]))
     omegas = 2 * np.pi * np.linspace(0.6 * f, 1.4 * f, rc.POLES_AFTER + 40)
@@ -49,6 +54,16 @@ def test_auto_turns_to_poles_after_a_short_sweep_with_the_direct_answers():
     for col in ("dte_rms [um]", "force_max [N]", "dslr [-]"):
         ref = fd[col].to_numpy()
         assert np.max(np.abs(fa[col].to_numpy() - ref)) <= 1e-8 * np.max(np.abs(ref)), col
+
+
+def test_auto_stays_direct_with_a_narrow_band():
+    """With a narrow band (two_shaft: half bandwidth 7 without the mesh damping) a direct
+    solve costs less than a twentieth of the pole-residue set-up per harmonic, and "auto"
+    stays direct however long the sweep."""
+    system = load_model(MODEL)
+    m = build_geared_model(system, 2 * np.pi * 6000.0, H=2)
+    assert m.receptance.method == "direct" and m.receptance._poles_after is None
+    assert m.receptance._direct().banded
 
 
 def test_auto_stays_direct_with_tabulated_bearings():

@@ -125,7 +125,9 @@ def _plain_newton(z: NDArray, t: NDArray, level: NDArray, lo: NDArray, hi: NDArr
     return None
 
 
-def _sampled_crossings(z: NDArray, levels: tuple[float, ...], refine: int = 1) -> NDArray | None:
+def _sampled_crossings(
+    z: NDArray, levels: tuple[float, ...], refine: int = 1, xs: NDArray | None = None
+) -> NDArray | None:
     """Crossings of ``levels`` by sign changes on a dense grid, polished by safeguarded Newton.
 
     Returns None when a grid cell might hide two crossings. Certificate: with
@@ -138,7 +140,8 @@ def _sampled_crossings(z: NDArray, levels: tuple[float, ...], refine: int = 1) -
     H = n_harmonics(z)
     N = refine * default_aft_samples(H)
     h = 2 * np.pi / N
-    xs = sample(z, N)
+    if xs is None or xs.size != N:
+        xs = sample(z, N)
     k = np.arange(1, H + 1)
     amp = np.hypot(z[1::2], z[2::2])
     tiny = 1e-14 * (np.max(np.abs(xs)) + 1e-300)
@@ -255,9 +258,11 @@ def contact_intervals(x: ArrayLike, b: float, crossings: str = "auto") -> Contac
     amp = np.hypot(x[1::2], x[2::2])
     bound = float(np.sum(amp))  # |x(θ) - x_0| <= Σ |X_k|
     lo, hi = x[0] - bound, x[0] + bound
+    xs = None
     if amp.size and lo <= b and hi >= -b:
-        # tighter: n samples, and x departs from its chords by at most Σ k² |X_k| h² / 8
-        n = max(64, int(2 ** np.ceil(np.log2(2 * amp.size + 2))))
+        # tighter: on the crossing search's grid, x departs from its chords by at most
+        # Σ k² |X_k| h² / 8
+        n = default_aft_samples(amp.size)
         xs = sample(x, n)
         margin = float(np.sum(np.arange(1, amp.size + 1) ** 2 * amp)) * (2 * np.pi / n) ** 2 / 8
         lo, hi = max(lo, float(np.min(xs)) - margin), min(hi, float(np.max(xs)) + margin)
@@ -271,7 +276,7 @@ def contact_intervals(x: ArrayLike, b: float, crossings: str = "auto") -> Contac
         for refine in (1, 8, 64):
             if refine > 1 and n0 * refine > MAX_CROSSING_SAMPLES:
                 break
-            breaks = _sampled_crossings(x, levels, refine=refine)
+            breaks = _sampled_crossings(x, levels, refine=refine, xs=xs if refine == 1 else None)
             if breaks is not None:
                 break
     if breaks is None:

@@ -18,11 +18,13 @@ solve with Rᵀ M q = 0; a static load with a component on such a mode is an err
 
 Three ways to get h_k = Wᵀ Z_k⁻¹ W:
 
-- ``"direct"``: a sparse LU factorisation of Z_k per harmonic and frequency (exact),
-  restricted to the connected components of Z's sparsity graph that hold a mesh or an
-  output DOF (axial bars, say, never couple to a spur mesh);
+- ``"direct"``: a factorisation per harmonic and frequency (exact), restricted to the
+  connected components of Z's sparsity graph that hold a mesh or an output DOF (axial
+  bars, say, never couple to a spur mesh): banded LU of Z_k without the mesh damping,
+  which is added back by the Sherman-Morrison-Woodbury identity, or sparse LU of Z_k
+  when its band is wide (:mod:`nlgrd.nonlinear.direct_receptance`);
 - ``"poles"`` (the default up to ``POLES_LIMIT`` DOFs, and up to ``POLES_LATE_LIMIT``
-  after ``POLES_AFTER`` frequencies solved directly): the pole-residue form below of
+  after ``POLES_AFTER`` frequencies solved directly by sparse LU): the pole-residue form below of
   the whole model (no truncation), made of Z'_k = Z_k + W diag(k_h) Wᵀ, which is
   regular at ω = 0 where a mesh is a shaft's only torsional support, and turned back by
   the Sherman-Morrison-Woodbury identity h_k = h'_k (I - K h'_k)⁻¹ (the shift of
@@ -53,6 +55,7 @@ from numpy.typing import NDArray
 from scipy.sparse.csgraph import connected_components
 
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.direct_receptance import DirectSolver
 from nlgrd.nonlinear.modal_basis import STABILITY_MODE_CAP, attachment_basis, lowest_modes, rigid_decoupled
 from nlgrd.nonlinear.pole_residue import POLE_CHECK_RTOL, PoleResidue
 from nlgrd.rotor.assembly import LinearModel, assemble, mesh_matrix
@@ -64,8 +67,10 @@ DIRECT_LIMIT = 3000
 #: Up to this many DOFs reached by a mesh, ``method="auto"`` uses the pole-residue form of
 #: the whole model (one eigendecomposition per harmonic: 60 ms at 83 DOFs, 250 ms at 210).
 POLES_LIMIT = 100
-#: Up to this many, "auto" solves POLES_AFTER new frequencies directly (a short sweep), then
-#: turns to the pole-residue form (a long sweep: cheaper than the solves it replaces).
+#: Up to this many, "auto" solves POLES_AFTER new frequencies by sparse LU (a short sweep),
+#: then turns to the pole-residue form (a long sweep: cheaper than the solves it replaces).
+#: A narrow band (direct_receptance.BAND_LIMIT) stays direct: 0.05 ms per harmonic at 210
+#: DOFs against 230 ms for the set-up.
 POLES_LATE_LIMIT = 300
 POLES_AFTER = 200
 
@@ -104,8 +109,8 @@ class MeshReceptance:
     method : {"auto", "poles", "direct", "modal"}
         How h_k is computed (see module docstring); "auto": "poles" up to
         ``POLES_LIMIT`` DOFs (those a mesh reaches) without tabulated bearings, "direct"
-        up to ``DIRECT_LIMIT`` (turning to "poles" after ``POLES_AFTER`` frequencies up
-        to ``POLES_LATE_LIMIT`` DOFs), "modal" above.
+        up to ``DIRECT_LIMIT`` (with a wide band, turning to "poles" after ``POLES_AFTER``
+        frequencies up to ``POLES_LATE_LIMIT`` DOFs), "modal" above.
     max_frequency : float, optional
         Highest excitation frequency the modal basis must serve [rad/s] (H times the
         highest mesh frequency); required for ``"modal"``.
@@ -148,11 +153,14 @@ class MeshReceptance:
         #: the method asked for (derived models are built with it), the frequencies solved
         #: directly, and how many more before "auto" turns to the pole-residue form
         self.requested_method, self.n_direct, self._poles_after = method, 0, None
+        self.output_dofs = np.zeros(0, dtype=int)
+        self._direct_solver = None
         if method == "auto":
             n = self.model.n_dofs
             n_mesh = 0 if self.model.tabulated_bearings else len(self._mesh_component())
             method = "poles" if 0 < n_mesh <= POLES_LIMIT else ("direct" if n <= DIRECT_LIMIT else "modal")
-            if method == "direct" and 0 < n_mesh <= POLES_LATE_LIMIT:
+            late = method == "direct" and 0 < n_mesh <= POLES_LATE_LIMIT
+            if late and not self._direct().banded:  # a band solve is cheaper than the poles' set-up
                 self._poles_after = POLES_AFTER
         if method not in ("poles", "direct", "modal"):
             raise ModelError("method", f"must be 'auto', 'poles', 'direct' or 'modal', got {method!r}")
@@ -168,8 +176,6 @@ class MeshReceptance:
         #: relative difference of the pole-residue h_k from a direct solve, per harmonic k
         self.pole_check: dict[int, float] = {}
         self.max_frequency = None if max_frequency is None else float(max_frequency)
-        self.output_dofs = np.zeros(0, dtype=int)
-        self._restriction = None
         self._stability_basis: dict[float, tuple] = {}
         self._shift = None
         if method == "poles":
@@ -302,7 +308,7 @@ class MeshReceptance:
         self._solve_cache.clear()
         self._poles.clear()
         self._stacks.clear()
-        self._restriction = None
+        self._direct_solver = None
 
     def _mesh_component(self, extra=()) -> NDArray:
         """DOFs in the connected components of Z's sparsity graph that hold a mesh DOF
@@ -314,51 +320,26 @@ class MeshReceptance:
         need = np.concatenate([np.flatnonzero(np.any(self.W != 0, axis=1)), np.asarray(extra, dtype=int)])
         return np.flatnonzero(np.isin(label, label[need]))
 
-    def _restricted(self) -> tuple:
-        """The part of Z the direct solves need: the connected components of its sparsity
-        graph that hold a mesh or an output DOF (axial DOFs, say, are decoupled from the
-        mesh; leaving them out is exact). Returns (kept DOFs, selection of the pattern's
-        non-zeros, a CSC matrix on the restricted pattern whose data each solve replaces,
-        row and column of each non-zero, W's rows, output rows)."""
-        if self._restriction is None:
-            pat = self.model._pattern
-            n = self.model.n_dofs
+    def _direct(self) -> DirectSolver:
+        """The per-frequency factorisation (:mod:`nlgrd.nonlinear.direct_receptance`) on
+        the connected components of Z's sparsity graph that hold a mesh or an output DOF
+        (axial DOFs, say, are decoupled from the mesh; leaving them out is exact)."""
+        if self._direct_solver is None:
+            bare = assemble(self.system, mesh_stiffness=False, mesh_damping=False)
             keep = self._mesh_component(self.output_dofs)
-            new = np.full(n, -1)
-            new[keep] = np.arange(len(keep))
-            col = np.repeat(np.arange(n), np.diff(pat["indptr"]))
-            sel = np.flatnonzero((new[pat["indices"]] >= 0) & (new[col] >= 0))
-            nk = len(keep)
-            indptr = np.concatenate([[0], np.cumsum(np.bincount(new[col[sel]], minlength=nk))])
-            rows, cols = new[pat["indices"][sel]], new[col[sel]]
-            Z = sp.csc_matrix((np.zeros(len(sel), dtype=complex), rows, indptr), shape=(nk, nk))
-            Wk = np.ascontiguousarray(self.W[keep], dtype=complex)
-            self._restriction = (keep, sel, Z, rows, cols, Wk, new[self.output_dofs])
-        return self._restriction
+            self._direct_solver = DirectSolver(
+                self.model, bare, self.W, self.c_m, keep, self.output_dofs, self.speed_per_mesh_frequency
+            )
+        return self._direct_solver
 
-    def _dZ(self, k: int, omega: float, speed: float, reduced: bool):
-        """dZ_k/dω along a sweep (Ω = ω / N_p): tabulated bearings and hysteresis held fixed.
-
-        Reduced: a dense matrix; full: its non-zeros on ``LinearModel._pattern``."""
+    def _dZ(self, k: int, omega: float, speed: float) -> NDArray:
+        """dZ_k/dω of the reduced model along a sweep (Ω = ω / N_p): tabulated bearings and
+        hysteresis held fixed."""
         sp_w = self.speed_per_mesh_frequency
         w = k * omega
-        if reduced:
-            r = self._red
-            return (
-                sp_w * r["Kc"]
-                - 2 * k * w * r["M"]
-                + 1j * k * (r["C"] + speed * r["G"])
-                + 1j * w * sp_w * r["G"]
-            )
-        m = self.model
-        pat = m._pattern
-        data = (
-            sp_w * pat["Kc"]
-            - 2 * k * w * pat["M"]
-            + 1j * k * (pat["C"] + pat["Ci"] + speed * pat["G"])
-            + 1j * w * sp_w * pat["G"]
-        )
-        return data  # non-zeros on the model's pattern (CSC order)
+        r = self._red
+        damp = r["C"] + speed * r["G"]
+        return sp_w * r["Kc"] - 2 * k * w * r["M"] + 1j * k * damp + 1j * w * sp_w * r["G"]
 
     def _pole_residues(self, k: int) -> tuple[NDArray, NDArray, NDArray, NDArray] | None:
         """Poles λ_j and residue factors of harmonic k in the modal basis (see module docstring).
@@ -468,6 +449,16 @@ class MeshReceptance:
                 dh[start - 1 :] = -cw @ (Yg * g[:, :, None])
             self._unshift(slice(start - 1, H), h, U, dh if derivative else None)
             start = H + 1
+        if self.method == "direct" and start <= H:  # every harmonic at once
+            if hit is None:  # a new frequency
+                self.n_direct += 1
+                if self._poles_after is not None:
+                    self._poles_after -= 1
+            rows = slice(start - 1, H)
+            h[rows], U[rows], d = self._direct().solve(np.arange(start, H + 1), omega, derivative)
+            if derivative:
+                dh[rows] = d
+            start = H + 1
         for k in range(start, H + 1):
             w = k * omega
             pr = self._pole_residues(k) if poles else None
@@ -480,21 +471,6 @@ class MeshReceptance:
                 if derivative:
                     dh[k - 1] = -cw @ (Yg * g[:, None])
                 self._unshift(slice(k - 1, k), h, U, dh if derivative else None)
-            elif self.method == "direct":
-                if k == start and hit is None:  # a new frequency
-                    self.n_direct += 1
-                    if self._poles_after is not None:
-                        self._poles_after -= 1
-                keep, sel, Z, rows, cols, Wk, out = self._restricted()
-                Z.data = self.model.dynamic_stiffness_data(w, speed)[sel]
-                lu = spla.splu(Z, permc_spec="MMD_AT_PLUS_A")
-                u = lu.solve(Wk)
-                h[k - 1] = Wk.T.real @ u
-                U[k - 1] = u[out]
-                if derivative:  # dh = -vᵀ dZ u, summed over the non-zeros of dZ
-                    v = lu.solve(Wk, trans="T")
-                    d = self._dZ(k, omega, speed, False)[sel]
-                    dh[k - 1] = -np.einsum("ri,r,rj->ij", v[rows], d, u[cols])
             else:
                 Z = self._reduced_Z(w, speed)
                 Wr = self._W_red.astype(complex)
@@ -504,7 +480,7 @@ class MeshReceptance:
                 U[k - 1] = self.basis[self.output_dofs] @ y
                 if derivative:
                     x = sla.lu_solve(lu, Wr, trans=1)
-                    dh[k - 1] = -x.T @ (self._dZ(k, omega, speed, True) @ y)
+                    dh[k - 1] = -x.T @ (self._dZ(k, omega, speed) @ y)
         if len(self._solve_cache) > 20000:
             self._solve_cache.clear()
         out = self._solve_cache[key] = [h, U, dh]
