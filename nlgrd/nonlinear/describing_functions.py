@@ -95,13 +95,19 @@ def _companion_crossings(z: NDArray, level: float, tol_circle: float = 1e-3) -> 
     return np.mod(theta, 2 * np.pi)
 
 
-def _value_and_slope(z: NDArray, theta: NDArray) -> tuple[NDArray, NDArray]:
-    """x(θ) and dx/dθ of real harmonics ``z`` at angles ``theta``."""
+def _trig(z: NDArray) -> tuple:
+    """(x_0, k, a_k, b_k, k b_k, k a_k) of real harmonics ``z``, for :func:`_value_and_slope`."""
     k = np.arange(1, n_harmonics(z) + 1)
+    a, b = z[1::2], z[2::2]
+    return z[0], k, a, b, k * b, k * a
+
+
+def _value_and_slope(tr: tuple, theta: NDArray) -> tuple[NDArray, NDArray]:
+    """x(θ) and dx/dθ at angles ``theta`` of the polynomial ``tr`` (:func:`_trig`)."""
+    x0, k, a, b, kb, ka = tr
     kt = np.multiply.outer(theta, k)
     c, s = np.cos(kt), np.sin(kt)
-    a, b = z[1::2], z[2::2]
-    return z[0] + c @ a + s @ b, c @ (k * b) - s @ (k * a)
+    return x0 + c @ a + s @ b, c @ kb - s @ ka
 
 
 #: Finest grid of the sampled crossing search; the companion matrix (of size 2D for D
@@ -109,7 +115,7 @@ def _value_and_slope(z: NDArray, theta: NDArray) -> tuple[NDArray, NDArray]:
 MAX_CROSSING_SAMPLES = 2**20
 
 
-def _plain_newton(z: NDArray, t: NDArray, level: NDArray, lo: NDArray, hi: NDArray) -> NDArray | None:
+def _plain_newton(tr: tuple, t: NDArray, level: NDArray, lo: NDArray, hi: NDArray) -> NDArray | None:
     """Three unguarded Newton steps from the chord estimates ``t`` of crossings bracketed in
     [lo, hi]; the roots when every last step is below 1e-9 (quadratic convergence: the
     error is then at the root's conditioning, as the safeguarded loop's) and inside its
@@ -117,7 +123,7 @@ def _plain_newton(z: NDArray, t: NDArray, level: NDArray, lo: NDArray, hi: NDArr
     step = np.zeros_like(t)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for _ in range(3):
-            val, der = _value_and_slope(z, t)
+            val, der = _value_and_slope(tr, t)
             step = (val - level) / der
             t = t - step
     if np.all(np.abs(step) <= 1e-9) and np.all((t >= lo) & (t <= hi)):
@@ -166,11 +172,12 @@ def _sampled_crossings(
     lo, hi = j * h, (j + 1) * h
     dlo, dhi = d[li, j], dn[li, j]
     t = lo + h * dlo / (dlo - dhi)
-    fast = _plain_newton(z, t, level, lo, hi)
+    tr = _trig(z)
+    fast = _plain_newton(tr, t, level, lo, hi)
     if fast is not None:
         return np.mod(fast, 2 * np.pi)
     for _ in range(40):
-        val, der = _value_and_slope(z, t)
+        val, der = _value_and_slope(tr, t)
         val = val - level
         left = (val > 0) == (dlo > 0)
         lo, dlo = np.where(left, t, lo), np.where(left, val, dlo)

@@ -199,8 +199,8 @@ class BacklashMesh:
         return self.cache.get(("lste samples", int(n_samples)), make)
 
     def elastic_samples(self, delta: NDArray) -> NDArray:
-        """Elastic force at θ_j = 2πj/N for N equally spaced δ samples (N,) [N]."""
-        e = self.lste_samples(delta.size)[0]
+        """Elastic force at θ_j = 2πj/N for N equally spaced δ samples (..., N) [N]."""
+        e = self.lste_samples(delta.shape[-1])[0]
         return self.stiffness * deadzone(delta - e, self.half_backlash)
 
 
@@ -242,8 +242,8 @@ class ContactStop(BacklashMesh):
         return self.stiffness * np.maximum(x - self.half_backlash, 0.0)
 
     def elastic_samples(self, delta: NDArray) -> NDArray:
-        """Contact force at θ_j = 2πj/N for N equally spaced samples (N,) [N]."""
-        e = self.lste_samples(delta.size)[0]
+        """Contact force at θ_j = 2πj/N for N equally spaced samples (..., N) [N]."""
+        e = self.lste_samples(delta.shape[-1])[0]
         return self.stiffness * np.maximum(delta - e - self.half_backlash, 0.0)
 
 
@@ -329,8 +329,8 @@ class ParametricMesh(BacklashMesh):
         return self.stiffness * evaluate(self.stiffness_variation, np.asarray(theta, dtype=float))
 
     def elastic_samples(self, delta: NDArray) -> NDArray:
-        """Elastic force k_h ρ f(δ - e) at θ_j = 2πj/N for N equally spaced δ samples [N]."""
-        n = delta.size
+        """Elastic force k_h ρ f(δ - e) at θ_j = 2πj/N for N equally spaced δ samples (..., N) [N]."""
+        n = delta.shape[-1]
         rho = self.cache.get(("rho samples", n), lambda: sample(self.stiffness_variation, n))
         return super().elastic_samples(delta) * rho
 

@@ -177,26 +177,65 @@ def metrics_from_harmonics(harmonics, omega: float, mesh: BacklashMesh, n_sample
     MeshMetrics
         The metrics in SI units; all NaN when a harmonic is not finite.
     """
-    z = np.asarray(harmonics, dtype=float).reshape(-1)
-    H = n_harmonics(z)
-    if not np.all(np.isfinite(z)):
-        return MeshMetrics.nan(H)
-    amp = np.abs(real_to_complex(z))
-    rms = float(np.sqrt(np.sum(amp[1:] ** 2) / 2))
-    th = time_history(z, omega, mesh, n_samples)
-    iv = mesh.intervals(z)
-    W0 = _static_load(mesh, th.force)
-    return MeshMetrics(
-        dte_mean=float(z[0]),
-        dte_rms=rms,
-        dte_p2p=float(np.ptp(th.delta)),
-        dte_amplitudes=amp,
-        force_max=float(np.max(th.force)),
-        force_min=float(np.min(th.force)),
-        dslr=float(np.max(th.force) / W0),
-        contact_loss_fraction=1.0 - iv.contact_fraction,
-        back_contact=iv.back_contact,
-    )
+    z = np.asarray(harmonics, dtype=float).reshape(1, -1)
+    return metrics_of_points(z, np.array([float(omega)]), mesh, n_samples)[0]
+
+
+def metrics_of_points(
+    harmonics, omegas, mesh: BacklashMesh, n_samples: int = 2048, intervals=None
+) -> list[MeshMetrics]:
+    """:func:`metrics_from_harmonics` of many points at once (one FFT of all of them).
+
+    Parameters
+    ----------
+    harmonics : array_like (P, 2H+1)
+        Real harmonics of δ per point [m].
+    omegas : array_like (P,)
+        Mesh frequency of each point [rad/s].
+    mesh : BacklashMesh
+        The mesh: LSTE, k_h, b, c_m and W_0.
+    n_samples : int
+        Samples per period for the extremes.
+    intervals : sequence of ContactIntervals, optional
+        The points' contact intervals (``mesh.intervals`` of each, which a sweep has at
+        hand when it solves the point); computed when not given.
+
+    Returns
+    -------
+    list of MeshMetrics
+        One per point, all NaN where a harmonic is not finite.
+    """
+    Z = np.atleast_2d(np.asarray(harmonics, dtype=float))
+    H = n_harmonics(Z)
+    out: list[MeshMetrics | None] = [None] * Z.shape[0]
+    ok = np.all(np.isfinite(Z), axis=1)
+    for i in np.flatnonzero(~ok):
+        out[i] = MeshMetrics.nan(H)
+    rows = np.flatnonzero(ok)
+    if rows.size:
+        Zs, w = Z[rows], np.asarray(omegas, dtype=float)[rows][:, None]
+        amp = np.abs(real_to_complex(Zs))
+        rms = np.sqrt(np.sum(amp[:, 1:] ** 2, axis=-1) / 2)
+        delta = sample(Zs, n_samples)
+        ddot = w * sample(differentiate(Zs), n_samples)
+        de = mesh.lste_samples(n_samples)[1]
+        force = mesh.elastic_samples(delta) + mesh.damping * (ddot - w * de)
+        fmax, fmin, p2p = np.max(force, axis=-1), np.min(force, axis=-1), np.ptp(delta, axis=-1)
+        W0 = np.full(rows.size, float(mesh.static_load)) if mesh.static_load else np.mean(force, axis=-1)
+        for j, i in enumerate(rows):
+            iv = mesh.intervals(Zs[j]) if intervals is None else intervals[i]
+            out[i] = MeshMetrics(
+                dte_mean=float(Zs[j, 0]),
+                dte_rms=float(rms[j]),
+                dte_p2p=float(p2p[j]),
+                dte_amplitudes=amp[j].copy(),
+                force_max=float(fmax[j]),
+                force_min=float(fmin[j]),
+                dslr=float(fmax[j] / W0[j]),
+                contact_loss_fraction=1.0 - iv.contact_fraction,
+                back_contact=iv.back_contact,
+            )
+    return out
 
 
 def metrics_from_history(history: TimeHistory, mesh: BacklashMesh, H: int = 15) -> MeshMetrics:

@@ -20,7 +20,7 @@ from nlgrd.nonlinear.floquet import floquet_multipliers
 from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonic_balance import HarmonicSolution, ReducedModel
 from nlgrd.nonlinear.landing import WANDER_ITER
-from nlgrd.nonlinear.metrics import MeshMetrics, metrics_from_harmonics
+from nlgrd.nonlinear.metrics import MeshMetrics, metrics_of_points
 from nlgrd.nonlinear.results import (
     STABLE_RTOL,
     SweepResult,
@@ -240,6 +240,7 @@ def _sweep_pass(
     candidates for a landing."""
     landings = []
     rows: dict[str, list] = {k: [] for k in ("w", "d", "z", "c", "r", "i", "f", "m", "j", "n", "u")}
+    todo: list[tuple] = []  # (row, harmonics of δ, ω, contact intervals) whose metrics are due
     z_end = None
     for direction, order in sweep_orders(omegas, directions):
         z, last_w = (z0 if z_end is None or not chain else z_end), None
@@ -333,12 +334,11 @@ def _sweep_pass(
                             fmax, dom = dominant_multiplier(
                                 floquet_multipliers(ss, model.nonlinearities, z, w)
                             )
-            coord = mesh.coord if mesh is not None else 0
-            met = (
-                metrics_from_harmonics(sol.harmonics[coord], w, mesh, n_samples)
-                if mesh is not None and not lost
-                else MeshMetrics.nan(H)
-            )
+            met = MeshMetrics.nan(H)  # the mesh's metrics: all points at once below
+            if mesh is not None and not lost:
+                met = None
+                z = np.asarray(sol.harmonics[mesh.coord], dtype=float).reshape(-1)
+                todo.append((len(rows["m"]), z, float(w), mesh.intervals(z)))
             for k, v in zip(
                 "wdzcrifm",
                 (w, direction, sol.harmonics, sol.converged, sol.residual, sol.iterations, fmax, met),
@@ -350,6 +350,11 @@ def _sweep_pass(
                 landings.append((direction, float(w), z_prev, sol.harmonics))
             rows["n"].append(lost)
             rows["u"].append(dom)
+    if todo:
+        at, zs, ws, ivs = zip(*todo, strict=True)
+        mets = metrics_of_points(np.array(zs), np.array(ws), mesh, n_samples, ivs)
+        for i, met in zip(at, mets, strict=True):
+            rows["m"][i] = met
     result = assemble_result(
         rows["w"],
         rows["d"],
