@@ -197,7 +197,7 @@ class Probe:
 
     A wrapped call charges its own time (minus nested wrapped calls) to its phase. A
     "sticky" phase (jumps, bearing recovery) takes everything inside it. The sweep's
-    per-point metrics call marks the end of each point, so every point's time is known
+    placeholder metrics of each point (MeshMetrics.nan) mark its end, so every point's time is known
     by phase; points that needed a branch switch or failed are then booked as a whole.
     """
 
@@ -245,8 +245,9 @@ class Probe:
         w(nl_hb.ReducedModel, "linear_state_space", "stability")
         w(nl_sweep, "solve", "Newton")
         w(nl_sweep, "floquet_multipliers", "stability")
-        w(nl_sweep, "metrics_from_harmonics", "output metrics", boundary=True)
-        w(nl_sweep.MeshMetrics, "nan", "output metrics", boundary=True)  # a point without a stable response
+        # every point starts with placeholder metrics: the end of the point
+        w(nl_sweep.MeshMetrics, "nan", "output metrics", boundary=True)
+        w(nl_sweep, "metrics_of_points", "output metrics")  # all points at once, after the last
         w(nl_sweep, "jump_to_branch", "jump", sticky=True)
         for name in ("restart", "follow_branch", "pool_candidates", "approach"):  # landings
             w(nl_landing, name, "jump", sticky=True)
@@ -305,6 +306,10 @@ def timed_sweep(system, model, omegas, H, directions="both", stability=False) ->
     regular = ~switch & ~failed & ~lost
     per_point = np.array([sum(p.values()) for p in probe.points])
     phases = {p: sum(probe.points[i].get(p, 0.0) for i in np.nonzero(regular)[0]) for p in POINT_PHASES}
+    # the metrics of all points, computed after the last one (booked to the regular points)
+    phases["output metrics"] += probe.acc.get("output metrics", 0.0) - sum(
+        p.get("output metrics", 0.0) for p in probe.points
+    )
     phases["jumps"] = float(per_point[switch].sum())
     phases["failed points"] = float(per_point[failed].sum())
     phases["no stable response"] = float(per_point[lost].sum())

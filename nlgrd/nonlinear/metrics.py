@@ -211,9 +211,16 @@ def metrics_of_points(
     ok = np.all(np.isfinite(Z), axis=1)
     for i in np.flatnonzero(~ok):
         out[i] = MeshMetrics.nan(H)
-    rows = np.flatnonzero(ok)
+    omegas = np.asarray(omegas, dtype=float)
+    for block in np.array_split(np.flatnonzero(ok), max(1, int(np.sum(ok)) // 64)):
+        _metrics_block(Z, omegas, block, mesh, n_samples, intervals, out)
+    return out
+
+
+def _metrics_block(Z, omegas, rows, mesh, n_samples, intervals, out) -> None:
+    """:func:`metrics_of_points` of the points ``rows`` (a block that fits the cache), in ``out``."""
     if rows.size:
-        Zs, w = Z[rows], np.asarray(omegas, dtype=float)[rows][:, None]
+        Zs, w = Z[rows], omegas[rows][:, None]
         amp = np.abs(real_to_complex(Zs))
         rms = np.sqrt(np.sum(amp[:, 1:] ** 2, axis=-1) / 2)
         delta = sample(Zs, n_samples)
@@ -235,7 +242,6 @@ def metrics_of_points(
                 contact_loss_fraction=1.0 - iv.contact_fraction,
                 back_contact=iv.back_contact,
             )
-    return out
 
 
 def metrics_from_history(history: TimeHistory, mesh: BacklashMesh, H: int = 15) -> MeshMetrics:
