@@ -37,17 +37,19 @@ BAND_LIMIT = 64
 COND_MAX = 1e6
 
 
-def dynamic_stiffness_derivative(
-    model: LinearModel, harmonic: int, omega: float, speed_per: float
-) -> NDArray:
-    """dZ_k/dω along a sweep, on the model's sparsity pattern.
+def dynamic_stiffness_derivative(parts, harmonic, omega: float, speed_per: float):
+    """dZ_k/dω along a sweep (Ω = ``speed_per`` ω): tabulated bearings and hysteresis held fixed.
+
+    Z_k = K + Ω K_c - (kω)² M + i kω (C + C_i + Ω G), so dZ_k/dω = s K_c - 2k²ω M
+    + i k (C + C_i + Ω G) + i kω s G with s = ``speed_per``.
 
     Parameters
     ----------
-    model : LinearModel
-        The linear model (its ``_pattern``: the union pattern of its matrices).
-    harmonic : int
-        k, the harmonic of the mesh frequency (Z_k is taken at kω).
+    parts : mapping
+        The matrices (or their non-zeros on one pattern) under the keys "Kc", "M", "C",
+        "G" and optionally "Ci" (``LinearModel._pattern``, or a model reduced on a basis).
+    harmonic : int or ndarray
+        k, the harmonic of the mesh frequency (an array broadcasts against the parts).
     omega : float
         Mesh frequency ω [rad/s].
     speed_per : float
@@ -56,18 +58,12 @@ def dynamic_stiffness_derivative(
     Returns
     -------
     ndarray of complex
-        The non-zeros of dZ_k/dω in the pattern's CSC order [N s/m]; tabulated bearings
-        and hysteresis held fixed.
+        dZ_k/dω in the layout of ``parts`` [N s/m].
     """
-    pat = model._pattern
-    k = harmonic
-    w, speed = k * omega, speed_per * omega
-    return (
-        speed_per * pat["Kc"]
-        - 2 * k * w * pat["M"]
-        + 1j * k * (pat["C"] + pat["Ci"] + speed * pat["G"])
-        + 1j * w * speed_per * pat["G"]
-    )
+    k, s = harmonic, speed_per
+    w, speed = k * omega, s * omega
+    damping = parts["C"] + parts.get("Ci", 0.0) + speed * parts["G"]
+    return s * parts["Kc"] - 2 * k * w * parts["M"] + 1j * k * damping + 1j * w * s * parts["G"]
 
 
 class _Restriction:
@@ -182,12 +178,8 @@ class DirectSolver:
         """dZ'_k/dω on the band's pattern, one row per harmonic in ``ks``."""
         p, s = self._parts, self.speed_per
         if p is None:
-            m, sel = self.bare.model, self.bare.sel
-            return np.stack([dynamic_stiffness_derivative(m, k, omega, s)[sel] for k in ks])
-        k = ks[:, None].astype(float)
-        w, speed = k * omega, s * omega
-        damp = p["C"] + p["Ci"] + speed * p["G"]
-        return s * p["Kc"] - 2 * k * w * p["M"] + 1j * k * damp + 1j * w * s * p["G"]
+            p = {key: self.bare.model._pattern[key][self.bare.sel] for key in ("Kc", "M", "C", "Ci", "G")}
+        return dynamic_stiffness_derivative(p, ks[:, None].astype(float), omega, s)
 
     def solve(self, harmonics, omega: float, derivative: bool) -> tuple[NDArray, NDArray, NDArray | None]:
         """Receptances of the given harmonics at one mesh frequency.
@@ -272,7 +264,7 @@ class DirectSolver:
         dh = None
         if derivative:  # dh = -vᵀ dZ u, summed over the non-zeros of dZ
             v = lu.solve(self.W, trans="T")
-            d = dynamic_stiffness_derivative(r.model, k, omega, self.speed_per)[r.sel]
+            d = dynamic_stiffness_derivative(r.model._pattern, k, omega, self.speed_per)[r.sel]
             dh = -np.einsum("ri,r,rj->ij", v[r.rows], d, u[r.cols])
         return h, u[self.out], dh
 

@@ -55,7 +55,7 @@ from numpy.typing import NDArray
 from scipy.sparse.csgraph import connected_components
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.direct_receptance import DirectSolver
+from nlgrd.nonlinear.direct_receptance import DirectSolver, dynamic_stiffness_derivative
 from nlgrd.nonlinear.modal_basis import STABILITY_MODE_CAP, attachment_basis, lowest_modes, rigid_decoupled
 from nlgrd.nonlinear.pole_residue import POLE_CHECK_RTOL, PoleResidue
 from nlgrd.rotor.assembly import LinearModel, assemble, mesh_matrix
@@ -332,14 +332,10 @@ class MeshReceptance:
             )
         return self._direct_solver
 
-    def _dZ(self, k: int, omega: float, speed: float) -> NDArray:
+    def _dZ(self, k: int, omega: float) -> NDArray:
         """dZ_k/dω of the reduced model along a sweep (Ω = ω / N_p): tabulated bearings and
         hysteresis held fixed."""
-        sp_w = self.speed_per_mesh_frequency
-        w = k * omega
-        r = self._red
-        damp = r["C"] + speed * r["G"]
-        return sp_w * r["Kc"] - 2 * k * w * r["M"] + 1j * k * damp + 1j * w * sp_w * r["G"]
+        return dynamic_stiffness_derivative(self._red, k, omega, self.speed_per_mesh_frequency)
 
     def _pole_residues(self, k: int) -> tuple[NDArray, NDArray, NDArray, NDArray] | None:
         """Poles λ_j and residue factors of harmonic k in the modal basis (see module docstring).
@@ -480,7 +476,7 @@ class MeshReceptance:
                 U[k - 1] = self.basis[self.output_dofs] @ y
                 if derivative:
                     x = sla.lu_solve(lu, Wr, trans=1)
-                    dh[k - 1] = -x.T @ (self._dZ(k, omega, speed) @ y)
+                    dh[k - 1] = -x.T @ (self._dZ(k, omega) @ y)
         if len(self._solve_cache) > 20000:
             self._solve_cache.clear()
         out = self._solve_cache[key] = [h, U, dh]
