@@ -101,6 +101,39 @@ def test_non_convergence_is_flagged():
     assert list(frame["converged"]) == list(res.converged)
 
 
+def test_a_failed_point_leaves_the_next_start_alone(monkeypatch):
+    """After a point that did not converge, the sweep starts the next from the last
+    converged orbit (a failed point's harmonics are NaN and must not become the start).
+
+    One Newton iteration solves a full-contact (linear) point from any start but not a
+    point with contact loss: swept from 0.5 to 2 ω_n, the points around the resonance fail
+    and those far above it, in full contact again, must converge to the linear answer
+    (independent reference: Newton with its default iterations at each of them). Every
+    start the sweep hands to Newton is recorded: all finite."""
+    import nlgrd.nonlinear.sweep as sweep_module
+
+    starts = []
+
+    def recording(problem, z=None, **kw):
+        starts.append(None if z is None else np.asarray(z, dtype=float).copy())
+        return solve(problem, z, **kw)
+
+    monkeypatch.setattr(sweep_module, "solve", recording)
+    model = kubo()
+    rm = model.reduced_model()
+    wn = model.natural_frequency
+    om = np.linspace(0.5, 2.0, 31) * wn
+    res = sweep(rm, om, 5, "up", max_iter=1, fallback=False, jump="none", stability=False)
+    assert len(starts) == om.size and all(s is None or np.all(np.isfinite(s)) for s in starts)
+    bad = np.flatnonzero(~res.converged)
+    assert bad.size > 0 and bad[-1] < om.size - 3
+    after = np.arange(bad[-1] + 1, om.size)
+    assert np.all(res.converged[after])
+    for i in after:
+        ref = solve(rm.at(om[i], 5))
+        assert np.max(np.abs(res.harmonics[i] - ref.harmonics)) <= 1e-9 * np.max(np.abs(ref.harmonics))
+
+
 def test_two_decoupled_coordinates_equal_two_scalar_problems():
     """An n_nl = 2 problem with diagonal κ equals the two scalar problems solved apart.
 

@@ -337,8 +337,9 @@ def _sweep_pass(
             met = MeshMetrics.nan(H)  # the mesh's metrics: all points at once below
             if mesh is not None and not lost:
                 met = None
-                z = np.asarray(sol.harmonics[mesh.coord], dtype=float).reshape(-1)
-                todo.append((len(rows["m"]), z, float(w), mesh.intervals(z)))
+                zm = np.asarray(sol.harmonics[mesh.coord], dtype=float).reshape(-1)
+                ivs = mesh.intervals(zm) if np.all(np.isfinite(zm)) else None
+                todo.append((len(rows["m"]), zm, float(w), ivs))
             for k, v in zip(
                 "wdzcrifm",
                 (w, direction, sol.harmonics, sol.converged, sol.residual, sol.iterations, fmax, met),
