@@ -74,8 +74,8 @@ def test_band_and_sparse_paths_agree(monkeypatch):
     sparse.set_output_dofs(out)
     assert not sparse._direct().banded
     for om in 2 * np.pi * np.array([450.0, 1800.0, 4100.0]):
-        a, b = band._solve(om, 5, derivative=True), sparse._solve(om, 5, derivative=True)
-        for x, y in zip(a, b, strict=True):
+        got, ref = band._solve(om, 5, derivative=True), sparse._solve(om, 5, derivative=True)
+        for x, y in zip(got, ref, strict=True):
             assert rel(x, y) < 1e-10
     assert sparse._direct().n_band == 0
 
@@ -103,3 +103,30 @@ def test_mode_only_the_mesh_damps():
     hr, _ = dense(mr, w, 1)
     assert rel(h, hr) < 1e-10
     assert d.n_band == 1 and d.n_sparse == 0
+
+
+def test_speed_tabulated_bearings_take_the_model_data_path(monkeypatch):
+    """With a bearing tabulated against speed the band's non-zeros come from the model per
+    frequency (no precomputed parts): the band path still equals sparse LU of Z, h_k,
+    responses and dh_k/dω (both hold the tabulated coefficients fixed in dh/dω)."""
+    import dataclasses
+
+    system = load_model(MODELS / "two_shaft.toml")
+    b = system.bearings[0]
+    tab = dataclasses.replace(
+        b, kyy=(b.kyy, 1.3 * b.kyy), kzz=(b.kzz, 1.2 * b.kzz), cyy=(b.cyy, 2 * b.cyy), speeds=(0.0, 1e3)
+    )
+    system = dataclasses.replace(system, bearings=(tab, *system.bearings[1:]))
+    out = np.arange(0, system.n_dofs, 9)
+    band = MeshReceptance(system, method="direct")
+    band.set_output_dofs(out)
+    assert band._direct().banded and band._direct()._parts is None
+    monkeypatch.setattr(dr, "BAND_LIMIT", -1)
+    sparse = MeshReceptance(system, method="direct")
+    sparse.set_output_dofs(out)
+    for om in 2 * np.pi * np.array([700.0, 2500.0, 4800.0]):
+        got, ref = band._solve(om, 4, derivative=True), sparse._solve(om, 4, derivative=True)
+        for x, y in zip(got, ref, strict=True):
+            assert rel(x, y) < 1e-10
+        hr, Ur = dense(band, om, 4)
+        assert rel(got[0], hr) < 1e-10 and rel(got[1], Ur) < 1e-10
