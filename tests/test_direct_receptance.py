@@ -107,8 +107,9 @@ def test_mode_only_the_mesh_damps():
 
 def test_speed_tabulated_bearings_take_the_model_data_path(monkeypatch):
     """With a bearing tabulated against speed the band's non-zeros come from the model per
-    frequency (no precomputed parts): the band path still equals sparse LU of Z, h_k,
-    responses and dh_k/dω (both hold the tabulated coefficients fixed in dh/dω)."""
+    frequency (no precomputed parts): the band path still equals sparse LU of Z and dense
+    solves, h_k, responses and dh_k/dω (both hold the tabulated coefficients at the current
+    speed in dh/dω, and keep the i kω of its damping)."""
     import dataclasses
 
     system = load_model(MODELS / "two_shaft.toml")
@@ -130,3 +131,69 @@ def test_speed_tabulated_bearings_take_the_model_data_path(monkeypatch):
             assert rel(x, y) < 1e-10
         hr, Ur = dense(band, om, 4)
         assert rel(got[0], hr) < 1e-10 and rel(got[1], Ur) < 1e-10
+
+
+@pytest.mark.parametrize("banded", [True, False])
+def test_speed_tabulated_bearing_derivative_keeps_its_damping(monkeypatch, banded):
+    """A bearing "tabulated" with the same coefficients at every speed is the plain bearing:
+    dh_k/dω must equal the finite differences of h_k, the i k C_b term of its damping
+    included (it was left out before 2026-12-05: 5.7e-3 off at 317 Hz)."""
+    import dataclasses
+
+    if not banded:
+        monkeypatch.setattr(dr, "BAND_LIMIT", -1)
+    system = load_model(MODELS / "two_shaft.toml")
+    b = system.bearings[0]
+    tab = dataclasses.replace(
+        b, kyy=(b.kyy, b.kyy), kzz=(b.kzz, b.kzz), cyy=(b.cyy, b.cyy), czz=(b.czz, b.czz), speeds=(0.0, 1e4)
+    )
+    system = dataclasses.replace(system, bearings=(tab, *system.bearings[1:]))
+    mr = MeshReceptance(system, method="direct")
+    assert mr._direct().banded == banded
+    for f in (317.0, 2513.0):
+        om = 2 * np.pi * f
+        dh = mr._solve(om, 3, derivative=True)[2]
+        eps = 3e-7 * om
+        r = [mr._solve(om + j * eps, 3)[0] for j in (-2, -1, 1, 2)]
+        fd = (r[0] - 8 * r[1] + 8 * r[2] - r[3]) / (12 * eps)
+        assert rel(dh, fd) < 1e-6
+
+
+def test_two_meshes_near_a_mode_only_the_meshes_damp():
+    """The idler train near a mode of its shafts that only the mesh damping reaches: the
+    2 x 2 Woodbury step is ill-conditioned there (its rounding in dh/dω grows as the square
+    of cond(I + D h')), so the solver hands such harmonics to sparse LU of Z. h_k within
+    1e-9 of dense solves and dh_k/dω within 1e-6 of finite differences at 1e-4 .. 1e-6 from
+    the mode (the band path alone gave 2e-5 at cond 2e5)."""
+    system = load_model(MODELS / "idler_train.toml")
+    mr = MeshReceptance(system, method="direct")
+    d = mr._direct()
+    bare, keep = d.bare.model, d.keep
+    K = bare.K.toarray()[np.ix_(keep, keep)]
+    M = bare.M.toarray()[np.ix_(keep, keep)]
+    C = (bare.C + bare.Ci).toarray()[np.ix_(keep, keep)]
+    lam, V = sla.eigh(K, M)
+    undamped = [
+        np.sqrt(v) for v, x in zip(lam, V.T, strict=True) if v > 1.0 and abs(x @ C @ x) < 1e-12 * np.sqrt(v)
+    ]
+    w0 = min(undamped, key=lambda x: abs(x - 2 * np.pi * 3905.0))
+    assert abs(w0 / (2 * np.pi) - 3905.0) < 5.0
+    for off in (1e-4, 1e-5, 1e-6):
+        om = w0 * (1 + off)
+        h, _, dh = mr._solve(om, 1, derivative=True)
+        hr, _ = dense(mr, om, 1)
+        assert rel(h, hr) < 1e-9
+        eps = 3e-7 * om
+        r = [dense(mr, om + j * eps, 1)[0] for j in (-2, -1, 1, 2)]
+        fd = (r[0] - 8 * r[1] + 8 * r[2] - r[3]) / (12 * eps)
+        assert rel(dh, fd) < 1e-6
+    assert d.n_sparse > 0
+
+
+def test_no_dof_reached_gives_zero_receptances():
+    """A mesh that reaches no DOF (its projection zeroed): h_k = 0, no error."""
+    system = load_model(MODELS / "two_shaft.toml")
+    mr = MeshReceptance(system, method="direct")
+    mr.W[:] = 0.0
+    h, U, dh = mr._solve(2 * np.pi * 1000.0, 3, derivative=True)
+    assert not np.any(h) and not np.any(dh) and U.shape[0] == 3

@@ -16,7 +16,8 @@ Z' can be nearly singular where Z is not (a shaft mode that only the mesh damps)
 banded LU is backward stable, so the computed h' is exact for Z' + E with E of rounding
 size, and the identity then gives h exactly for Z + E: with one mesh (S a scalar) the
 result is as accurate as a factorisation of Z. With several meshes the small matrix
-I + D h' amplifies rounding by its condition number; above ``COND_MAX``, or when the band
+I + D h' amplifies rounding by its condition number (dh/dω by its square); above
+``COND_MAX`` (``COND_MAX_DERIVATIVE`` when dh/dω is asked for), or when the band
 is wider than ``BAND_LIMIT`` or Z' exactly singular, Z itself is factorised by sparse LU
 (SuperLU), as it always was. Both paths agree to rounding (tests/test_direct_receptance.py)."""
 
@@ -33,12 +34,15 @@ from nlgrd.rotor.assembly import LinearModel
 
 #: Widest half bandwidth factorised as a band (wider: sparse LU of the whole Z).
 BAND_LIMIT = 64
-#: Above this condition number of I + D h' (several meshes), sparse LU of Z instead.
+#: Above this condition number of I + D h' (several meshes), sparse LU of Z instead; for
+#: dh/dω, whose rounding grows as its square, above ``COND_MAX_DERIVATIVE``.
 COND_MAX = 1e6
+COND_MAX_DERIVATIVE = 1e3
 
 
 def dynamic_stiffness_derivative(parts, harmonic, omega: float, speed_per: float):
-    """dZ_k/dω along a sweep (Ω = ``speed_per`` ω): tabulated bearings and hysteresis held fixed.
+    """dZ_k/dω along a sweep (Ω = ``speed_per`` ω) of the parts given (hysteresis held fixed;
+    speed-tabulated bearings: :func:`model_stiffness_derivative`).
 
     Z_k = K + Ω K_c - (kω)² M + i kω (C + C_i + Ω G), so dZ_k/dω = s K_c - 2k²ω M
     + i k (C + C_i + Ω G) + i kω s G with s = ``speed_per``.
@@ -64,6 +68,36 @@ def dynamic_stiffness_derivative(parts, harmonic, omega: float, speed_per: float
     w, speed = k * omega, s * omega
     damping = parts["C"] + parts.get("Ci", 0.0) + speed * parts["G"]
     return s * parts["Kc"] - 2 * k * w * parts["M"] + 1j * k * damping + 1j * w * s * parts["G"]
+
+
+def model_stiffness_derivative(model: LinearModel, harmonic: int, omega: float, speed_per: float) -> NDArray:
+    """dZ_k/dω of a model along a sweep, speed-tabulated bearings included.
+
+    :func:`dynamic_stiffness_derivative` of the model's matrices plus i k C_b of the
+    bearings tabulated against speed, whose coefficients are held at the current speed
+    (their change with speed is left out; the i kω of the damping term is not).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+    harmonic : int
+        k, the harmonic of the mesh frequency.
+    omega : float
+        Mesh frequency ω [rad/s].
+    speed_per : float
+        Reference speed per mesh frequency, Ω = ``speed_per`` ω [-].
+
+    Returns
+    -------
+    ndarray of complex
+        The non-zeros of dZ_k/dω on ``model._pattern`` (CSC order) [N s/m].
+    """
+    pat = model._pattern
+    data = dynamic_stiffness_derivative(pat, harmonic, omega, speed_per)
+    for (bearing, ratio, _), pos in zip(model.tabulated_bearings, pat["bear"], strict=True):
+        np.add.at(data, pos, (1j * harmonic * bearing.C(ratio * speed_per * omega)).ravel())
+    return data
 
 
 class _Restriction:
@@ -147,8 +181,8 @@ class DirectSolver:
         self.speed_per = float(speed_per)
         self.W = np.ascontiguousarray(W[keep], dtype=complex)
         self.out = self.full.new[np.asarray(output_dofs, dtype=int)]
-        band = _Band(self.bare)
-        self.band = band if band.half_width <= BAND_LIMIT else None
+        band = _Band(self.bare) if self.keep.size else None
+        self.band = band if band is not None and band.half_width <= BAND_LIMIT else None
         if self.band is not None:
             self.W_perm = np.asfortranarray(self.W[band.perm])
             pat, sel = bare._pattern, self.bare.sel
@@ -178,7 +212,8 @@ class DirectSolver:
         """dZ'_k/dω on the band's pattern, one row per harmonic in ``ks``."""
         p, s = self._parts, self.speed_per
         if p is None:
-            p = {key: self.bare.model._pattern[key][self.bare.sel] for key in ("Kc", "M", "C", "Ci", "G")}
+            m, sel = self.bare.model, self.bare.sel
+            return np.stack([model_stiffness_derivative(m, int(k), omega, s)[sel] for k in ks])
         return dynamic_stiffness_derivative(p, ks[:, None].astype(float), omega, s)
 
     def solve(self, harmonics, omega: float, derivative: bool) -> tuple[NDArray, NDArray, NDArray | None]:
@@ -208,6 +243,11 @@ class DirectSolver:
         h = np.empty((len(ks), nc, nc), dtype=complex)
         U = np.empty((len(ks), len(self.out), nc), dtype=complex)
         dh = np.empty((len(ks), nc, nc), dtype=complex) if derivative else None
+        if self.keep.size == 0:  # no DOF a mesh reaches
+            h[:], U[:] = 0.0, 0.0
+            if derivative:
+                dh[:] = 0.0
+            return h, U, dh
         todo = np.ones(len(ks), dtype=bool)
         if self.band is not None:
             done = self._woodbury(ks, omega, derivative, h, U, dh)
@@ -241,7 +281,7 @@ class DirectSolver:
         A = np.eye(nc) + D[:, :, None] * hp
         if nc > 1:
             with np.errstate(all="ignore"):
-                ok &= np.linalg.cond(A) <= COND_MAX
+                ok &= np.linalg.cond(A) <= (COND_MAX_DERIVATIVE if derivative else COND_MAX)
         A[~ok] = np.eye(nc)
         S = np.linalg.inv(A)
         hk = hp @ S
@@ -264,9 +304,16 @@ class DirectSolver:
         dh = None
         if derivative:  # dh = -vᵀ dZ u, summed over the non-zeros of dZ
             v = lu.solve(self.W, trans="T")
-            d = dynamic_stiffness_derivative(r.model._pattern, k, omega, self.speed_per)[r.sel]
+            d = model_stiffness_derivative(r.model, k, omega, self.speed_per)[r.sel]
             dh = -np.einsum("ri,r,rj->ij", v[r.rows], d, u[r.cols])
         return h, u[self.out], dh
 
 
-__all__ = ["DirectSolver", "dynamic_stiffness_derivative", "BAND_LIMIT", "COND_MAX"]
+__all__ = [
+    "DirectSolver",
+    "dynamic_stiffness_derivative",
+    "model_stiffness_derivative",
+    "BAND_LIMIT",
+    "COND_MAX",
+    "COND_MAX_DERIVATIVE",
+]

@@ -333,9 +333,13 @@ class MeshReceptance:
         return self._direct_solver
 
     def _dZ(self, k: int, omega: float) -> NDArray:
-        """dZ_k/dω of the reduced model along a sweep (Ω = ω / N_p): tabulated bearings and
-        hysteresis held fixed."""
-        return dynamic_stiffness_derivative(self._red, k, omega, self.speed_per_mesh_frequency)
+        """dZ_k/dω of the reduced model along a sweep (Ω = ω / N_p): hysteresis and the
+        coefficients of speed-tabulated bearings held fixed (their i kω C_b term is not)."""
+        dZ = dynamic_stiffness_derivative(self._red, k, omega, self.speed_per_mesh_frequency)
+        speed = self.speed(omega)
+        for b, ratio, Vb in self._red_bear:
+            dZ = dZ + 1j * k * (Vb.T @ b.C(ratio * speed) @ Vb)
+        return dZ
 
     def _pole_residues(self, k: int) -> tuple[NDArray, NDArray, NDArray, NDArray] | None:
         """Poles λ_j and residue factors of harmonic k in the modal basis (see module docstring).
