@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from scipy.linalg.lapack import zgbtrf, zgbtrs
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from nlgrd.rotor.assembly import LinearModel
+from nlgrd.rotor.assembly import LinearModel, plain_dynamic_stiffness
 
 #: Widest half bandwidth factorised as a band (wider: sparse LU of the whole Z).
 BAND_LIMIT = 64
@@ -205,8 +205,7 @@ class DirectSolver:
         if p is None:
             m, sel = self.bare.model, self.bare.sel
             return np.stack([m.dynamic_stiffness_data(k * omega, speed)[sel] for k in ks])
-        w = (ks * omega)[:, None]
-        return p["K"] + speed * p["Kc"] - w * w * p["M"] + 1j * w * (p["C"] + p["Ci"] + speed * p["G"])
+        return plain_dynamic_stiffness(p, (ks * omega)[:, None], speed)
 
     def _band_derivative(self, ks: NDArray, omega: float) -> NDArray:
         """dZ'_k/dω on the band's pattern, one row per harmonic in ``ks``."""
@@ -237,8 +236,7 @@ class DirectSolver:
         dh : ndarray (K, n_nl, n_nl) or None
             dh_k/dω [m s/N] when ``derivative``.
         """
-        ks = harmonics
-        ks = np.asarray(ks, dtype=int)
+        ks = np.asarray(harmonics, dtype=int)
         nc = self.W.shape[1]
         h = np.empty((len(ks), nc, nc), dtype=complex)
         U = np.empty((len(ks), len(self.out), nc), dtype=complex)

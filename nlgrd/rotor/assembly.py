@@ -213,12 +213,7 @@ class LinearModel:
     def dynamic_stiffness_data(self, omega: float, speed: float = 0.0) -> NDArray:
         """The non-zeros of :meth:`dynamic_stiffness` on the pattern ``_pattern`` (CSC order)."""
         pat = self._pattern
-        data = (
-            pat["K"]
-            + speed * pat["Kc"]
-            - omega**2 * pat["M"]
-            + 1j * omega * (pat["C"] + pat["Ci"] + speed * pat["G"])
-        )
+        data = plain_dynamic_stiffness(pat, omega, speed)
         for part, (kb, kx) in zip(self.hysteretic_parts, pat["hyst"], strict=True):
             spin = part.speed_ratio * speed
             s1, s2 = np.sign(omega - spin), np.sign(-omega - spin)
@@ -270,6 +265,34 @@ class LinearModel:
             pat["bear"].append(np.searchsorted(keys, c.ravel().astype(np.int64) * n + r.ravel()))
         pat["indices"], pat["indptr"] = union.indices.copy(), union.indptr.copy()
         return pat
+
+
+def plain_dynamic_stiffness(parts, omega, speed: float) -> NDArray:
+    """K + Ω K_c - ω² M + i ω (C + C_i + Ω G) of the parts given (matrices, or their
+    non-zeros on one pattern, under those keys); ``omega`` may be an array that broadcasts
+    against them. Hysteretic parts and speed-tabulated bearings are not included
+    (:meth:`LinearModel.dynamic_stiffness_data` adds them).
+
+    Parameters
+    ----------
+    parts : mapping
+        "K", "Kc", "M", "C", "Ci", "G" [SI].
+    omega : float or ndarray
+        Excitation frequency ω [rad/s].
+    speed : float
+        Reference speed Ω [rad/s].
+
+    Returns
+    -------
+    ndarray of complex
+        The dynamic stiffness in the layout of ``parts`` [N/m].
+    """
+    return (
+        parts["K"]
+        + speed * parts["Kc"]
+        - omega**2 * parts["M"]
+        + 1j * omega * (parts["C"] + parts["Ci"] + speed * parts["G"])
+    )
 
 
 def mesh_matrix(W: NDArray, gains: NDArray) -> sp.csc_matrix:
@@ -387,4 +410,4 @@ def assemble(system: RotorSystem, mesh_stiffness: bool = True, mesh_damping: boo
     )
 
 
-__all__ = ["assemble", "mesh_matrix", "LinearModel", "MeshLink", "DOFS_PER_NODE"]
+__all__ = ["assemble", "mesh_matrix", "plain_dynamic_stiffness", "LinearModel", "MeshLink", "DOFS_PER_NODE"]
