@@ -12,8 +12,8 @@ Three cases, each printed as a table (figures and machine in ``benchmarks/README
    receptances, Newton solves, jumps (points with ``branch_switch``), failed points and
    bearing recovery; ``stability=False`` on the full grid, ``stability=True`` on a
    2 x 15-point subsample with the full sweep extrapolated (``--full-stability`` also
-   runs the full grid with stability, as the library builds it and with a Floquet cache
-   shared by the model's state spaces). Target: under 2 s. Then Floquet per point side
+   runs the full grid with stability, twice, as the library builds it: its state spaces
+   share one Floquet cache). Target: under 2 s. Then Floquet per point side
    by side on the sweep's harmonics: the reference ``method="expm"`` (the method before
    issue 10) against the default, verdicts compared. Target: <= 1 ms per point.
 2. Time integration (HHT-α, :func:`nlgrd.timedomain.geared.time_response`) against
@@ -55,7 +55,6 @@ import sys
 import time
 from collections import defaultdict
 from contextlib import contextmanager
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -403,13 +402,11 @@ def case_sweep(cfg) -> dict:
         plan.append((f"stability=True {nsub} [2]", True, sub, cfg.secondary))
     if cfg.full_stability:
         plan.append(("stability=True full", True, omegas, cfg.primary))
-        plan.append(("stability=True full, shared", True, omegas, cfg.primary))
+        plan.append(("stability=True full, again", True, omegas, cfg.primary))
     runs = {}
     for label, stab, grid, threads in plan:
         with BLAS.threads(threads):
             model, t_build = build()
-            if label.endswith("shared"):
-                model = with_shared_floquet_cache(model)
             t_basis = None
             if stab:
                 t0 = time.perf_counter()
@@ -488,12 +485,9 @@ def case_sweep(cfg) -> dict:
             f"+ basis {tsf:.2f}) -> target < 2 s: {verdict(tot < 2)}; "
             f"stability=False in the same run: {total0:.2f} s"
         )
-        ss_, tbs, tss = runs["stability=True full, shared"]
+        ss_, tbs, tss = runs["stability=True full, again"]
         tot = ss_.total + tbs + tss
-        print(
-            f"  with a Floquet cache shared by the model's state spaces (the change proposed for "
-            f"build_geared_model): {tot:.2f} s -> {verdict(tot < 2)}"
-        )
+        print(f"  the same again: {tot:.2f} s -> {verdict(tot < 2)}")
     if cfg.secondary is not None:
         for a in ("stability=False", f"stability=True {nsub}"):
             s2 = runs[f"{a} [2]"][0]
@@ -502,24 +496,6 @@ def case_sweep(cfg) -> dict:
     with BLAS.threads(cfg.primary):
         floquet_side_by_side(build()[0], st0.result, cfg)
     return {"system": system, "omegas": omegas, "f_mode": f_mode, "sweep": st0, "build": tb0}
-
-
-def with_shared_floquet_cache(model):
-    """``model`` whose state spaces share one :class:`nlgrd.nonlinear.floquet.FloquetCache`.
-
-    What ``build_geared_model`` would do with the proposed one-line change (its
-    ``state_space_at`` passing ``cache=``); built here from the public pieces, the
-    library is not modified.
-    """
-    cache = nl_floquet.FloquetCache(maxsize=4096)
-    mr, top = model.receptance, model.max_mesh_frequency
-
-    @lru_cache(maxsize=4)
-    def state_space_at(omega: float) -> LinearStateSpace:
-        return LinearStateSpace(*mr.state_space(omega, top), cache=cache)
-
-    reduced = dataclasses.replace(model.reduced, state_space_at=state_space_at)
-    return dataclasses.replace(model, reduced=reduced)
 
 
 def floquet_side_by_side(model, result, cfg) -> None:

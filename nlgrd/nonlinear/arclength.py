@@ -18,14 +18,13 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from nlgrd.nonlinear.floquet import floquet_multipliers
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
-from nlgrd.nonlinear.results import STABLE_RTOL, dominant_multiplier, instability_kind
+from nlgrd.nonlinear.results import STABLE_RTOL
 from nlgrd.nonlinear.solvers import solve
 
 
@@ -192,35 +191,6 @@ class Tracer:
 TRACE_TOL = 1e-6
 
 
-class BranchJump(NamedTuple):
-    """What :func:`jump_to_branch` found.
-
-    Attributes
-    ----------
-    harmonics : ndarray or None
-        The landing at the target frequency, shape (n_nl, 2H+1) [m]; None when none was found.
-    steps : int
-        Continuation steps taken.
-    folds : int
-        Turning points passed.
-    unstable : ndarray or None
-        With ``require_stable``, when no stable landing was found: the first crossing of
-        the target that converged but is unstable (harmonics as above), the orbit a sweep
-        reports as "no stable mesh-periodic response"; otherwise None.
-    settled : bool
-        The search stopped at ``unstable`` because it lost stability to a complex pair or
-        a multiplier < -1 after an even number of folds: the branch a slow sweep reaches,
-        where it stays near the orbit (a torus or a period-2 orbit grows around it) rather
-        than looking for another attractor.
-    """
-
-    harmonics: NDArray | None
-    steps: int
-    folds: int
-    unstable: NDArray | None
-    settled: bool = False
-
-
 def jump_to_branch(
     model: ReducedModel,
     H: int,
@@ -233,7 +203,7 @@ def jump_to_branch(
     require_stable: bool = True,
     max_excursion: float = 50.0,
     max_overshoot: float = 20.0,
-) -> BranchJump:
+) -> tuple[NDArray | None, int, int, NDArray | None]:
     """Find the solution at ``omega_target`` reached after the branch through ``omega_prev`` folded.
 
     Follows the curve from (z_prev, ω_prev) towards ω_target by arc-length continuation
@@ -243,10 +213,9 @@ def jump_to_branch(
     ``require_stable=False`` or without a state space, the first crossing after an even
     number of turning points (each fold flips the sign of the Jacobian's determinant, so
     that crossing has the stability of the start: on an S-shaped curve, the far stable
-    branch). No turning point means Newton had failed on the same branch (e.g. at
-    grazing), not a jump. A crossing after an even number of turning points that is
-    unstable by a complex pair or a multiplier < -1 ends the search (``settled``): a sweep
-    treats it as it treats a branch that loses stability that way between two grid points.
+    branch). Returns (harmonics or None, continuation steps, turning points passed); no
+    turning point means Newton had failed on the same branch (e.g. at grazing), not a
+    jump.
 
     Parameters
     ----------
@@ -279,9 +248,16 @@ def jump_to_branch(
 
     Returns
     -------
-    BranchJump
-        The landing (or None), steps, turning points, the first unstable crossing and
-        whether the search settled there.
+    harmonics : ndarray or None
+        The landing at ``omega_target``, shape (n_nl, 2H+1) [m]; None when none was found.
+    steps : int
+        Continuation steps taken.
+    folds : int
+        Turning points passed.
+    unstable : ndarray or None
+        With ``require_stable``, when no stable landing was found: the first crossing of
+        ``omega_target`` that converged but is unstable (harmonics as above), the orbit a
+        sweep reports as "no stable mesh-periodic response"; otherwise None.
     """
     direction = 1 if omega_target > omega_prev else -1
     tracer = Tracer(model, H, z_prev, omega_prev, TRACE_TOL)
@@ -309,17 +285,14 @@ def jump_to_branch(
                         sol.harmonics,
                         omega_target,
                     )
-                    top, dom = dominant_multiplier(mu)
-                    ok = top < 1 + STABLE_RTOL
+                    ok = bool(np.max(np.abs(mu)) < 1 + STABLE_RTOL)
                 if ok:
-                    return BranchJump(sol.harmonics, steps, folds, None)
+                    return sol.harmonics, steps, folds, None
                 if unstable is None:
                     unstable = sol.harmonics
-                if folds % 2 == 0 and instability_kind(np.array([dom]), np.array([False]))[0] != "real > 1":
-                    return BranchJump(None, steps, folds, sol.harmonics, True)
         if abs(p.omega - omega_prev) > max_excursion * span + 0.5 * abs(omega_prev):
             break
         if direction * (p.omega - omega_target) > max_overshoot * span + 0.02 * abs(omega_target):
             break
         prev = p
-    return BranchJump(None, steps, folds, unstable)
+    return None, steps, folds, unstable

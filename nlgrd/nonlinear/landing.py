@@ -284,7 +284,7 @@ def follow_branch(
     switched : bool
         Continuation passed a fold on the way: the point is a jump.
     """
-    zj, steps, folds, *_ = jump_to_branch(
+    zj, steps, folds, _ = jump_to_branch(
         model, H, z_prev, omega_prev, omega, tol=tol, require_stable=stability
     )
     if zj is None:
@@ -349,7 +349,7 @@ def approach(model, problem, order, i, H, method, tol, max_iter, stability, look
         start = solve(model.at(float(wk), H), None, method=method, tol=tol, max_iter=max_iter, fallback=True)
         if not start.converged:
             continue
-        zj, steps, *_ = jump_to_branch(
+        zj, steps, _, _ = jump_to_branch(
             model, H, start.harmonics, float(wk), omega, tol=tol, require_stable=stability
         )
         if zj is None:

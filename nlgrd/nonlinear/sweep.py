@@ -130,11 +130,8 @@ def sweep(
         when another direction's is nearer): where the curve folds more than once, the far
         branch of arc length can be an orbit a slow sweep does not reach; where both fail
         (a branch that ends at a non-smooth grazing of a contact), the nearest of the other
-        directions' stable solutions (a second pass). With stability, a crossing reached
-        after the folds that is unstable by a complex pair or a multiplier < -1 ends the
-        search: the point is reported there as ``no_stable``, as a branch that loses
-        stability that way between two grid points is (``leave_unstable``). "none" leaves
-        the point flagged as not converged.
+        directions' stable solutions (a second pass). "none" leaves the point flagged as
+        not converged.
     leave_unstable : bool
         With stability: at a point where the branch followed is unstable (by a fold or
         not), do what a slow physical sweep does. A real multiplier > 1 (the orbit
@@ -276,7 +273,7 @@ def _sweep_pass(
                     try_jump = False
             searched = False  # the landing search has already looked for a stable orbit here
             if not sol.converged and try_jump:
-                zj, steps, folds, unstable, settled = jump_to_branch(
+                zj, steps, folds, unstable = jump_to_branch(
                     model, H, z, last_w, float(w), tol=tol, require_stable=stability
                 )
                 if zj is not None:
@@ -294,11 +291,7 @@ def _sweep_pass(
                     )
                     if switched and auto:
                         sol = landing.nearest_landing(sol, z, others())
-                elif (
-                    auto
-                    and not settled
-                    and (cand := landing.restart(model, problem, z, w, H, method, tol, max_iter))
-                ):
+                elif auto and (cand := landing.restart(model, problem, z, w, H, method, tol, max_iter)):
                     sol, switched = cand, True
                     sol = landing.nearest_landing(sol, z, others())
                 elif unstable is not None:  # no stable orbit found: report the unstable crossing
