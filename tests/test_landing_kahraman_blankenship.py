@@ -6,7 +6,7 @@ grid of 300 mesh frequencies over 800-6000 Hz), swept down at H = 17 from 1478 H
 1356.5 Hz the branch has lost stability to a complex pair (|μ| 1.15: no stable
 mesh-periodic response); between 1356.5 and 1339.1 Hz it folds. The first crossings of
 1339.1 Hz that the arc-length search meets are unstable by complex pairs (|μ| up to 1.68);
-it follows the curve through 16 turning points (219 steps) to a stable orbit, which the
+it follows the curve through 18 turning points (212 steps) to a stable orbit, which the
 sweep then follows down to 1304 Hz and on. A search that settled on the first crossing
 (tried on 2026-12-05) left 1339-1304 Hz as gaps.
 

@@ -156,8 +156,7 @@ class Tracer:
         """Yield successive curve points (the start first), until the step size collapses.
 
         The step grows by 1.5 after a corrector that needed at most ``grow_below``
-        iterations, unless the step had to be halved to be accepted (growing it again at
-        once would only be refused again), and halves after one that needed 8 or more."""
+        iterations and halves after one that needed 8 or more."""
         u = np.append(np.asarray(z0, dtype=float).reshape(-1) / self.Lz, omega0 / self.Lw)
         prev = np.zeros(u.size)
         prev[-1] = float(np.sign(direction) or 1)
@@ -165,7 +164,6 @@ class Tracer:
         t = self.tangent(A, prev)
         yield CurvePoint(u[:-1] * self.Lz, u[-1] * self.Lw, t, 0, res0)
         for _ in range(max_steps):
-            halved = False
             while True:
                 u_pred = u + ds * t
                 un, its, res, A = self.correct(u_pred, t)
@@ -175,20 +173,14 @@ class Tracer:
                     if ds <= 2 * ds_min or (tn @ t > 0.9 and np.linalg.norm(un - u_pred) < 0.5 * ds):
                         break
                 ds /= 2
-                halved = True
                 if ds < ds_min:
                     return
             u, t = un, tn
             yield CurvePoint(u[:-1] * self.Lz, u[-1] * self.Lw, t, its, res)
-            if its <= grow_below and not halved:
+            if its <= grow_below:
                 ds = min(ds * 1.5, ds_max)
             elif its >= 8:
                 ds = max(ds / 2, ds_min)
-
-
-#: Corrector tolerance of the jump search (relative residual): its curve points only guide
-#: the way to the target, where Newton converges to the sweep's tolerance.
-TRACE_TOL = 1e-6
 
 
 def jump_to_branch(
@@ -260,7 +252,7 @@ def jump_to_branch(
         sweep reports as "no stable mesh-periodic response"; otherwise None.
     """
     direction = 1 if omega_target > omega_prev else -1
-    tracer = Tracer(model, H, z_prev, omega_prev, TRACE_TOL)
+    tracer = Tracer(model, H, z_prev, omega_prev, 1e-9)
     span = abs(omega_target - omega_prev)
     prev: CurvePoint | None = None
     steps = 0
