@@ -338,23 +338,8 @@ def geared_sweep(
         raise ModelError("omegas", "must be a non-empty list of positive finite frequencies")
     ladder = _ladder(model) if H is None else ()
     model.check_range(omegas, H if H is not None else ladder[-1])
-    count = {"i": 0}
-    n_total = len(omegas) * (2 if directions == "both" else 1)
-    base_kappa = model.reduced.kappa
-
-    def kappa(w, H_):
-        count["i"] += 1
-        if progress and count["i"] <= n_total:
-            progress(count["i"], n_total)
-        return base_kappa(w, H_)
-
-    reduced = ReducedModel(
-        kappa=kappa,
-        force=model.reduced.force,
-        nonlinearities=model.reduced.nonlinearities,
-        state_space_at=model.reduced.state_space_at,
-        kappa_derivative=model.reduced.kappa_derivative,
-        force_derivative=model.reduced.force_derivative,
+    reduced, count = reporting_progress(
+        model.reduced, progress, len(omegas) * (2 if directions == "both" else 1)
     )
     options = dict(
         directions=directions, method=method, stability=stability, tol=tol, max_iter=max_iter, jump=jump
@@ -378,6 +363,40 @@ def geared_sweep(
         b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(model.system.bearings)
     ]
     return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), names, res.H // res.base)
+
+
+def reporting_progress(
+    reduced: ReducedModel, progress: Callable[[int, int], None] | None, total: int
+) -> tuple[ReducedModel, dict]:
+    """``reduced`` whose κ calls report ``progress(i, total)`` up to i = ``total``: a sweep
+    asks for κ once per point, a landing search once per step (the bar then runs ahead).
+
+    Parameters
+    ----------
+    reduced : ReducedModel
+        The model swept.
+    progress : callable or None
+        ``progress(i, total)``, called for i <= ``total``; None: nothing reported.
+    total : int
+        Points of the sweep (all directions).
+
+    Returns
+    -------
+    reduced : ReducedModel
+        The same model with the counting κ.
+    count : dict
+        {"i": calls so far}; set "i" to 0 to count a new rung of harmonics from the start.
+    """
+    count = {"i": 0}
+    base_kappa = reduced.kappa
+
+    def kappa(w, H_):
+        count["i"] += 1
+        if progress and count["i"] <= total:
+            progress(count["i"], total)
+        return base_kappa(w, H_)
+
+    return dc.replace(reduced, kappa=kappa), count
 
 
 def _beyond_period_one(model: GearedModel, p1: SweepResult, omegas, directions, period, harmonic_rtol):

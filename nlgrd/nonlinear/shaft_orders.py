@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.bearing_loads import bearing_response
-from nlgrd.nonlinear.geared import GearedModel, GearedSweepResult, build_geared_model
+from nlgrd.nonlinear.geared import GearedModel, GearedSweepResult, build_geared_model, reporting_progress
 from nlgrd.nonlinear.harmonic_convergence import LADDER, OUTPUT_RTOL, converged_sweep
 from nlgrd.nonlinear.harmonics import real_to_complex
 from nlgrd.nonlinear.subharmonic import amplitudes, subharmonic_mask
@@ -134,7 +134,7 @@ def shaft_order_sweep(
     base = omegas / N
     reduced = model.reduced
     if progress is not None:
-        reduced = _counting(reduced, progress, base.size * (2 if directions == "both" else 1))
+        reduced, _ = reporting_progress(reduced, progress, base.size * (2 if directions == "both" else 1))
     options = dict(directions=directions, stability=stability, jump=jump)
     if H is None:
         res = converged_sweep(reduced, base, ladder=ladder, rtol=harmonic_rtol, **options)
@@ -154,19 +154,6 @@ def shaft_order_sweep(
     )
     names = [b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(system.bearings)]
     return GearedSweepResult(mesh, bearings, model.pinion_rpm(base), names, res.H // N)
-
-
-def _counting(reduced, progress, total):
-    count = {"i": 0}
-    base_kappa = reduced.kappa
-
-    def kappa(w, H_):
-        count["i"] += 1
-        if count["i"] <= total:
-            progress(count["i"], total)
-        return base_kappa(w, H_)
-
-    return dc.replace(reduced, kappa=kappa)
 
 
 def dte_spectrum(result: GearedSweepResult, index: int) -> tuple[NDArray, NDArray]:
