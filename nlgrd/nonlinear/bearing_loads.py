@@ -72,12 +72,51 @@ def _radial_maxima(X: NDArray) -> NDArray:
     return np.maximum(peak, y1)
 
 
-def bearing_response(model: GearedModel, result: SweepResult) -> BearingResponse:
-    """Recover bearing displacements and forces for every converged point of ``result``.
+def bearing_harmonics(model: GearedModel, omega: float, harmonics: NDArray) -> tuple[NDArray, NDArray]:
+    """Complex harmonics of every bearing's displacement and force at one solved point.
 
-    At a converged point the mesh force harmonics are G_k = F_k - κ_k Y_k (the balance
-    the solver met, to its tolerance), so recovery needs only the receptances the sweep
+    At a converged point the mesh force harmonics are G_k = F_k - κ_k Y_k (the balance the
+    solver met, to its tolerance), so recovery needs only the receptances the sweep
     already computed: Q_k = U_k (F_k - G_k), Q_0 from the mean terms.
+
+    Parameters
+    ----------
+    model : GearedModel
+        The model solved.
+    omega : float
+        The frequency the model's receptances take: the mesh frequency, or the base ω/ν of
+        a period-ν model [rad/s].
+    harmonics : ndarray (2H+1,) or (1, 2H+1)
+        Real harmonics of δ on that base [m].
+
+    Returns
+    -------
+    Q : ndarray (H+1, 2 n_bearings), complex
+        Harmonics k = 0..H of each bearing node's (y, z) displacement [m].
+    F : ndarray (H+1, 2 n_bearings), complex
+        Harmonics of the (y, z) force of each bearing on its node [N].
+    """
+    system, mr = model.system, model.receptance
+    z = np.asarray(harmonics, dtype=float).reshape(-1)
+    H = (z.size - 1) // 2
+    w = float(omega)
+    Y = real_to_complex(z)[:, None]
+    F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
+    kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, 1, 1)
+    Q = mr.recover(w, Y, F - kap[:, :, 0] * Y, F)
+    speed = mr.speed(w)
+    k = np.arange(H + 1)
+    Fb = np.empty_like(Q)
+    for j, b in enumerate(system.bearings):
+        s = system.shafts[b.shaft].speed_ratio * speed
+        q = Q[:, 2 * j : 2 * j + 2]
+        Fb[:, 2 * j : 2 * j + 2] = -(q @ b.stiffness(s).T + (1j * k * w)[:, None] * (q @ b.damping(s).T))
+    return Q, Fb
+
+
+def bearing_response(model: GearedModel, result: SweepResult) -> BearingResponse:
+    """Recover bearing displacements and forces for every converged point of ``result``
+    (:func:`bearing_harmonics` per point, the maxima of all points at once).
 
     Parameters
     ----------
@@ -101,24 +140,10 @@ def bearing_response(model: GearedModel, result: SweepResult) -> BearingResponse
     if not pts:
         return BearingResponse(**out)
     H = (result.harmonics[pts[0]].size - 1) // 2
-    k = np.arange(H + 1)
     Qs = np.empty((len(pts), H + 1, 2 * nb), dtype=complex)
     Fs = np.empty_like(Qs)
     for row, i in enumerate(pts):
-        w = float(result.omega[i])
-        Y = real_to_complex(result.harmonics[i].reshape(-1))[:, None]
-        F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
-        kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, 1, 1)
-        G = F - kap[:, :, 0] * Y
-        Q = mr.recover(w, Y, G, F)
-        speed = mr.speed(w)
-        for j, b in enumerate(system.bearings):
-            s = system.shafts[b.shaft].speed_ratio * speed
-            q = Q[:, 2 * j : 2 * j + 2]
-            Fs[row, :, 2 * j : 2 * j + 2] = -(
-                q @ b.stiffness(s).T + (1j * k * w)[:, None] * (q @ b.damping(s).T)
-            )
-        Qs[row] = Q
+        Qs[row], Fs[row] = bearing_harmonics(model, float(result.omega[i]), result.harmonics[i])
     rows = np.array(pts)
     out["displacement_mean"][rows] = np.hypot(Qs[:, 0, 0::2].real, Qs[:, 0, 1::2].real)
     out["displacement_rms"][rows] = np.sqrt(

@@ -20,10 +20,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.bearing_loads import bearing_response
+from nlgrd.nonlinear.bearing_loads import bearing_harmonics, bearing_response
 from nlgrd.nonlinear.geared import GearedModel, GearedSweepResult, build_geared_model, reporting_progress
 from nlgrd.nonlinear.harmonic_convergence import LADDER, OUTPUT_RTOL, converged_sweep
-from nlgrd.nonlinear.harmonics import real_to_complex
 from nlgrd.nonlinear.subharmonic import amplitudes, subharmonic_mask
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.rotor.system import RotorSystem
@@ -199,21 +198,7 @@ def bearing_force_spectrum(model: GearedModel, omega: float, harmonics: ArrayLik
     amplitude : ndarray (H, n_bearings)
         The larger of the y and z force amplitudes at each harmonic [N].
     """
-    nu = model.receptance.period
-    w = float(omega) / nu
-    z = np.asarray(harmonics, dtype=float).reshape(-1)
-    H = (z.size - 1) // 2
-    Y = real_to_complex(z)[:, None]
-    F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
-    kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, -1)
-    mr, system = model.receptance, model.system
-    Q = mr.recover(w, Y, F - kap * Y, F)
-    speed = mr.speed(w)
-    k = np.arange(H + 1)
-    out = np.empty((H, len(system.bearings)))
-    for j, b in enumerate(system.bearings):
-        s = system.shafts[b.shaft].speed_ratio * speed
-        q = Q[:, 2 * j : 2 * j + 2]
-        f = q @ b.stiffness(s).T + (1j * k * w)[:, None] * (q @ b.damping(s).T)
-        out[:, j] = np.max(np.abs(f[1:]), axis=1)
-    return k[1:] * w, out
+    w = float(omega) / model.receptance.period
+    _, f = bearing_harmonics(model, w, harmonics)
+    k = np.arange(1, f.shape[0])
+    return k * w, np.maximum(np.abs(f[1:, 0::2]), np.abs(f[1:, 1::2]))
