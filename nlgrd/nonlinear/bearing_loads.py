@@ -102,8 +102,8 @@ def bearing_harmonics(model: GearedModel, omega: float, harmonics: NDArray) -> t
     w = float(omega)
     Y = real_to_complex(z)[:, None]
     F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
-    kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, 1, 1)
-    Q = mr.recover(w, Y, F - kap[:, :, 0] * Y, F)
+    kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, -1)
+    Q = mr.recover(w, Y, F - kap * Y, F)
     speed = mr.speed(w)
     k = np.arange(H + 1)
     Fb = np.empty_like(Q)
