@@ -185,7 +185,7 @@ def test_plots_return_axes():
     c = continuation(rm, 1.0 * WN, 0.9 * WN, 3, ds_max=0.05)
     ax = sw.plot("dslr")
     assert c.plot(ax=ax) is ax
-    th = time_history(sw.harmonics[0, 0], sw.omega[0], rm.mesh)
+    th = time_history(sw.harmonics[0, 0], sw.omega[0], rm.metrics.mesh)
     assert th.plot(quantity="force") is not None
     assert len(ax.lines) >= 3
     plt.close("all")

@@ -39,7 +39,7 @@ def test_contact_never_lost_equals_linear_response():
         lin = model.linear_response(f * wn, 5)
         assert sol.converged
         assert np.max(np.abs(sol.harmonics[0] - lin)) <= 1e-8 * np.max(np.abs(lin))
-        assert rm.mesh.intervals(sol.harmonics[0]).contact_fraction == 1.0
+        assert rm.metrics.mesh.intervals(sol.harmonics[0]).contact_fraction == 1.0
 
 
 def test_residual_jacobian_matches_finite_differences():

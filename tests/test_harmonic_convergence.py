@@ -140,7 +140,7 @@ def test_continuation_chooses_h_like_the_sweep():
         if not ref.converged:  # allowed only next to a fold (located to FOLD_RTOL)
             assert np.min(np.abs(res.turning_omegas - w)) <= FOLD_RTOL * w, w / wn
             continue
-        m = metrics_from_harmonics(ref.harmonics[0], w, rm.mesh)
+        m = metrics_from_harmonics(ref.harmonics[0], w, rm.metrics.mesh)
         worst = max(worst, abs(c.dte_rms[i] / m.dte_rms - 1), abs(c.force_max[i] / m.force_max - 1))
     assert worst <= OUTPUT_RTOL
 
@@ -183,3 +183,43 @@ def test_link_model_chooses_h_against_h25_on_the_idler_train():
     assert np.all(est[ok] <= OUTPUT_RTOL)
     assert np.all(err[ok] <= 2 * OUTPUT_RTOL)
     assert np.all(est[ok] >= err[ok] / 3)
+
+
+def test_link_model_climbs_the_ladder_by_lifting_without_resweeping(monkeypatch):
+    """Issue 34 item 3: a link model's H is chosen by lifting the checked points, as for one
+    mesh: the two-shaft rotor as a link model, 8 points at 3000-4000 rpm, climbs H = 5,
+    7, 9 to 13 (estimates 0.1, 0.26, 0.0064, 0.0039 when this was written) with one
+    sweep. The lifted sweep at the chosen H is judged against an independent fresh sweep
+    at that H (natural continuation, every point solved from its neighbour): the same
+    stability per point and every link output within 1e-8 relative (both are Newton
+    solutions of the same equations to a residual of 1e-10; 1e-8 leaves room for the
+    conditioning of the outputs near a contact-loss onset)."""
+    import nlgrd.nonlinear.harmonic_convergence as hc
+    from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+
+    calls = []
+    original = hc.sweep
+
+    def counting(*args, **kwargs):
+        calls.append(args[2] if len(args) > 2 else kwargs["H"])
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(hc, "sweep", counting)
+    system = load_model(DATA / "models/two_shaft.toml")
+    model = build_link_model(system)
+    teeth = system.gear_pairs[0].geometry.teeth_pinion
+    omegas = np.linspace(3000.0, 4000.0, 8) * np.pi / 30 * teeth
+    res = link_sweep(model, omegas)
+    assert calls == [5], calls  # one sweep, at the first rung; the rest lifted
+    assert res.result.H > 9  # the ladder climbed at least three rungs
+    fresh = link_sweep(model, omegas, H=res.result.H)
+    r, f = res.result, fresh.result
+    assert np.array_equal(r.converged, f.converged) and np.array_equal(r.stable, f.stable)
+    assert np.array_equal(r.no_stable, f.no_stable)
+    for col in res.links.columns:
+        a, b = res.links[col].to_numpy(float), fresh.links[col].to_numpy(float)
+        assert np.array_equal(np.isnan(a), np.isnan(b)), col
+        ok = np.isfinite(b)
+        np.testing.assert_allclose(
+            a[ok], b[ok], rtol=1e-8, atol=1e-12 * np.max(np.abs(b[ok]), initial=0), err_msg=col
+        )

@@ -14,9 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.nonlinear.arclength import CurvePoint, Tracer
 from nlgrd.nonlinear.floquet import floquet_multipliers
-from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
-from nlgrd.nonlinear.metrics import MeshMetrics, metrics_from_harmonics
 from nlgrd.nonlinear.results import ContinuationResult, assemble_result
 from nlgrd.nonlinear.solvers import solve
 from nlgrd.threads import single_blas_thread
@@ -55,7 +53,6 @@ def continuation(
     max_steps: int = 2000,
     tol: float = 1e-9,
     stability: bool = True,
-    mesh: BacklashMesh | None = None,
     n_samples: int = 2048,
 ) -> ContinuationResult:
     """Trace the harmonic-balance solution curve from ``omega_start`` towards ``omega_end``.
@@ -81,8 +78,6 @@ def continuation(
         Scaled residual tolerance of the corrector.
     stability : bool
         Floquet multipliers per point (needs ``model.state_space``).
-    mesh : BacklashMesh, optional
-        For the output metrics (default the model's mesh).
     n_samples : int
         Samples per period for the force extremes of the metrics.
 
@@ -97,7 +92,6 @@ def continuation(
     RuntimeError
         No converged starting solution at ``omega_start``.
     """
-    mesh = mesh or model.mesh
     first = solve(model.at(omega_start, H), z0)
     if not first.converged:
         raise RuntimeError(f"no converged starting solution at omega = {omega_start}: {first.message}")
@@ -124,7 +118,7 @@ def continuation(
                 np.max(np.abs(floquet_multipliers(model.linear_state_space(w), model.nonlinearities, z, w)))
             )
         fm.append(f)
-        mets.append(metrics_from_harmonics(z[mesh.coord], w, mesh, n_samples) if mesh else MeshMetrics.nan(H))
+        mets.append(model.metrics.of(z, w, n_samples))
     curve = assemble_result(
         ws,
         ["curve"] * len(pts),

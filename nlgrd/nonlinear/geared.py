@@ -37,6 +37,7 @@ from nlgrd.nonlinear.harmonic_convergence import (
 )
 from nlgrd.nonlinear.harmonics import real_to_complex
 from nlgrd.nonlinear.mesh_law import gear_mesh_force, mesh_law
+from nlgrd.nonlinear.metrics import PointMetrics
 from nlgrd.nonlinear.receptance import MeshReceptance
 from nlgrd.nonlinear.results import ContinuationResult, SweepResult
 from nlgrd.nonlinear.state_space import LinearStateSpace
@@ -176,6 +177,7 @@ def build_geared_model(
         # (tests/test_geared_response.py), at a tenth of the size
         return LinearStateSpace(*mr.state_space(omega, max_mesh_frequency), cache=floquet_cache)
 
+    metrics = PointMetrics(mesh)
     reduced = ReducedModel(
         kappa=mr.kappa,
         force=force,
@@ -183,6 +185,9 @@ def build_geared_model(
         state_space_at=state_space_at,
         kappa_derivative=mr.kappa_derivative,
         force_derivative=force_derivative,
+        outputs=metrics.outputs,
+        branch_signature=metrics.signature,
+        metrics=metrics,
     )
     return GearedModel(system, mr, mesh, reduced, bearing_dofs, float(max_mesh_frequency), int(H))
 
@@ -338,17 +343,20 @@ def geared_sweep(
         raise ModelError("omegas", "must be a non-empty list of positive finite frequencies")
     ladder = _ladder(model) if H is None else ()
     model.check_range(omegas, H if H is not None else ladder[-1])
-    reduced, count = reporting_progress(
-        model.reduced, progress, len(omegas) * (2 if directions == "both" else 1)
-    )
+    reduced = model.reduced
     options = dict(
-        directions=directions, method=method, stability=stability, tol=tol, max_iter=max_iter, jump=jump
+        directions=directions,
+        method=method,
+        stability=stability,
+        tol=tol,
+        max_iter=max_iter,
+        jump=jump,
+        progress=progress,
     )
     if H is None:
         label = getattr(progress, "label", None)
 
         def on_rung(H_: int) -> None:
-            count["i"] = 0
             if label is not None:
                 progress.label = f"{label} (H = {H_})"
 
@@ -363,40 +371,6 @@ def geared_sweep(
         b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(model.system.bearings)
     ]
     return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), names, res.H // res.base)
-
-
-def reporting_progress(
-    reduced: ReducedModel, progress: Callable[[int, int], None] | None, total: int
-) -> tuple[ReducedModel, dict]:
-    """``reduced`` whose κ calls report ``progress(i, total)`` up to i = ``total``: a sweep
-    asks for κ once per point, a landing search once per step (the bar then runs ahead).
-
-    Parameters
-    ----------
-    reduced : ReducedModel
-        The model swept.
-    progress : callable or None
-        ``progress(i, total)``, called for i <= ``total``; None: nothing reported.
-    total : int
-        Points of the sweep (all directions).
-
-    Returns
-    -------
-    reduced : ReducedModel
-        The same model with the counting κ.
-    count : dict
-        {"i": calls so far}; set "i" to 0 to count a new rung of harmonics from the start.
-    """
-    count = {"i": 0}
-    base_kappa = reduced.kappa
-
-    def kappa(w, H_):
-        count["i"] += 1
-        if progress and count["i"] <= total:
-            progress(count["i"], total)
-        return base_kappa(w, H_)
-
-    return dc.replace(reduced, kappa=kappa), count
 
 
 def _beyond_period_one(model: GearedModel, p1: SweepResult, omegas, directions, period, harmonic_rtol):

@@ -36,8 +36,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonics import complex_to_real, real_to_complex
+from nlgrd.nonlinear.metrics import PointMetrics
 from nlgrd.nonlinear.state_space import LinearStateSpace
 
 # --------------------------------------------------------------------------------------
@@ -416,10 +416,17 @@ class ReducedModel:
         an FE model); overrides ``state_space`` when given.
     kappa_derivative, force_derivative, nl_gain_derivative : callable, optional
         d/dω of the above; central finite differences when None.
-    outputs : callable (harmonics, omega) -> ndarray, optional
+    outputs : callable (harmonics, omega) -> ndarray
         The per-point outputs whose change with H estimates the truncation error
-        (:mod:`nlgrd.nonlinear.harmonic_convergence`); default the first mesh's RMS DTE
-        and largest force.
+        (:mod:`nlgrd.nonlinear.harmonic_convergence`), e.g. every link's RMS DTE and
+        largest force.
+    branch_signature : callable (harmonics, omega) -> ndarray
+        Per point, what tells one branch from another: the fractions of the period each
+        contact spends in each state [-] (a point lifted to more harmonics whose signature
+        moves by more than 0.05 is on another branch).
+    metrics : PointMetrics
+        What a sweep writes per point in ``SweepResult.metrics``
+        (:class:`~nlgrd.nonlinear.metrics.PointMetrics`; NaN by default).
     """
 
     kappa: Callable[[float, int], ArrayLike]
@@ -431,7 +438,9 @@ class ReducedModel:
     kappa_derivative: Callable[[float, int], ArrayLike] | None = None
     force_derivative: Callable[[float, int], ArrayLike] | None = None
     nl_gain_derivative: Callable[[float, int], ArrayLike] | None = None
-    outputs: Callable[[NDArray, float], NDArray] | None = None
+    outputs: Callable[[NDArray, float], NDArray] = field(kw_only=True)
+    branch_signature: Callable[[NDArray, float], NDArray] = field(kw_only=True)
+    metrics: PointMetrics = field(default_factory=PointMetrics, kw_only=True)
 
     def __post_init__(self):
         object.__setattr__(self, "nonlinearities", tuple(self.nonlinearities))
@@ -446,11 +455,6 @@ class ReducedModel:
         if self.state_space_at is not None:
             return self.state_space_at(float(omega))
         return self.state_space
-
-    @property
-    def mesh(self) -> BacklashMesh | None:
-        """The first :class:`BacklashMesh` among the nonlinearities."""
-        return next((nl for nl in self.nonlinearities if isinstance(nl, BacklashMesh)), None)
 
     def omega_derivative(self, omega: float, H: int, z: NDArray) -> NDArray:
         """dR/dω at fixed harmonics z: (dL/dω) z + (dB/dω) G - dc/dω."""
@@ -476,8 +480,14 @@ class ReducedModel:
         static_force: ArrayLike,
         nonlinearities: Sequence,
         regularization: ArrayLike | None = None,
+        metrics: PointMetrics | None = None,
     ) -> ReducedModel:
         """Dense reference reduction of a small linear model (tests; FE models build their own).
+
+        A law's full-contact stiffness (``full_contact``: the default regularisation) and
+        ``damping`` (the mesh damping through which the LSTE excites) are used where it has them.
+        ``metrics`` (default: those of the first law, a gear mesh or a stop) also gives
+        the model's outputs and branch signature.
 
         M q'' + D q' + K q = F0 - W g(y, θ) + Σ_mesh w c_m e'(t), y = Wᵀ q. D must include
         each mesh's damping c_m w wᵀ; K excludes k_h. Then per harmonic k >= 1
@@ -491,12 +501,13 @@ class ReducedModel:
         W = W[:, None] if W.ndim == 1 else W
         F0 = np.asarray(static_force, dtype=float).reshape(-1)
         nls = tuple(nonlinearities)
+        metrics = PointMetrics(nls[0]) if metrics is None and nls else (metrics or PointMetrics())
         n = W.shape[1]
         if regularization is None:
             kr = np.zeros(n)
-            for nl in nls:
-                if isinstance(nl, BacklashMesh):
-                    kr[nl.coord] = nl.stiffness
+            for nl in nls:  # a law with a full-contact linear form: at its stiffness
+                if hasattr(nl, "full_contact"):
+                    kr[list(nl.coords)] = nl.full_contact(0)[0]
             kr[kr == 0] = np.max(np.abs(np.diag(K))) if np.any(K) else 1.0
         else:
             kr = np.broadcast_to(np.asarray(regularization, dtype=float), (n,))
@@ -510,10 +521,10 @@ class ReducedModel:
         def _lste_forcing(omega: float, H: int) -> NDArray:
             F = np.zeros((H + 1, M.shape[0]), dtype=complex)
             for nl in nls:
-                if isinstance(nl, BacklashMesh) and nl.damping > 0:
+                if getattr(nl, "damping", 0.0) > 0:
                     E = real_to_complex(nl.offset(H)[0])
                     k = np.arange(H + 1)
-                    F += np.outer(1j * k * omega * nl.damping * E, W[:, nl.coord])
+                    F += np.outer(1j * k * omega * nl.damping * E, W[:, nl.coords[0]])
             return F
 
         cache: dict = {}
@@ -542,4 +553,7 @@ class ReducedModel:
             force=lambda omega, H: _reduce(omega, H)[1],
             nonlinearities=nls,
             state_space=LinearStateSpace(M, D, K, W),
+            outputs=metrics.outputs,
+            branch_signature=metrics.signature,
+            metrics=metrics,
         )

@@ -10,7 +10,8 @@ from them.
 The estimate (:func:`check_harmonics`): every accepted point of a sweep at H is solved
 again at the next H' of :data:`LADDER`, by Newton started from its own solution padded
 with zero harmonics (a few iterations, and on the same branch). The relative change of
-the outputs (RMS DTE and maximum mesh force, each relative to max(|value|,
+the model's outputs (``ReducedModel.outputs``: every mesh's RMS DTE and maximum force,
+every clearance's largest force and displacement; each relative to max(|value|,
 :data:`FLOOR` x its largest value over the sweep)) estimates the error of the H solution;
 since the error falls fast with H it bounds the error of H' too (it is the error of H
 minus that of H'). A point where Newton at H' fails or lands far away has no solution on
@@ -22,10 +23,10 @@ is stable, H' would jump later and the jump is off by at least one grid step.
 0.5 %) at every accepted point and every jump holds, and returns that sweep with the
 estimate stored per point. Only the first rung is swept point by point (with its jumps);
 the next rung is the check's re-solved points (:func:`lift`) when they stay on the same
-branches (same contact-loss fraction to 0.05, same stability, every jump held), else a
-fresh sweep. Points still above ``rtol`` at the top of the ladder are
-returned as not converged (their outputs are not the converged answer) with a
-:class:`HarmonicsWarning`.
+branches (the same branch signature, each contact's fractions of the period, to 0.05; the
+same stability; every jump held), for every model, else a fresh sweep. Points still above
+``rtol`` at the top of the ladder are returned as not converged (their outputs are not the
+converged answer) with a :class:`HarmonicsWarning`.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.floquet import floquet_multipliers
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
-from nlgrd.nonlinear.metrics import MeshMetrics, metrics_from_harmonics
+from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import STABLE_RTOL, SweepResult, assemble_result, dominant_multiplier
 from nlgrd.nonlinear.solvers import solve
 from nlgrd.nonlinear.sweep import sweep
@@ -49,13 +50,14 @@ from nlgrd.nonlinear.sweep import sweep
 LADDER = (5, 7, 9, 13, 17, 25)
 #: Default output tolerance: RMS DTE and maximum mesh force within 0.5 %.
 OUTPUT_RTOL = 5e-3
-#: The outputs compared, by their names in :data:`nlgrd.nonlinear.metrics.METRIC_NAMES`.
-OUTPUTS = ("dte_rms", "force_max")
 #: A value below FLOOR x its sweep maximum is compared relative to that floor: an RMS DTE
 #: of 1 % of the resonance peak, far from resonance, needs no 0.5 % of itself.
 FLOOR = 1e-2
 #: A continuation's fold is located to this relative frequency (see :func:`_fold_band`).
 FOLD_RTOL = 1e-3
+#: A point lifted to H' whose branch signature (contact fractions) moved by more than this
+#: is on another branch: the next rung is swept afresh.
+SIGNATURE_ATOL = 0.05
 #: The check at H' polishes a solution that is already close: few Newton iterations.
 CHECK_MAX_ITER = 30
 
@@ -162,11 +164,7 @@ def _resolve(model: ReducedModel, w: float, z: NDArray, H_new: int, tol: float):
 
 
 def _outputs(model: ReducedModel, z: NDArray, w: float) -> NDArray:
-    if model.outputs is not None:
-        return np.asarray(model.outputs(z, w), dtype=float)
-    mesh = model.mesh
-    m = metrics_from_harmonics(z[mesh.coord], w, mesh)
-    return np.array([getattr(m, q) for q in OUTPUTS])
+    return np.asarray(model.outputs(z, w), dtype=float)
 
 
 def check_harmonics(
@@ -216,14 +214,12 @@ def check_harmonics(
         raise ModelError("H_check", f"must exceed the sweep's H = {H}, got {H2}")
     n = len(result)
     checked = result.converged & (result.stable | ~result.stability_known)
-    if model.outputs is None:
-        values = np.array([result.metrics[q] for q in OUTPUTS]).T  # (n, n_outputs)
-    else:  # the model's own outputs (every link's), NaN where not checked
-        ref = next((i for i in np.nonzero(checked)[0]), None)
-        m = 0 if ref is None else _outputs(model, result.harmonics[ref], float(result.omega[ref])).size
-        values = np.full((n, m), np.nan)
-        for i in np.nonzero(checked)[0]:
-            values[i] = _outputs(model, result.harmonics[i], float(result.omega[i]))
+    # the model's outputs (every link's), NaN where not checked
+    ref = next((i for i in np.nonzero(checked)[0]), None)
+    m = 0 if ref is None else _outputs(model, result.harmonics[ref], float(result.omega[ref])).size
+    values = np.full((n, m), np.nan)
+    for i in np.nonzero(checked)[0]:
+        values[i] = _outputs(model, result.harmonics[i], float(result.omega[i]))
     scale = (
         FLOOR * np.nanmax(np.where(checked[:, None], np.abs(values), np.nan), axis=0)
         if checked.any()
@@ -297,9 +293,10 @@ def lift(
 ) -> SweepResult | None:
     """The sweep at ``check.H_check`` from the check's re-solved points, or None when a
     full sweep is needed: a converged point that has no solution near it at H', a point
-    whose contact-loss fraction moved by more than 0.05 or whose stability changed (the
-    branch structure differs), or a jump that does not hold. Each point is then the H'
-    solution on the branch the sweep chose, as a sweep at H' would find it.
+    whose branch signature (``model.branch_signature``: each contact's fraction of the
+    period in each state) moved by more than 0.05 or whose stability changed (the branch
+    structure differs), or a jump that does not hold. Each point is then the H' solution
+    on the branch the sweep chose, as a sweep at H' would find it. Serves every model.
 
     Parameters
     ----------
@@ -317,10 +314,9 @@ def lift(
     SweepResult or None
         The sweep at H'; None when a full sweep at H' is needed.
     """
-    if not check.jumps_held or model.outputs is not None:  # a model with its own outputs: sweep
+    if not check.jumps_held:
         return None
     H2 = check.H_check
-    mesh = model.mesh
     n = len(result)
     z = np.full((n, *pad_harmonics(result.harmonics[0], H2).shape), np.nan)
     residual, iterations, fmax = np.full(n, np.nan), np.zeros(n, dtype=int), np.full(n, np.nan)
@@ -334,9 +330,10 @@ def lift(
         sol = check.solutions.get(i)
         if sol is None:
             return None
-        m = metrics_from_harmonics(sol.harmonics[mesh.coord], w, mesh)
-        if abs(m.contact_loss_fraction - result.contact_loss_fraction[i]) > 0.05:
-            return None
+        if not result.no_stable[i]:  # the response's branch (an unstable orbit is not one)
+            moved = model.branch_signature(sol.harmonics, w) - model.branch_signature(result.harmonics[i], w)
+            if np.max(np.abs(moved), initial=0.0) > SIGNATURE_ATOL:
+                return None
         ss = model.linear_state_space(w) if stability else None
         if ss is not None:
             fmax[i], dominant[i] = dominant_multiplier(
@@ -345,7 +342,7 @@ def lift(
             if result.stability_known[i] and (fmax[i] < 1 + STABLE_RTOL) != bool(result.stable[i]):
                 return None
         z[i], residual[i], iterations[i] = sol.harmonics, sol.residual, sol.iterations
-        metrics.append(MeshMetrics.nan(H2) if result.no_stable[i] else m)
+        metrics.append(MeshMetrics.nan(H2) if result.no_stable[i] else model.metrics.of(sol.harmonics, w))
     source = result.source.replace(f"H={result.H},", f"H={H2},", 1)
     return assemble_result(
         result.omega,

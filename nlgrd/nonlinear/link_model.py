@@ -27,6 +27,7 @@ from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.harmonic_convergence import LADDER, OUTPUT_RTOL, converged_sweep, next_harmonics
 from nlgrd.nonlinear.link_reduction import LinkReceptance
 from nlgrd.nonlinear.links import GearMeshLink
+from nlgrd.nonlinear.metrics import PointMetrics
 from nlgrd.nonlinear.results import SweepResult
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.rotor.assembly import assemble
@@ -268,6 +269,20 @@ def _reduce(system: RotorSystem, links: tuple, plan: FrequencyPlan, loads: dict,
             ]
         )
 
+    def branch_signature(harmonics: NDArray, omega: float) -> NDArray:  # each contact's state
+        return np.array(
+            [
+                lk.metrics(harmonics[sl], omega)[q]
+                for lk, sl in zip(links, rec.slices, strict=True)
+                for q in lk.contact_outputs
+            ]
+        )
+
+    # the sweep's own per-point metrics: the first gear mesh's (the link columns hold all)
+    first_mesh = next(
+        (law for lk, law in zip(links, laws, strict=True) if isinstance(lk, GearMeshLink)), None
+    )
+
     reduced = ReducedModel(
         kappa=lambda omega, H: rec.terms(omega, H)[0],
         force=lambda omega, H: rec.terms(omega, H)[1],
@@ -276,6 +291,8 @@ def _reduce(system: RotorSystem, links: tuple, plan: FrequencyPlan, loads: dict,
         kappa_derivative=(lambda omega, H: rec.derivatives(omega, H)[0]) if rec.has_derivatives else None,
         force_derivative=(lambda omega, H: rec.derivatives(omega, H)[1]) if rec.has_derivatives else None,
         outputs=outputs,
+        branch_signature=branch_signature,
+        metrics=PointMetrics(first_mesh),
     )
     orders = [lk.order for lk in links if isinstance(lk, GearMeshLink)] + [u[-1] for u in unb]
     return LinkModel(system, links, rec, reduced, max(orders, default=1), period, dict(loads))
@@ -418,13 +435,11 @@ def link_sweep(
             if top > 0:
                 model.receptance.prepare(next_harmonics(h, ladder) * top)
 
-        res = converged_sweep(
-            model.reduced, omegas, rtol=rtol, ladder=ladder, on_rung=on_rung, mesh=None, **options
-        )
+        res = converged_sweep(model.reduced, omegas, rtol=rtol, ladder=ladder, on_rung=on_rung, **options)
     else:
         if top > 0:  # a modal basis (large models) serves H x the highest frequency
             model.receptance.prepare(H * top)
-        res = sweep(model.reduced, omegas, H, mesh=None, **options)
+        res = sweep(model.reduced, omegas, H, **options)
     p1, p2 = res, None
     if period != 1 and options["stability"]:
         H_check = 2 * next_harmonics(p1.H, ladder)  # of ω/2: the check of 2 H harmonics

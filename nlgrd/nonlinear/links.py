@@ -18,7 +18,8 @@ The contract (:class:`NonlinearLink`):
 - ``metrics(harmonics, omega)``: its per-point outputs, named ``<link name>.<quantity>``;
   ``converged_outputs``, the names of those whose change with the number of harmonics
   estimates the truncation error (:mod:`nlgrd.nonlinear.harmonic_convergence`; all of
-  them when a link has none).
+  them when a link has none); ``contact_outputs``, those that are fractions of the period
+  in a contact state (the branch signature that tells one branch from another).
 - ``subharmonic(nu)`` (optional): the same link on the base ω/ν of a period-ν model
   (:func:`nlgrd.nonlinear.link_model.period_model`): whatever it holds in harmonics of
   the base moves from harmonic k to νk. A link without it must not depend on the base
@@ -61,10 +62,13 @@ class NonlinearLink(Protocol):
         Unique in a model; the prefix of the link's output columns.
     n_coords : int
         d, the number of local coordinates.
+    contact_outputs : tuple of str
+        The names of its ``metrics`` that are fractions of the period in a contact state.
     """
 
     name: str
     n_coords: int
+    contact_outputs: tuple[str, ...]
 
     def projection(self, system: RotorSystem) -> NDArray:
         """P (n_dofs, d): y = Pᵀ q."""
@@ -151,6 +155,7 @@ class BearingClearance:
     n_coords = 2
     #: The outputs the harmonic-count estimate compares.
     converged_outputs = ("force_max [N]", "displacement_max [m]")
+    contact_outputs = ("contact_fraction [-]",)
 
     def projection(self, system: RotorSystem) -> NDArray:
         """P (n_dofs, 2): the journal's (u_y, u_z) less the housing's.
@@ -342,6 +347,7 @@ class GearMeshLink:
     n_coords = 1
     #: The outputs the harmonic-count estimate compares (those of the single-mesh path).
     converged_outputs = ("dte_rms [m]", "force_max [N]")
+    contact_outputs = ("contact_loss_fraction [-]",)
 
     @classmethod
     def from_system(

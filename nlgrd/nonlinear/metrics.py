@@ -244,6 +244,122 @@ def _metrics_block(Z, omegas, rows, mesh, n_samples, intervals, out) -> None:
             )
 
 
+@dataclass(frozen=True)
+class PointMetrics:
+    """The metrics a sweep writes per point (``SweepResult.metrics``) for one model.
+
+    They are those of the coordinate ``mesh.coord`` under the law ``mesh`` (a gear mesh
+    with backlash or a one-sided stop), or NaN when ``mesh`` is None (a model without
+    one). A model supplies it (``ReducedModel.metrics``); the sweep, the continuation, the
+    choice of H and the orbit search call it and never ask what the law is.
+
+    Attributes
+    ----------
+    mesh : BacklashMesh or None
+        The law whose metrics are written.
+    """
+
+    mesh: BacklashMesh | None = None
+
+    def _coord(self, harmonics) -> NDArray:
+        z = np.asarray(harmonics, dtype=float)
+        z = z[self.mesh.coord] if z.ndim > 1 else z
+        return z.reshape(-1)
+
+    def intervals(self, harmonics) -> object | None:
+        """What :meth:`of_points` needs of a point while it is solved (its contact
+        intervals); None when the harmonics are not finite or there is no mesh.
+
+        Parameters
+        ----------
+        harmonics : ndarray (n_nl, 2H+1)
+            Real harmonics of the nonlinear coordinates [m].
+
+        Returns
+        -------
+        ContactIntervals or None
+        """
+        if self.mesh is None:
+            return None
+        z = self._coord(harmonics)
+        return self.mesh.intervals(z) if np.all(np.isfinite(z)) else None
+
+    def of_points(self, harmonics, omegas, n_samples: int = 2048, intervals=None) -> list[MeshMetrics]:
+        """The metrics of many points (:func:`metrics_of_points`), NaN without a mesh.
+
+        Parameters
+        ----------
+        harmonics : array_like (P, n_nl, 2H+1)
+            Real harmonics of the nonlinear coordinates per point [m].
+        omegas : array_like (P,)
+            Base frequency of each point [rad/s].
+        n_samples : int
+            Samples per period for the extremes.
+        intervals : sequence, optional
+            :meth:`intervals` of each point; computed when not given.
+
+        Returns
+        -------
+        list of MeshMetrics
+        """
+        Z = np.asarray(harmonics, dtype=float)
+        if self.mesh is None:
+            return [MeshMetrics.nan((Z.shape[-1] - 1) // 2) for _ in range(len(Z))]
+        zs = np.array([self._coord(z) for z in Z]).reshape(len(Z), -1)
+        return metrics_of_points(zs, omegas, self.mesh, n_samples, intervals)
+
+    def of(self, harmonics, omega: float, n_samples: int = 2048) -> MeshMetrics:
+        """The metrics of one point (:meth:`of_points`).
+
+        Parameters
+        ----------
+        harmonics : ndarray (n_nl, 2H+1)
+            Real harmonics of the nonlinear coordinates [m].
+        omega : float
+            Base frequency [rad/s].
+        n_samples : int
+            Samples per period for the extremes.
+
+        Returns
+        -------
+        MeshMetrics
+        """
+        return self.of_points(np.asarray(harmonics, dtype=float)[None], [float(omega)], n_samples)[0]
+
+    def outputs(self, harmonics, omega: float) -> NDArray:
+        """RMS DTE and largest mesh force [m, N]: what the choice of H compares.
+
+        Parameters
+        ----------
+        harmonics : ndarray (n_nl, 2H+1)
+            Real harmonics of the nonlinear coordinates [m].
+        omega : float
+            Base frequency [rad/s].
+
+        Returns
+        -------
+        ndarray (2,)
+        """
+        m = self.of(harmonics, omega)
+        return np.array([m.dte_rms, m.force_max])
+
+    def signature(self, harmonics, omega: float) -> NDArray:
+        """The contact-loss fraction [-]: what tells one branch from another.
+
+        Parameters
+        ----------
+        harmonics : ndarray (n_nl, 2H+1)
+            Real harmonics of the nonlinear coordinates [m].
+        omega : float
+            Base frequency [rad/s].
+
+        Returns
+        -------
+        ndarray (1,)
+        """
+        return np.array([self.of(harmonics, omega).contact_loss_fraction])
+
+
 def metrics_from_history(history: TimeHistory, mesh: BacklashMesh, H: int = 15) -> MeshMetrics:
     """Metrics from equally spaced samples over one period (time integration).
 

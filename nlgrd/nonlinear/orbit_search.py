@@ -36,7 +36,7 @@ from nlgrd.nonlinear.floquet import floquet_multipliers
 from nlgrd.nonlinear.geared import GearedModel, build_geared_model
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.landing import SAME_ORBIT_RTOL
-from nlgrd.nonlinear.metrics import MeshMetrics, metrics_from_harmonics
+from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import STABLE_RTOL, SweepResult, dominant_multiplier
 from nlgrd.nonlinear.solvers import solve
 from nlgrd.nonlinear.subharmonic import amplitudes, follow_period, period_of
@@ -219,8 +219,7 @@ def search_orbits(
                 fmax, dom = dominant_multiplier(
                     floquet_multipliers(ss, model.nonlinearities, sol.harmonics, base)
                 )
-            mesh = model.mesh
-            met = None if mesh is None else metrics_from_harmonics(sol.harmonics[mesh.coord], base, mesh)
+            met = model.metrics.of(sol.harmonics, base)
             mine.append(FoundOrbit(float(omega), nu, sol.harmonics, float(fmax), complex(dom), label, met))
         found += sorted(mine, key=lambda o: o.amplitude)
     return found

@@ -24,6 +24,7 @@ from nlgrd.errors import ModelError, check_finite, check_positive
 from nlgrd.nonlinear.force_laws import BacklashMesh, ParametricMesh
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.harmonics import real_to_complex, resize_harmonics
+from nlgrd.nonlinear.metrics import PointMetrics
 from nlgrd.nonlinear.state_space import LinearStateSpace
 from nlgrd.nonlinear.subharmonic import spread
 
@@ -172,13 +173,18 @@ class SDOFGearPair:
             k = np.arange(H + 1)
             return 1j * k * c * real_to_complex(resize_harmonics(self.lste, H))
 
+        mesh = self.mesh(method, n_samples)
+        metrics = PointMetrics(mesh)
         return ReducedModel(
             self.kappa,
             self.force,
-            (self.mesh(method, n_samples),),
+            (mesh,),
             state_space=self.state_space(),
             kappa_derivative=dkappa,
             force_derivative=dforce,
+            outputs=metrics.outputs,
+            branch_signature=metrics.signature,
+            metrics=metrics,
         )
 
     def linear_response(self, omega: float, H: int) -> NDArray[np.float64]:

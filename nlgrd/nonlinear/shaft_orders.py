@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.bearing_loads import bearing_harmonics, bearing_response
-from nlgrd.nonlinear.geared import GearedModel, GearedSweepResult, build_geared_model, reporting_progress
+from nlgrd.nonlinear.geared import GearedModel, GearedSweepResult, build_geared_model
 from nlgrd.nonlinear.harmonic_convergence import LADDER, OUTPUT_RTOL, converged_sweep
 from nlgrd.nonlinear.subharmonic import amplitudes, subharmonic_mask
 from nlgrd.nonlinear.sweep import sweep
@@ -132,9 +132,7 @@ def shaft_order_sweep(
     model.check_range(omegas, N * H if H is not None else ladder[-1])
     base = omegas / N
     reduced = model.reduced
-    if progress is not None:
-        reduced, _ = reporting_progress(reduced, progress, base.size * (2 if directions == "both" else 1))
-    options = dict(directions=directions, stability=stability, jump=jump)
+    options = dict(directions=directions, stability=stability, jump=jump, progress=progress)
     if H is None:
         res = converged_sweep(reduced, base, ladder=ladder, rtol=harmonic_rtol, **options)
     else:

@@ -28,7 +28,7 @@ from nlgrd.nonlinear.continuation import continuation
 from nlgrd.nonlinear.floquet import floquet_multipliers
 from nlgrd.nonlinear.harmonic_balance import HarmonicSolution, ReducedModel, ReducedProblem
 from nlgrd.nonlinear.harmonics import n_harmonics
-from nlgrd.nonlinear.metrics import MeshMetrics, metrics_from_harmonics
+from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import ContinuationResult, SweepResult, assemble_result, dominant_multiplier
 from nlgrd.nonlinear.solvers import solve
 from nlgrd.nonlinear.sweep import sweep_orders
@@ -409,7 +409,6 @@ def _period_pass(
     """One sweep of :func:`period_sweep`: {ω: (harmonics, converged, residual, iterations,
     max |μ|, metrics, dominant μ)} in sweep order; with ``stop``, no orbit past the first
     point without one (the end of a followed branch)."""
-    mesh = model.mesh
     out: dict[float, tuple] = {}
     z = None
     for w in order:
@@ -436,10 +435,6 @@ def _period_pass(
         ss = model.linear_state_space(base) if (stability and ok) else None
         if ss is not None:
             fmax, dom = dominant_multiplier(floquet_multipliers(ss, model.nonlinearities, z, base))
-        met = (
-            metrics_from_harmonics(harm[mesh.coord], base, mesh)
-            if ok and mesh is not None
-            else MeshMetrics.nan(H)
-        )
+        met = model.metrics.of(harm, base) if ok else MeshMetrics.nan(H)
         out[w] = (harm, ok, sol.residual if ok else np.nan, sol.iterations if ok else 0, fmax, met, dom)
     return out

@@ -7,7 +7,7 @@ kept, flagged and listed (:meth:`SweepResult.failures`), with NaN outputs.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import partial
 
 import numpy as np
@@ -17,10 +17,9 @@ from nlgrd.errors import ModelError
 from nlgrd.nonlinear import landing
 from nlgrd.nonlinear.arclength import jump_to_branch
 from nlgrd.nonlinear.floquet import floquet_multipliers
-from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonic_balance import HarmonicSolution, ReducedModel
 from nlgrd.nonlinear.landing import WANDER_ITER
-from nlgrd.nonlinear.metrics import MeshMetrics, metrics_of_points
+from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import (
     STABLE_RTOL,
     SweepResult,
@@ -77,12 +76,12 @@ def sweep(
     max_iter: int = 50,
     fallback: bool = True,
     stability: bool = True,
-    mesh: BacklashMesh | None = None,
     n_samples: int = 2048,
     z0: ArrayLike | None = None,
     jump: str = "arclength",
     chain: bool = True,
     leave_unstable: bool = True,
+    progress: Callable[[int, int], None] | None = None,
 ) -> SweepResult:
     """Harmonic-balance sweeps up and/or down in frequency by natural continuation.
 
@@ -105,8 +104,6 @@ def sweep(
         relative residual).
     stability : bool
         Floquet multipliers per point (needs ``model.state_space``).
-    mesh : BacklashMesh, optional
-        The mesh for the output metrics (default: the model's first BacklashMesh).
     n_samples : int
         Samples per period for the force extremes.
     z0 : array_like, optional
@@ -146,6 +143,9 @@ def sweep(
         orbit", for stronger instabilities), or no stable solution found: flag the point
         ``no_stable`` with NaN metrics and its dominant multiplier, and go on from the
         unstable orbit. False: stay on the branch and flag its points unstable.
+    progress : callable, optional
+        ``progress(i, n)`` once after each of the n points of all directions (a second
+        pass of ``jump="auto"`` counts its points again from 1).
 
     Returns
     -------
@@ -160,7 +160,6 @@ def sweep(
     """
     if jump not in JUMP_STRATEGIES:
         raise ModelError("jump", f"must be one of {', '.join(map(repr, JUMP_STRATEGIES))}, got {jump!r}")
-    mesh = mesh or model.mesh
     omegas = np.asarray(omegas, dtype=float)
     kw = dict(
         method=method,
@@ -168,12 +167,12 @@ def sweep(
         max_iter=max_iter,
         fallback=fallback,
         stability=stability,
-        mesh=mesh,
         n_samples=n_samples,
         z0=z0,
         jump=jump,
         chain=chain,
         leave_unstable=leave_unstable,
+        progress=progress,
     )
     result, landings = _sweep_pass(model, omegas, H, directions, **kw)
     if jump != "auto" or len({d for d, _ in sweep_orders(omegas, directions)}) < 2:
@@ -227,12 +226,12 @@ def _sweep_pass(
     max_iter,
     fallback,
     stability,
-    mesh,
     n_samples,
     z0,
     jump,
     chain,
     leave_unstable,
+    progress,
     pool=None,
 ):
     """One pass of :func:`sweep`; returns (result, landings after folds: (direction, w,
@@ -240,9 +239,11 @@ def _sweep_pass(
     candidates for a landing."""
     landings = []
     rows: dict[str, list] = {k: [] for k in ("w", "d", "z", "c", "r", "i", "f", "m", "j", "n", "u")}
-    todo: list[tuple] = []  # (row, harmonics of δ, ω, contact intervals) whose metrics are due
+    todo: list[tuple] = []  # (row, harmonics, ω, what the metrics need) whose metrics are due
     z_end = None
-    for direction, order in sweep_orders(omegas, directions):
+    orders = sweep_orders(omegas, directions)
+    total, done = sum(len(o) for _, o in orders), 0
+    for direction, order in orders:
         z, last_w = (z0 if z_end is None or not chain else z_end), None
         for k, w in enumerate(order):
             problem = model.at(float(w), H)
@@ -334,12 +335,11 @@ def _sweep_pass(
                             fmax, dom = dominant_multiplier(
                                 floquet_multipliers(ss, model.nonlinearities, z, w)
                             )
-            met = MeshMetrics.nan(H)  # the mesh's metrics: all points at once below
-            if mesh is not None and not lost:
+            met = MeshMetrics.nan(H)  # the model's metrics: all points at once below
+            if not lost:
                 met = None
-                zm = np.asarray(sol.harmonics[mesh.coord], dtype=float).reshape(-1)
-                ivs = mesh.intervals(zm) if np.all(np.isfinite(zm)) else None
-                todo.append((len(rows["m"]), zm, float(w), ivs))
+                zm = np.asarray(sol.harmonics, dtype=float)
+                todo.append((len(rows["m"]), zm, float(w), model.metrics.intervals(zm)))
             for k, v in zip(
                 "wdzcrifm",
                 (w, direction, sol.harmonics, sol.converged, sol.residual, sol.iterations, fmax, met),
@@ -351,9 +351,12 @@ def _sweep_pass(
                 landings.append((direction, float(w), z_prev, sol.harmonics))
             rows["n"].append(lost)
             rows["u"].append(dom)
+            done += 1
+            if progress is not None:
+                progress(done, total)
     if todo:
         at, zs, ws, ivs = zip(*todo, strict=True)
-        mets = metrics_of_points(np.array(zs), np.array(ws), mesh, n_samples, ivs)
+        mets = model.metrics.of_points(np.array(zs), np.array(ws), n_samples, ivs)
         for i, met in zip(at, mets, strict=True):
             rows["m"][i] = met
     result = assemble_result(
