@@ -58,7 +58,7 @@ def link_sweep_command(args, system, values, out, png) -> int:
     import numpy as np
 
     from nlgrd.cli_orbits import parse_period
-    from nlgrd.io.command_line import pyplot
+    from nlgrd.io.command_line import ProgressBar, pyplot
     from nlgrd.nonlinear.link_model import build_link_model, link_sweep
 
     if args.continuation:
@@ -79,6 +79,7 @@ def link_sweep_command(args, system, values, out, png) -> int:
         directions=args.direction,
         stability=not args.no_stability,
         period=parse_period(args.period),
+        progress=ProgressBar("sweep"),
     )
     H = res.result.H
     frame = res.to_frame()

@@ -9,6 +9,7 @@ import sys
 from nlgrd.errors import ModelError
 from nlgrd.io.command_line import (
     Outputs,
+    ProgressBar,
     check_quantity,
     harmonics_line,
     output_file,
@@ -16,22 +17,6 @@ from nlgrd.io.command_line import (
     parse_span,
     pyplot,
 )
-
-
-class _Progress:
-    """A one-line progress bar on stderr (a final line only when stderr is not a terminal)."""
-
-    def __init__(self, label: str):
-        self.label = label
-
-    def __call__(self, i: int, n: int) -> None:
-        if sys.stderr.isatty():
-            bar = "#" * int(30 * i / n)
-            print(
-                f"\r{self.label} [{bar:<30}] {i}/{n}", end="" if i < n else "\n", file=sys.stderr, flush=True
-            )
-        elif i == n or i % max(1, n // 10) == 0:
-            print(f"{self.label}: {i}/{n}", file=sys.stderr, flush=True)
 
 
 class _Unit:
@@ -142,7 +127,7 @@ def cmd_sweep(args) -> int:
         directions=args.direction,
         model=model,
         stability=not args.no_stability,
-        progress=_Progress("sweep"),
+        progress=ProgressBar("sweep"),
         period=period,
     )
     found = None
@@ -261,7 +246,7 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
         directions=args.direction,
         model=model,
         stability=not args.no_stability,
-        progress=_Progress("sweep"),
+        progress=ProgressBar("sweep"),
     )
     rms = np.where(res.mesh.converged & ~res.mesh.no_stable, res.mesh.dte_rms, -np.inf)
     extra = None

@@ -43,11 +43,13 @@ def test_idler_train_sweep_writes_both_meshes(tmp_path, capsys):
     """Two meshes: columns of both, the base frequency (= mesh frequency) and the shaft
     speed base x 60 / 25 (25 input teeth, by hand); H chosen by the error estimate (on the
     ladder, within 0.5 % at every stable point); points without a stable periodic
-    response have empty link columns; the PNG is written."""
+    response have empty link columns; the PNG is written; progress is shown."""
     out = tmp_path / "idler.csv"
     argv = ["sweep", str(IDLER), "--hz", "1000:1200:2", "--direction", "up", "--out", str(out)]
     assert main([*argv, "--quantity", "mesh1.dslr"]) == 0
-    text = capsys.readouterr().out
+    captured = capsys.readouterr()
+    text = captured.out
+    assert "sweep: 2/2" in captured.err  # progress once per point, as on one mesh
     assert "links mesh0, mesh1" in text and "base frequency = mesh (25 x the shaft speed)" in text
     assert "(chosen; largest estimated error" in text  # the default: H by the estimate
     df = pd.read_csv(out)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -376,3 +377,40 @@ def pyplot():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+class ProgressBar:
+    """``progress(i, n)`` of a sweep drawn on stderr: a tqdm bar on a terminal, else a line
+    at every tenth of the points (logs stay readable). ``label`` may change between runs
+    (the rung of harmonics); a count that starts again from 1 starts a new bar.
+
+    Parameters
+    ----------
+    label : str
+        What is running, shown before the bar.
+    """
+
+    def __init__(self, label: str):
+        self.label = label
+        self._bar = None
+
+    def __call__(self, i: int, n: int) -> None:
+        if not sys.stderr.isatty():
+            if i == n or i % max(1, n // 10) == 0:
+                print(f"{self.label}: {i}/{n}", file=sys.stderr, flush=True)
+            return
+        from tqdm import tqdm
+
+        if self._bar is None or self._bar.total != n or i < self._bar.n:
+            self.close()
+            self._bar = tqdm(total=n, desc=self.label, file=sys.stderr, leave=True, dynamic_ncols=True)
+        self._bar.set_description(self.label, refresh=False)
+        self._bar.update(i - self._bar.n)
+        if i >= n:
+            self.close()
+
+    def close(self) -> None:
+        """End the bar on the terminal (a run that stops early)."""
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
