@@ -162,3 +162,38 @@ def test_shift_by_a_mesh_period_is_the_same_motion():
 def test_bad_search_input_names_the_field(kwargs, field):
     with pytest.raises(ModelError, match=field):
         search_orbits(model_of, W0, H, **kwargs)
+
+
+def test_search_on_two_nonlinear_coordinates_and_with_user_starts_only():
+    """The search on a model with two nonlinear coordinates (it raised ValueError on the
+    linear response's flat harmonics) and with ``n_starts=0`` (only the user's starts):
+    tests/test_period_doubling.py's two-DOF oscillator with its stop on the second mass,
+    both masses nonlinear coordinates, a second stop on the first one far beyond its
+    motion (1 mm gap). At 0.9 x the first in-contact natural frequency the period-1 orbit
+    found from perturbed starts is the one a sweep to that frequency reaches (the same
+    Newton solution to 1e-7 relative; both are converged to 1e-10 of the residual), and
+    with no perturbed starts the user's start alone gives it again."""
+    from test_period_doubling import K2, KC, LOAD, M2, SEAT, two_dof
+
+    from nlgrd.nonlinear.force_laws import ContactStop
+    from nlgrd.nonlinear.harmonic_balance import ReducedModel
+    from nlgrd.nonlinear.subharmonic import spread
+
+    D, wn = two_dof()
+
+    def model_of(nu: int) -> ReducedModel:
+        stops = (
+            ContactStop(KC, 0.0, spread(np.array([0.0, SEAT, 0.0]), nu), coord=1),
+            ContactStop(KC, 1e-3, np.zeros(1), coord=0),
+        )
+        return ReducedModel.from_matrices(M2, D, K2, np.eye(2), LOAD, stops, metrics=None)
+
+    w = 0.9 * wn
+    ref = sweep(model_of(1), np.linspace(0.5 * wn, w, 9), 9, "up")
+    assert ref.converged[-1] and ref.stable[-1]
+    found = search_orbits(model_of, w, 9, periods=(1,), n_starts=6)
+    assert len(found) == 1 and found[0].harmonics.shape == (2, 19)
+    np.testing.assert_allclose(found[0].harmonics, ref.harmonics[-1], rtol=1e-7, atol=1e-7 * SEAT)
+    again = search_orbits(model_of, w, 9, periods=(1,), n_starts=0, starts=[(1, ref.harmonics[-1])])
+    assert len(again) == 1 and again[0].start == "user start 0"
+    assert search_orbits(model_of, w, 9, periods=(1,), n_starts=0) == []

@@ -205,7 +205,9 @@ def search_orbits(
         tries = [
             (np.asarray(z, dtype=float), f"user start {i}") for i, (p, z) in enumerate(starts) if p == nu
         ]
-        tries += _perturbed(problem.linear_solution(), nu, Hb, int(n_starts), amplitude, rng)
+        if n_starts:  # the linear response's harmonics, one row per nonlinear coordinate
+            z_lin = problem.linear_solution().reshape(problem.n_coords, -1)
+            tries += _perturbed(z_lin, nu, Hb, int(n_starts), amplitude, rng)
         mine: list[FoundOrbit] = []
         for z0, label in tries:
             sol = solve(problem, z0, tol=tol, max_iter=max_iter, fallback=False, stall=True)
