@@ -403,10 +403,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sw.add_argument(
         "--quantity",
-        default="dslr",
+        default=None,
         help="plotted quantity: dte_mean, dte_rms, dte_p2p, force_max, force_min, dslr (default), "
         "contact_loss_fraction or back_contact; for a link sweep LINK.QUANTITY, e.g. mesh1.dslr or "
-        "B1.force_max",
+        "B1.force_max (default: the first mesh's dslr, or the first link's largest force)",
     )
     sw.add_argument(
         "--period",

@@ -14,13 +14,16 @@ from nlgrd.nonlinear.link_model import needs_links
 __all__ = ["link_sweep_command", "needs_links"]
 
 
-def _quantity(text: str, model) -> tuple[str, str]:
+def _quantity(text: str | None, model) -> tuple[str, str]:
     """``--quantity`` for a link model: ``LINK.QUANTITY`` or a bare quantity of the first
-    link that has it; returns (column, label)."""
+    link that has it (None: the default); returns (column, label)."""
     from nlgrd.nonlinear.link_model import metric_names
     from nlgrd.nonlinear.links import GearMeshLink
 
     keys = {lk.name: metric_names(lk) for lk in model.links}
+    if text is None:  # the default: a mesh's DSLR, else the first link's largest force
+        has_dslr = any(isinstance(lk, GearMeshLink) for lk in model.links)
+        text = "dslr" if has_dslr else f"{model.links[0].name}.force_max"
     name, _, q = text.rpartition(".")
     if not name:
         meshes = [lk.name for lk in model.links if isinstance(lk, GearMeshLink)]

@@ -96,7 +96,7 @@ def cmd_sweep(args) -> int:
         if not system.gear_pairs and not system.bearing_clearances:
             raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
         return link_sweep_command(args, system, values, out, png)
-    quantity = check_quantity(args.quantity)
+    quantity = check_quantity(args.quantity or "dslr")
     gp = system.gear_pairs[0]
     unit = _Unit(
         args.rpm is not None, gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
