@@ -299,3 +299,71 @@ def test_floquet_verdicts_agree_at_hb_points():
 def test_floquet_verdicts_agree_with_a_loss_factor():
     """As above on two_shaft with a loss factor η = 0.01."""
     _floquet_agree(_point_sweeps("loss"), FLOQUET_RTOL)
+
+
+# ----------------------------------------------------------------------------- sweeps
+
+#: Sweep tolerance: both paths solve the same equations to tol = 1e-10 (relative
+#: residual) from the same starts; outputs agree to the solver's tolerance times the
+#: conditioning, measured 3e-13.
+SWEEP_RTOL = 1e-8
+
+
+def test_fold_free_sweep_agrees():
+    """two_shaft, 2200-2900 Hz (8 points, up and down, H = 5, stability): below the
+    superharmonic rise at 3000-3100 Hz, no fold, shown by both jump lists being empty.
+    RMS DTE (single ``dte_rms [um]``, link ``mesh0.dte_rms [m]``), largest mesh force and
+    DSLR from the two tables, to SWEEP_RTOL."""
+    s = system("two_shaft")
+    g, lk = models("two_shaft")
+    ws = 2 * np.pi * np.linspace(2200.0, 2900.0, 8)
+    rg = geared_sweep(s, ws, H=H, directions="both", model=g, period=1, stability=True)
+    rl = link_sweep(lk, ws, H=H, directions="both", period=1, stability=True)
+    assert rg.jumps() == [] and rl.jumps() == []
+    fg, fl = rg.to_frame(), rl.to_frame()
+    assert fg["converged"].all() and fl["converged"].all() and fg["stable"].all() and fl["stable"].all()
+    assert np.allclose(fg["mesh_frequency [Hz]"], fl["base_frequency [Hz]"], rtol=1e-15)
+    worst = 0.0
+    for single, link, to_single in (
+        ("dte_rms [um]", "mesh0.dte_rms [m]", 1e6),
+        ("force_max [N]", "mesh0.force_max [N]", 1.0),
+        ("dslr [-]", "mesh0.dslr [-]", 1.0),
+    ):
+        a, b = fg[single].to_numpy(float), fl[link].to_numpy(float) * to_single
+        worst = max(worst, float(np.max(np.abs(a / b - 1))))
+    print(f"fold-free sweep max rel diff {worst:.1e}")
+    assert worst <= SWEEP_RTOL
+
+
+@pytest.fixture(scope="module")
+def kubo_sweeps():
+    """Kubo's rig, 3000-6000 Hz in 16 points (200 Hz steps), up and down, H = 5, with
+    stability: across the main resonance (gear-pair mode 4915 Hz) and its jumps."""
+    ws = 2 * np.pi * np.linspace(3000.0, 6000.0, 16)
+    g, lk = models("kubo")
+    rg = geared_sweep(system("kubo"), ws, H=H, directions="both", model=g, period=1, stability=True)
+    rl = link_sweep(lk, ws, H=H, directions="both", period=1, stability=True)
+    return ws, rg, rl
+
+
+def test_jump_locations_agree(kubo_sweeps):
+    """Every jump of one path has one of the other in the same direction within one grid
+    step (200 Hz), and the counts are equal; the up sweep jumps off the resonance."""
+    ws, rg, rl = kubo_sweeps
+    step = ws[1] - ws[0]
+    jg, jl = rg.jumps(), rl.jumps()
+    assert len(jg) == len(jl) and any(j.direction == "up" for j in jg)
+    worst = 0.0
+    for a_list, b_list in ((jg, jl), (jl, jg)):
+        for a in a_list:
+            d = min(abs(a.omega - b.omega) for b in b_list if b.direction == a.direction)
+            worst = max(worst, d / step)
+    print(f"kubo: {len(jg)} jumps, largest shift {worst:.2f} grid steps")
+    assert worst <= 1.0
+
+
+def test_floquet_verdicts_agree_along_kubo_sweep(kubo_sweeps):
+    """Stable flags equal and |μ| to FLOQUET_RTOL along Kubo's sweep (some points unstable)."""
+    _, rg, rl = kubo_sweeps
+    assert not np.all(rg.mesh.stable)
+    print(f"kubo floquet |mu| {_floquet_agree([(rg.mesh, rl.result)], FLOQUET_RTOL):.1e}")
