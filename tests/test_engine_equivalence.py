@@ -170,8 +170,8 @@ def test_derivatives_with_a_loss_factor_against_differences(name):
 @pytest.mark.xfail(
     strict=True,
     reason="single path's dκ_k/dω (k >= 1) omits the speed dependence of a tabulated bearing "
-    "(receptance.py differentiates Z_k at fixed bearing coefficients): measured 3.3e-4 of max|dκ| "
-    "on two_shaft at 1500 Hz, 2e-6 on kubo, against differences good to ~1e-11",
+    "(direct_receptance.model_stiffness_derivative holds its coefficients at the current speed): "
+    "measured 3.3e-4 of max|dκ| on two_shaft at 1500 Hz, 2e-6 on kubo, against differences good to ~1e-11",
 )
 @pytest.mark.parametrize("name", FILES)
 def test_derivatives_with_a_tabulated_bearing_against_differences(name):
