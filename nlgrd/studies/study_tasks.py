@@ -32,7 +32,7 @@ import nlgrd
 from nlgrd.studies.study_file import Study
 from nlgrd.threads import single_blas_thread
 
-__all__ = ["TaskSpec", "run_task", "summarise", "task_specs"]
+__all__ = ["SummaryColumns", "TaskSpec", "run_task", "summarise", "task_specs"]
 
 #: Columns of a summary row, in order (those a model lacks are NaN).
 SUMMARY_COLUMNS = (
@@ -151,8 +151,46 @@ def task_specs(study: Study) -> list[TaskSpec]:
 # ----------------------------------------------------------------------------- running
 
 
-def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float]:
-    """Run the analysis on ``system``: (points, jumps, x column, x per rad/s)."""
+@dataclass(frozen=True)
+class SummaryColumns:
+    """Which columns of a sweep's table hold the summarised outputs, read from the model's
+    typed outputs (its gear meshes, bearings and links), not from column-name patterns.
+
+    Attributes
+    ----------
+    dslr : list of str
+        Dynamic-to-static load ratio columns [-], one per mesh.
+    dte_rms : list of tuple (str, float)
+        RMS DTE columns, each with its factor to µm (1 for ``[um]``, 1e6 for ``[m]``).
+    mesh_force : list of str
+        Largest mesh force columns [N].
+    bearing_force : list of str
+        Largest bearing (or bearing clearance) force columns [N].
+    """
+
+    dslr: list = field(default_factory=list)
+    dte_rms: list = field(default_factory=list)
+    mesh_force: list = field(default_factory=list)
+    bearing_force: list = field(default_factory=list)
+
+
+def _link_columns(links) -> SummaryColumns:
+    """The summary columns of a link sweep (``<link>.<quantity> [unit]``), by link type."""
+    from nlgrd.nonlinear.links import BearingClearance, GearMeshLink
+
+    out = SummaryColumns()
+    for link in links:
+        if isinstance(link, GearMeshLink):
+            out.dslr.append(f"{link.name}.dslr [-]")
+            out.dte_rms.append((f"{link.name}.dte_rms [m]", 1e6))
+            out.mesh_force.append(f"{link.name}.force_max [N]")
+        elif isinstance(link, BearingClearance):
+            out.bearing_force.append(f"{link.name}.force_max [N]")
+    return out
+
+
+def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float, SummaryColumns]:
+    """Run the analysis on ``system``: (points, jumps, x column, x per rad/s, summary columns)."""
     from nlgrd.nonlinear.link_model import needs_links
 
     values = np.linspace(analysis["start"], analysis["stop"], analysis["count"])
@@ -170,7 +208,7 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
         x_col = "shaft_speed [rpm]" if rpm else "base_frequency [Hz]"
         if rpm:
             frame.insert(1, x_col, frame["base_frequency [Hz]"] * 2 * math.pi * per_rad)
-        return frame, res.jumps(), x_col, per_rad
+        return frame, res.jumps(), x_col, per_rad, _link_columns(model.links)
     from nlgrd.nonlinear.geared import geared_sweep
     from nlgrd.nonlinear.shaft_orders import shaft_order_sweep
 
@@ -187,18 +225,30 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
         **options,
     )
     x_col = "pinion_speed [rpm]" if rpm else "mesh_frequency [Hz]"
-    return res.to_frame(), res.jumps(), x_col, per_rad
+    columns = SummaryColumns(
+        dslr=["dslr [-]"],
+        dte_rms=[("dte_rms [um]", 1.0)],
+        mesh_force=["force_max [N]"],
+        bearing_force=[f"{name} force_max [N]" for name in res.bearing_names],
+    )
+    return res.to_frame(), res.jumps(), x_col, per_rad, columns
 
 
-def _peak(frame: pd.DataFrame, columns: list[str]) -> float:
-    cols = [c for c in columns if c in frame]
-    if not cols:
+def _peak(frame: pd.DataFrame, columns: list, scales: list | None = None) -> float:
+    """Largest finite value of ``columns`` (each times its scale); NaN when there is none."""
+    scales = [1.0] * len(columns) if scales is None else scales
+    missing = [c for c in columns if c not in frame]
+    if missing:
+        raise KeyError(f"summary columns {missing} are not in the sweep's table")
+    if not columns:
         return math.nan
-    v = frame[cols].astype(float).to_numpy()
+    v = frame[list(columns)].astype(float).to_numpy() * np.asarray(scales, dtype=float)
     return float(np.nanmax(v)) if np.isfinite(v).any() else math.nan
 
 
-def summarise(frame: pd.DataFrame, jumps: list, x_col: str, per_rad: float) -> dict[str, Any]:
+def summarise(
+    frame: pd.DataFrame, jumps: list, x_col: str, per_rad: float, columns: SummaryColumns
+) -> dict[str, Any]:
     """The summary row of one sweep (:data:`SUMMARY_COLUMNS`, frequencies in the x unit).
 
     The resonance is the speed (frequency) of the largest DSLR (or RMS DTE) of the sweep.
@@ -217,19 +267,16 @@ def summarise(frame: pd.DataFrame, jumps: list, x_col: str, per_rad: float) -> d
         The x column (speed [rpm] or frequency [Hz]).
     per_rad : float
         x units per rad/s.
+    columns : SummaryColumns
+        Which columns hold DSLR, RMS DTE, mesh and bearing forces (from the model).
 
     Returns
     -------
     dict
     """
     unit = x_col[x_col.index("[") :]
-    dslr_cols = [c for c in frame if c.split(" ")[0].endswith("dslr")]
-    dte_cols = [c for c in frame if c.split(" ")[0].endswith("dte_rms")]
-    mesh_force = [
-        c for c in frame if c in ("force_max [N]",) or (c.endswith(".force_max [N]") and "mesh" in c)
-    ]
-    bearing = [c for c in frame if c.startswith("bearing ") and c.endswith("force_max [N]")]
-    bearing += [c for c in frame if c.endswith(".force_max [N]") and c not in mesh_force]
+    dslr_cols = columns.dslr
+    dte_cols = [c for c, _ in columns.dte_rms]
     peak_col = dslr_cols[0] if dslr_cols else (dte_cols[0] if dte_cols else None)
     resonance = math.nan
     peaks = {}
@@ -250,14 +297,14 @@ def summarise(frame: pd.DataFrame, jumps: list, x_col: str, per_rad: float) -> d
     no_stable = frame["response"].astype("string").fillna("").ne("periodic") & converged
     return {
         "dslr_peak [-]": _peak(frame, dslr_cols),
-        "dte_rms_peak [um]": _peak(frame, dte_cols),
-        "mesh_force_peak [N]": _peak(frame, mesh_force),
+        "dte_rms_peak [um]": _peak(frame, dte_cols, [f for _, f in columns.dte_rms]),
+        "mesh_force_peak [N]": _peak(frame, columns.mesh_force),
         f"resonance {unit}": resonance,
         f"jump_up {unit}": up,
         f"jump_down {unit}": down,
         f"jump_width {unit}": up - down,
         "jumps": len(jumps),
-        "bearing_force_max [N]": _peak(frame, bearing),
+        "bearing_force_max [N]": _peak(frame, columns.bearing_force),
         "points": len(frame),
         "failed_points": int((~converged).sum()),
         "no_stable_points": int(no_stable.sum()),
@@ -288,8 +335,8 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
         warnings.simplefilter("always")
         try:
             system = model_from_file_data(spec.model_data, spec.model_file)
-            frame, jumps, x_col, per_rad = _sweep_frame(system, spec.analysis)
-            out["summary"] = summarise(frame, jumps, x_col, per_rad)
+            frame, jumps, x_col, per_rad, columns = _sweep_frame(system, spec.analysis)
+            out["summary"] = summarise(frame, jumps, x_col, per_rad, columns)
             out["points"] = frame
             out["error"] = None
         except Exception as err:  # recorded: the study goes on

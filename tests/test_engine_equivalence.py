@@ -1,0 +1,373 @@
+"""Guard rail of issue 33: today's single-mesh path equals the link path on one system.
+
+The single-mesh path (``build_geared_model``: ``MeshReceptance``, ``bearing_harmonics``,
+``geared_sweep``) and the link path (``build_link_model``: ``LinkReceptance`` with the
+mesh as a ``GearMeshLink``, ``link_sweep``) reduce the same FE equations onto the same
+mesh coordinate δ, so everything they compute must agree to the rounding of two
+factorisations (κ_k, F_k, their ω-derivatives, recovered displacements) or of the
+solver's tolerance (sweeps, tol = 1e-10). Floquet multipliers are the exception: the
+single path takes them on the modes below 3x the highest mesh frequency
+(``build_geared_model``), the link path on the whole dense model, so |μ| agree only to that
+truncation and the verdicts must agree.
+
+Models: ``data/models/two_shaft.toml`` and ``data/case_studies/kubo.toml``, as loaded
+and modified in memory (:func:`system`):
+
+- ``cross``: every bearing cross-coupled, k_yz = 0.2 k_yy = -k_zy, c_yz = 0.1 c_yy = -c_zy;
+- ``tabulated``: one more bearing, tabulated against speed (at 100 and 3000 rad/s:
+  k_yy 0.5 -> 2 k, k_zz 0.6 -> 1.5 k, k_yz 0 -> 0.3 k, k the first bearing's k_yy), at a
+  node with no bearing (two_shaft: pinion shaft node 3; kubo: shaft 0 node 0), so the
+  others still hold every shaft;
+- ``loss``: a hysteretic loss factor η = 0.01 in every material.
+
+Known differences are strict xfails whose reasons carry the figures measured. One named
+in issue 33 is not measurable here: the single path takes dκ_0/dω = 0, but on both models
+a free torsional rigid-body mode leaves κ_0 at rounding (~1e-8 N/m), and with a torsional
+brake added (k_tt = 2e3 N m/rad) and the tabulated bearing, dκ_0/dω by differences was
+2.5e-4 N s/m against max |dκ_k/dω| ~5e6: 5e-11, below any tolerance that is not rounding.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nlgrd.errors import ModelError
+from nlgrd.io.model_file import model_from_file_data
+from nlgrd.nonlinear.bearing_loads import bearing_harmonics
+from nlgrd.nonlinear.geared import build_geared_model, geared_sweep
+from nlgrd.nonlinear.harmonics import complex_to_real, real_to_complex
+from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+
+ROOT = Path(__file__).resolve().parents[1]
+FILES = {
+    "two_shaft": ROOT / "data" / "models" / "two_shaft.toml",
+    "kubo": ROOT / "data" / "case_studies" / "kubo.toml",
+}
+#: Mesh frequencies [Hz] of the pointwise checks: below, near and above the gear-pair
+#: mode (two_shaft 3662 Hz, kubo 4915 Hz).
+POINTS_HZ = {"two_shaft": (1500.0, 3600.0, 5200.0), "kubo": (2000.0, 3400.0, 4500.0)}
+H = 5
+#: κ_k, F_k, dκ_k/dω and recovery: two factorisations of matrices with condition up to
+#: ~1e6 (dense LU or pole-residue against sparse LU), rounding ~1e-10 measured.
+REDUCTION_RTOL = 1e-9
+VARIANTS = ("base", "cross", "tabulated", "loss")
+
+
+@cache
+def system(name: str, variant: str = "base"):
+    """The model ``name`` with the modification ``variant`` (module docstring)."""
+    path = FILES[name]
+    data = tomllib.loads(path.read_text())
+    if variant == "cross":
+        for b in data["bearings"]:
+            k, c = b.get("kyy", 0.0), b.get("cyy", 0.0)
+            b.update(kyz=0.2 * k, kzy=-0.2 * k, cyz=0.1 * c, czy=-0.1 * c)
+    elif variant == "tabulated":
+        first = data["bearings"][0]
+        k = first["kyy"]
+        node = 3 if name == "two_shaft" else 0
+        extra = {"shaft": 0, "node": node, "cyy": first["cyy"], "czz": first["czz"]}
+        extra.update(speeds=[100.0, 3000.0], kyy=[0.5 * k, 2 * k], kzz=[0.6 * k, 1.5 * k], kyz=[0.0, 0.3 * k])
+        data["bearings"].append(extra)
+    elif variant == "loss":
+        for m in data["materials"].values():
+            m["loss_factor"] = 0.01
+    return model_from_file_data(data, str(path))
+
+
+@cache
+def models(name: str, variant: str = "base"):
+    """(single-mesh GearedModel, LinkModel) of one system, H = 5, up to 6 kHz."""
+    s = system(name, variant)
+    return build_geared_model(s, 2 * np.pi * 6000.0, H), build_link_model(s)
+
+
+def _flat(a) -> np.ndarray:
+    return np.asarray(a, dtype=complex).reshape(H + 1, -1)
+
+
+def _rel(a, b, scale) -> float:
+    return float(np.max(np.abs(np.asarray(a) - np.asarray(b))) / scale)
+
+
+# ----------------------------------------------------------------------------- κ and F
+
+
+@pytest.mark.parametrize("variant", VARIANTS)
+@pytest.mark.parametrize("name", FILES)
+def test_kappa_and_force_agree(name, variant):
+    """κ_k and F_k, k = 0..5, at three mesh frequencies: REDUCTION_RTOL of their largest
+    entry (κ_0 is rounding, ~1e-8 N/m, where a free torsional mode leaves the mean mesh
+    compliance unbounded; it is compared against the scale of κ_1..κ_5)."""
+    g, lk = models(name, variant)
+    worst = 0.0
+    for w in 2 * np.pi * np.array(POINTS_HZ[name]):
+        kg, kl = _flat(g.reduced.kappa(w, H)), _flat(lk.reduced.kappa(w, H))
+        fg, fl = _flat(g.reduced.force(w, H)), _flat(lk.reduced.force(w, H))
+        worst = max(worst, _rel(kg, kl, np.max(np.abs(kl[1:]))), _rel(fg, fl, np.max(np.abs(fl))))
+    print(f"{name} {variant}: kappa, F max rel diff {worst:.1e}")
+    assert worst <= REDUCTION_RTOL
+
+
+@pytest.mark.parametrize("variant", ("base", "cross"))
+@pytest.mark.parametrize("name", FILES)
+def test_analytic_derivatives_agree(name, variant):
+    """dκ_k/dω and dF_k/dω where both paths have them analytically (no tabulated bearing,
+    no loss factor): dκ to REDUCTION_RTOL of max |dκ|; dF to 1e-8 max|F|/ω, the rounding of
+    the link path's central difference of F_0 (a step ~1e-6 ω on |F_0| ~ 2.3 kN: ~1e-10
+    |F|/ω), the single path's dF_0 being 0 exactly (F_0 = the static mesh load)."""
+    g, lk = models(name, variant)
+    worst_k = worst_f = 0.0
+    for w in 2 * np.pi * np.array(POINTS_HZ[name]):
+        dkg, dkl = _flat(g.reduced.kappa_derivative(w, H)), _flat(lk.reduced.kappa_derivative(w, H))
+        dfg, dfl = _flat(g.reduced.force_derivative(w, H)), _flat(lk.reduced.force_derivative(w, H))
+        worst_k = max(worst_k, _rel(dkg, dkl, np.max(np.abs(dkl))))
+        worst_f = max(worst_f, _rel(dfg, dfl, np.max(np.abs(lk.reduced.force(w, H))) / w))
+    print(f"{name} {variant}: dkappa {worst_k:.1e} (of max), dF {worst_f:.1e} (of max|F|/omega)")
+    assert worst_k <= REDUCTION_RTOL and worst_f <= 1e-8
+
+
+def _richardson(f, w: float, h: float) -> np.ndarray:
+    """Central difference of ``f(ω, H)`` with one Richardson step (error O(h^4))."""
+
+    def cd(s):
+        return (_flat(f(w + s, H)) - _flat(f(w - s, H))) / (2 * s)
+
+    return (4 * cd(h / 2) - cd(h)) / 3
+
+
+def _derivatives_against_differences(name, variant):
+    """Worst |single-path analytic - differences of the link path's κ, F| over the points,
+    relative to max |dκ| (max |dF|), and the bound it must stay under: 1e-9 plus ten times
+    the differences' own error (two Richardson steps h = 2e-5 ω and 1e-5 ω compared)."""
+    g, lk = models(name, variant)
+    excess = 0.0
+    for w in 2 * np.pi * np.array(POINTS_HZ[name]):
+        for analytic, f in (
+            (g.reduced.kappa_derivative, lk.reduced.kappa),
+            (g.reduced.force_derivative, lk.reduced.force),
+        ):
+            a, d1, d2 = _flat(analytic(w, H)), _richardson(f, w, 2e-5 * w), _richardson(f, w, 1e-5 * w)
+            scale = np.max(np.abs(d2))
+            bound = 1e-9 + 10 * _rel(d1, d2, scale)
+            excess = max(excess, _rel(a, d2, scale) / bound)
+    return excess
+
+
+@pytest.mark.parametrize("name", FILES)
+def test_derivatives_with_a_loss_factor_against_differences(name):
+    """With a loss factor the link path has no analytic derivative: the single path's
+    dκ_k/dω and dF_k/dω equal central differences (Richardson) of the link path's κ_k and
+    F_k within 1e-9 of their scale plus ten times the differences' own error."""
+    assert _derivatives_against_differences(name, "loss") <= 1.0
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="single path's dκ_k/dω (k >= 1) omits the speed dependence of a tabulated bearing "
+    "(direct_receptance.model_stiffness_derivative holds its coefficients at the current speed): "
+    "measured 3.3e-4 of max|dκ| on two_shaft at 1500 Hz, 2e-6 on kubo, against differences good to ~1e-11",
+)
+@pytest.mark.parametrize("name", FILES)
+def test_derivatives_with_a_tabulated_bearing_against_differences(name):
+    """As the loss-factor test, with the speed-tabulated bearing."""
+    assert _derivatives_against_differences(name, "tabulated") <= 1.0
+
+
+# ----------------------------------------------------------------------------- recovery
+
+
+_POLE_RECOVERY = pytest.mark.xfail(
+    strict=True,
+    reason="link path's pole-residue recovery (LinkReceptance.recover, method 'poles') of the "
+    "bearing DOFs of kubo (bearings 3.5e12 N/m: harmonics ~1e-11 m) differs from a direct solve "
+    "by 3.6e-6 of the alternating harmonics at 2000 Hz (2.4e-7 at 4500 Hz); the single path's "
+    "poles agree with a direct solve to 9e-10",
+)
+RECOVERY_CASES = [
+    pytest.param(n, v, marks=_POLE_RECOVERY if (n, v) in {("kubo", "base"), ("kubo", "cross")} else ())
+    for n in FILES
+    for v in VARIANTS
+]
+
+
+@pytest.mark.parametrize(("name", "variant"), RECOVERY_CASES)
+def test_bearing_displacements_recovered_alike(name, variant):
+    """Harmonics of every bearing node's (u_y, u_z) from the same δ harmonics: the single
+    path's ``bearing_harmonics`` (G = F - κ Y) against the link path's ``recover`` given
+    that same G. Recovery is linear in (Y, G), so any δ serves: a static offset with
+    1 µm at the first harmonic and 0.3 µm at the second. The mean and the alternating
+    harmonics each to REDUCTION_RTOL of their largest (the mean, the static deflection, is
+    30x the alternating part on kubo's stiff bearings)."""
+    g, lk = models(name, variant)
+    z = np.zeros(2 * H + 1)
+    z[0], z[1], z[4] = 5e-6, 1e-6, 0.3e-6
+    worst = 0.0
+    for w in 2 * np.pi * np.array(POINTS_HZ[name]):
+        Q, _ = bearing_harmonics(g, w, z)
+        Y = real_to_complex(z)
+        G = _flat(lk.reduced.force(w, H))[:, 0] - _flat(lk.reduced.kappa(w, H))[:, 0] * Y
+        q = lk.receptance.recover(w, H, z[None, :], complex_to_real(G)[None, :], g.bearing_dofs)
+        Ql = real_to_complex(q).T
+        for part in (slice(0, 1), slice(1, None)):
+            worst = max(worst, _rel(Q[part], Ql[part], np.max(np.abs(Ql[part]))))
+    print(f"{name} {variant}: bearing recovery {worst:.1e}")
+    assert worst <= REDUCTION_RTOL
+
+
+@pytest.mark.xfail(
+    strict=True,
+    raises=ModelError,
+    reason="link path refuses a tabulated bearing that replaces one of a shaft's two bearings: "
+    "LinkReceptance checks the static loads against the rigid-body modes of LinearModel.K, which "
+    "leaves tabulated bearings out (net load 2.0e-1 on a free mode of two_shaft); the single path "
+    "takes stiffness(0) and builds",
+)
+def test_a_tabulated_bearing_in_place_of_a_linear_one_builds_on_both_paths():
+    """two_shaft with its first bearing tabulated against speed (k_yy 0.5 -> 2 x, k_zz
+    0.6 -> 1.5 x over 100-3000 rad/s): both paths build and give the same κ_k, F_k."""
+    data = tomllib.loads(FILES["two_shaft"].read_text())
+    b = data["bearings"][0]
+    k = b["kyy"]
+    b.update(speeds=[100.0, 3000.0], kyy=[0.5 * k, 2 * k], kzz=[0.6 * k, 1.5 * k])
+    s = model_from_file_data(data, str(FILES["two_shaft"]))
+    g = build_geared_model(s, 2 * np.pi * 6000.0, H)
+    lk = build_link_model(s)
+    w = 2 * np.pi * 3600.0
+    kl = _flat(lk.reduced.kappa(w, H))
+    assert _rel(g.reduced.kappa(w, H), kl, np.max(np.abs(kl[1:]))) <= REDUCTION_RTOL
+
+
+# ----------------------------------------------------------------------------- Floquet
+
+#: Floquet multipliers: the single path's state space holds the modes below 3x the
+#: highest mesh frequency its model was built for; the link path's is the dense model.
+#: That truncation moves |μ| by up to 3e-3 (measured on two_shaft's 1-6 kHz sweep, 5000
+#: Hz down: 1.04822 against 1.05134); built for 20 kHz instead, the single path gives
+#: 1.18599215 at 3400 Hz against the link path's 1.18599217.
+FLOQUET_RTOL = 5e-3
+#: |μ| of a single-path model built for 60 kHz (modes to 180 kHz) against the link path:
+#: the truncation gone, what remains is the eigenvalue rounding of two state spaces.
+FLOQUET_FULL_RTOL = 1e-6
+#: two_shaft mesh frequencies [Hz] solved from rest: 3400 Hz on an unstable period-1
+#: orbit (|μ| = 1.186), 5000 and 5500 Hz stable (|μ| = 1, the free torsional mode).
+FLOQUET_HZ = (3400.0, 5000.0, 5500.0)
+
+
+def _point_sweeps(variant: str = "base", fine: bool = False):
+    s = system("two_shaft", variant)
+    g = build_geared_model(s, 2 * np.pi * 60e3, H) if fine else models("two_shaft", variant)[0]
+    lk = models("two_shaft", variant)[1]
+    out = []
+    for hz in FLOQUET_HZ:
+        ws = 2 * np.pi * np.array([hz])
+        rg = geared_sweep(s, ws, H=H, directions="up", model=g, period=1, stability=True).mesh
+        rl = link_sweep(lk, ws, H=H, directions="up", period=1, stability=True).result
+        out.append((rg, rl))
+    return out
+
+
+def _floquet_agree(pairs, rtol: float) -> float:
+    """Worst relative |μ| difference; asserts the points converged alike and the verdicts agree."""
+    worst = 0.0
+    for rg, rl in pairs:
+        assert np.array_equal(rg.converged, rl.converged) and np.all(rg.converged)
+        assert np.array_equal(rg.stable, rl.stable)
+        worst = max(worst, float(np.max(np.abs(rg.floquet_max / rl.floquet_max - 1))))
+    assert worst <= rtol
+    return worst
+
+
+def test_floquet_verdicts_agree_at_hb_points():
+    """Stable flag equal and largest |μ| to FLOQUET_RTOL at the two_shaft points of
+    FLOQUET_HZ (one unstable); with the single path's truncation removed, to
+    FLOQUET_FULL_RTOL."""
+    pairs = _point_sweeps()
+    assert [bool(rg.stable[0]) for rg, _ in pairs] == [False, True, True]
+    print(f"floquet |mu| default {_floquet_agree(pairs, FLOQUET_RTOL):.1e}", end=" ")
+    print(f"60 kHz model {_floquet_agree(_point_sweeps(fine=True), FLOQUET_FULL_RTOL):.1e}")
+
+
+@pytest.mark.xfail(
+    strict=True,
+    raises=ModelError,
+    reason="hysteretic damping in Floquet: the link path refuses it (LinkReceptance.state_space: "
+    "'hysteretic damping has no time-domain form for stability'), the single path drops it and "
+    "gives |μ| of the model without it",
+)
+def test_floquet_verdicts_agree_with_a_loss_factor():
+    """As above on two_shaft with a loss factor η = 0.01."""
+    _floquet_agree(_point_sweeps("loss"), FLOQUET_RTOL)
+
+
+# ----------------------------------------------------------------------------- sweeps
+
+#: Sweep tolerance: both paths solve the same equations to tol = 1e-10 (relative
+#: residual) from the same starts; outputs agree to the solver's tolerance times the
+#: conditioning, measured 3e-13.
+SWEEP_RTOL = 1e-8
+
+
+def test_fold_free_sweep_agrees():
+    """two_shaft, 2200-2900 Hz (8 points, up and down, H = 5, stability): below the
+    superharmonic rise at 3000-3100 Hz, no fold, shown by both jump lists being empty.
+    RMS DTE (single ``dte_rms [um]``, link ``mesh0.dte_rms [m]``), largest mesh force and
+    DSLR from the two tables, to SWEEP_RTOL."""
+    s = system("two_shaft")
+    g, lk = models("two_shaft")
+    ws = 2 * np.pi * np.linspace(2200.0, 2900.0, 8)
+    rg = geared_sweep(s, ws, H=H, directions="both", model=g, period=1, stability=True)
+    rl = link_sweep(lk, ws, H=H, directions="both", period=1, stability=True)
+    assert rg.jumps() == [] and rl.jumps() == []
+    fg, fl = rg.to_frame(), rl.to_frame()
+    assert fg["converged"].all() and fl["converged"].all() and fg["stable"].all() and fl["stable"].all()
+    assert np.allclose(fg["mesh_frequency [Hz]"], fl["base_frequency [Hz]"], rtol=1e-15)
+    worst = 0.0
+    for single, link, to_single in (
+        ("dte_rms [um]", "mesh0.dte_rms [m]", 1e6),
+        ("force_max [N]", "mesh0.force_max [N]", 1.0),
+        ("dslr [-]", "mesh0.dslr [-]", 1.0),
+    ):
+        a, b = fg[single].to_numpy(float), fl[link].to_numpy(float) * to_single
+        worst = max(worst, float(np.max(np.abs(a / b - 1))))
+    print(f"fold-free sweep max rel diff {worst:.1e}")
+    assert worst <= SWEEP_RTOL
+
+
+@pytest.fixture(scope="module")
+def kubo_sweeps():
+    """Kubo's rig, 3000-6000 Hz in 16 points (200 Hz steps), up and down, H = 5, with
+    stability: across the main resonance (gear-pair mode 4915 Hz) and its jumps."""
+    ws = 2 * np.pi * np.linspace(3000.0, 6000.0, 16)
+    g, lk = models("kubo")
+    rg = geared_sweep(system("kubo"), ws, H=H, directions="both", model=g, period=1, stability=True)
+    rl = link_sweep(lk, ws, H=H, directions="both", period=1, stability=True)
+    return ws, rg, rl
+
+
+def test_jump_locations_agree(kubo_sweeps):
+    """Every jump of one path has one of the other in the same direction within one grid
+    step (200 Hz), and the counts are equal; the up sweep jumps off the resonance."""
+    ws, rg, rl = kubo_sweeps
+    step = ws[1] - ws[0]
+    jg, jl = rg.jumps(), rl.jumps()
+    assert len(jg) == len(jl) and any(j.direction == "up" for j in jg)
+    worst = 0.0
+    for a_list, b_list in ((jg, jl), (jl, jg)):
+        for a in a_list:
+            d = min(abs(a.omega - b.omega) for b in b_list if b.direction == a.direction)
+            worst = max(worst, d / step)
+    print(f"kubo: {len(jg)} jumps, largest shift {worst:.2f} grid steps")
+    assert worst <= 1.0
+
+
+def test_floquet_verdicts_agree_along_kubo_sweep(kubo_sweeps):
+    """Stable flags equal and |μ| to FLOQUET_RTOL along Kubo's sweep (some points unstable)."""
+    _, rg, rl = kubo_sweeps
+    assert not np.all(rg.mesh.stable)
+    print(f"kubo floquet |mu| {_floquet_agree([(rg.mesh, rl.result)], FLOQUET_RTOL):.1e}")

@@ -1,0 +1,160 @@
+"""A study's summary row against one sweep run by hand (issue 33): units and forces.
+
+Two studies of one task each, run in this process (``run_task``, no Dask):
+
+- ``two_shaft.toml``, whose bearings have names: the single-mesh path, bearing columns
+  ``<name> force_max [N]``;
+- the same model with a bearing clearance at the pinion's free-end bearing (written into
+  a temporary model file): the link path, columns ``<link>.<quantity> [unit]`` in SI
+  (the DTE in metres).
+
+The hand sweep is the library's own call with the study's analysis; the summary must be
+the maximum over the sweep of the typed outputs (``SweepResult.dte_rms`` [m] times 1e6,
+``BearingResponse.force_max`` over every bearing; on the link model each link's
+``metrics`` recomputed from the harmonics), not of whatever columns match a pattern. The
+same arithmetic in the same process (one BLAS thread both times): 1e-12.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nlgrd.io.model_file import load_model
+from nlgrd.studies.study_file import load_study
+from nlgrd.studies.study_tasks import run_task, task_specs
+from nlgrd.threads import single_blas_thread
+
+ROOT = Path(__file__).resolve().parents[1]
+TWO_SHAFT = ROOT / "data" / "models" / "two_shaft.toml"
+RTOL = 1e-12
+
+#: A radial clearance of 5 µm at the pinion's free-end bearing (node 8): the static mesh
+#: load (~2.3 kN on 1.5e8 N/m bearings, ~1e-5 m) keeps the journal on it, so its force
+#: is not zero.
+CLEARANCE = """
+[[bearing_clearances]]
+name = "B1"
+shaft = 0
+node = 8
+clearance = 5e-6
+stiffness = 1.0e8
+exponent = 1.0
+"""
+
+
+def study_text(model: Path) -> str:
+    return f"""version = 1
+name = "summary check"
+model = "{model.as_posix()}"
+[analysis]
+rpm = [6000.0, 12000.0, 6]
+direction = "up"
+harmonics = 5
+stability = false
+[[axes]]
+key = "gear_pairs[0].damping_ratio"
+values = [0.05]
+"""
+
+
+def one_task(tmp_path: Path, model: Path) -> tuple[dict, dict]:
+    path = tmp_path / "study.toml"
+    path.write_text(study_text(model))
+    (spec,) = task_specs(load_study(path))
+    out = run_task(spec)
+    assert out["error"] is None, out["error"]
+    return out["summary"], spec
+
+
+def close(a: float, b: float) -> bool:
+    return math.isfinite(a) and math.isfinite(b) and abs(a - b) <= RTOL * abs(b)
+
+
+def test_named_bearings_summary_equals_the_hand_sweep(tmp_path):
+    """Bearings with names (two_shaft.toml): ``bearing_force_max`` is the largest bearing
+    force of the sweep (it was NaN: the summary looked for columns named ``bearing ...``),
+    ``dte_rms_peak [um]`` the largest RMS DTE in µm."""
+    from nlgrd.io.model_file import model_from_file_data
+    from nlgrd.nonlinear.geared import geared_sweep
+
+    summary, spec = one_task(tmp_path, TWO_SHAFT)
+    system = model_from_file_data(spec.model_data, spec.model_file)
+    assert all(b.name for b in system.bearings)
+    a = spec.analysis
+    res = single_blas_thread(geared_sweep)(
+        system,
+        rpm=np.linspace(a["start"], a["stop"], a["count"]),
+        H=a["harmonics"],
+        directions=a["direction"],
+        stability=a["stability"],
+        harmonic_rtol=a["tolerance"],
+    )
+    ok = np.asarray(res.mesh.converged, dtype=bool) & ~res.mesh.no_stable
+    assert ok.all()
+    dte = 1e6 * float(np.max(res.mesh.dte_rms[ok]))
+    bearing = float(np.max(res.bearings.force_max[ok]))
+    assert bearing > 100.0  # the bearings carry the mesh load (~2.3 kN over two bearings)
+    assert close(summary["dte_rms_peak [um]"], dte), (summary["dte_rms_peak [um]"], dte)
+    assert close(summary["bearing_force_max [N]"], bearing), (summary["bearing_force_max [N]"], bearing)
+    assert close(summary["mesh_force_peak [N]"], float(np.max(res.mesh.force_max[ok])))
+
+
+def test_link_model_summary_equals_the_hand_sweep(tmp_path):
+    """A link model (two_shaft.toml with a bearing clearance): ``dte_rms_peak [um]`` is the
+    mesh's largest RMS DTE in µm (it was in metres: 1e6 too small) and
+    ``bearing_force_max`` the clearance's largest contact force, each recomputed here from
+    the harmonics by the link's own ``metrics``."""
+    from nlgrd.io.model_file import model_from_file_data
+    from nlgrd.nonlinear.link_model import build_link_model, link_sweep, needs_links
+    from nlgrd.nonlinear.links import BearingClearance, GearMeshLink
+
+    model_file = tmp_path / "two_shaft_clearance.toml"
+    model_file.write_text(TWO_SHAFT.read_text() + CLEARANCE)
+    assert needs_links(load_model(model_file))
+    summary, spec = one_task(tmp_path, model_file)
+    system = model_from_file_data(spec.model_data, spec.model_file)
+    a = spec.analysis
+    model = build_link_model(system)
+    per_rad = 30 / math.pi * model.receptance.plan.speed_per_base
+    omegas = np.linspace(a["start"], a["stop"], a["count"]) / per_rad
+    res = single_blas_thread(link_sweep)(
+        model, omegas, H=a["harmonics"], rtol=a["tolerance"], directions=a["direction"], stability=False
+    ).result
+    assert np.asarray(res.converged, dtype=bool).all()
+    (mesh,) = [lk for lk in model.links if isinstance(lk, GearMeshLink)]
+    (clear,) = [lk for lk in model.links if isinstance(lk, BearingClearance)]
+    dte, force, mesh_force = [], [], []
+    for z, w in zip(res.harmonics, res.omega, strict=True):
+        m = mesh.metrics(model.link_harmonics(z, mesh.name), w)
+        dte.append(m["dte_rms [m]"])
+        mesh_force.append(m["force_max [N]"])
+        force.append(clear.metrics(model.link_harmonics(z, clear.name), w)["force_max [N]"])
+    assert max(force) > 0.0  # the journal is on the clearance
+    assert close(summary["dte_rms_peak [um]"], 1e6 * max(dte)), (summary["dte_rms_peak [um]"], max(dte))
+    assert summary["dte_rms_peak [um]"] > 0.01  # µm, not m
+    assert close(summary["bearing_force_max [N]"], max(force)), (summary["bearing_force_max [N]"], max(force))
+    assert close(summary["mesh_force_peak [N]"], max(mesh_force))
+
+
+@pytest.mark.parametrize("missing", ["dslr", "bearing_force"])
+def test_a_summary_column_missing_from_the_table_is_an_error(missing):
+    """A typed column that is not in the table raises (a renamed column must not turn a
+    summary value into NaN silently)."""
+    import pandas as pd
+
+    from nlgrd.studies.study_tasks import SummaryColumns, summarise
+
+    frame = pd.DataFrame(
+        {"x [Hz]": [1.0, 2.0], "direction": ["up", "up"], "converged": [True, True]}
+        | {"response": ["periodic"] * 2, "H": [5, 5], "dslr [-]": [1.0, 2.0], "b force_max [N]": [3.0, 4.0]}
+    )
+    cols = SummaryColumns(dslr=["dslr [-]"], bearing_force=["b force_max [N]"])
+    row = summarise(frame, [], "x [Hz]", 1.0, cols)
+    assert row["dslr_peak [-]"] == 2.0 and row["bearing_force_max [N]"] == 4.0
+    bad = SummaryColumns(**{**cols.__dict__, missing: ["nope [-]"]})
+    with pytest.raises(KeyError, match="nope"):
+        summarise(frame, [], "x [Hz]", 1.0, bad)
