@@ -15,6 +15,7 @@ from nlgrd.io.command_line import (
     parse_range,
     parse_span,
     pyplot,
+    snap_to_grid,
 )
 
 
@@ -37,8 +38,10 @@ class _Progress:
 class _Unit:
     """Mesh frequencies [rad/s] to and from the unit the range was given in (rpm or Hz)."""
 
-    def __init__(self, rpm: bool, mesh_per_pinion: float):
+    def __init__(self, rpm: bool, mesh_per_pinion: float, grid=None):
         self.name = "rpm" if rpm else "Hz"
+        self.column = "pinion_speed [rpm]" if rpm else "mesh_frequency [Hz]"
+        self.grid = grid  # the values as given, written in place of their round trip
         # mesh frequency [rad/s] per pinion speed [rad/s]: N_p |s_p|
         self.scale = mesh_per_pinion * math.pi / 30 if rpm else 2 * math.pi
 
@@ -114,9 +117,12 @@ def cmd_sweep(args) -> int:
     quantity = check_quantity(args.quantity)
     gp = system.gear_pairs[0]
     unit = _Unit(
-        args.rpm is not None, gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
+        args.rpm is not None,
+        gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio),
+        None if args.continuation else values,
     )
     omegas = unit.omega(values)
+    _check_pitch_line_velocity(option, text, gp, float(omegas.max()))
     pyplot()
     from nlgrd.nonlinear.auto_period import transitions
 
@@ -150,11 +156,31 @@ def cmd_sweep(args) -> int:
         from nlgrd.cli_orbits import search_command
 
         found = search_command(model, res, omegas, *search, unit)
-    _write_sweep(res, quantity, out, png, found=found)
+    _write_sweep(res, quantity, out, png, found=found, unit=unit)
     status = _summary(args, res, unit, out, png, transitions)
     if found is not None:
         print(f"wrote {_beside(out, 'orbits')} and {_beside(out, 'branches')}")
     return status
+
+
+#: Largest pitch-line velocity [m/s]. A thin steel rim turning at v carries the hoop
+#: stress rho v^2 (Timoshenko 1956, Strength of Materials II, sec. 30): 700 MPa at 300 m/s
+#: with rho = 7850 kg/m^3, beyond any gear's strength; the model neglects the
+#: centrifugal loads that govern well before.
+MAX_PITCH_LINE_VELOCITY = 300.0
+
+
+def _check_pitch_line_velocity(option: str, text: str, gp, omega_max: float) -> None:
+    """Refuse a range whose top speed moves the pinion's pitch circle faster than
+    :data:`MAX_PITCH_LINE_VELOCITY` (v = omega r_w / z1, omega the mesh frequency [rad/s])."""
+    g = gp.geometry
+    v = omega_max * g.operating_pitch_radius_pinion / g.teeth_pinion
+    if v > MAX_PITCH_LINE_VELOCITY:
+        raise ModelError(
+            option,
+            f"{text!r} reaches a pitch-line velocity of {v:.3g} m/s, above the model's limit of "
+            f"{MAX_PITCH_LINE_VELOCITY:g} m/s (a steel rim's hoop stress rho v^2 is 700 MPa there)",
+        )
 
 
 def _check_period_options(args, period: int) -> None:
@@ -194,7 +220,7 @@ def _period_command(args, system, omegas, unit, quantity, out, png, search) -> i
             file=sys.stderr,
         )
         return 1
-    _write_sweep(res, quantity, out, png, found=(orbits, branches))
+    _write_sweep(res, quantity, out, png, found=(orbits, branches), unit=unit)
     m = res.mesh
     ok = m.converged & ~m.no_stable
     print(
@@ -220,9 +246,12 @@ def _beside(out, name: str):
     return out.with_name(f"{out.stem}_{name}.csv")
 
 
-def _write_sweep(res, quantity, out, png, extra=None, found=None) -> None:
+def _write_sweep(res, quantity, out, png, extra=None, found=None, unit=None) -> None:
+    frame = res.to_frame()
+    if unit is not None and unit.grid is not None:
+        snap_to_grid(frame, unit.column, unit.grid)
     with Outputs() as files:
-        files.csv(res.to_frame(), out)
+        files.csv(frame, out)
         ax = res.plot(quantity=quantity)
         if found is not None:
             from nlgrd.cli_orbits import draw_branches
@@ -284,7 +313,7 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
         a1.set_title(f"spectra at {unit(res.mesh.omega[i])} {unit.name} (the largest RMS DTE)")
         fig.tight_layout()
         extra = (fig, out.with_name(out.stem + "_spectrum.png"))
-    _write_sweep(res, quantity, out, png, extra)
+    _write_sweep(res, quantity, out, png, extra, unit=unit)
     if extra is not None:
         print(f"wrote {extra[1]}")
     return _summary(args, res, unit, out, png, transitions)
@@ -303,6 +332,10 @@ def _summary(args, res, unit, out, png, transitions) -> int:
             f"not converged (NaN in the CSV, flagged converged = False) at {unit.name}: "
             + ", ".join(unit(w) for w in bad)
         )
+    if len(bad) == len(res.mesh):
+        print(f"wrote {out} and {png}")
+        print("nlgrd: error: no point of the sweep converged", file=sys.stderr)
+        return 1
     torus = np.isfinite(res.mesh.secondary_frequency)
     lost = np.atleast_1d(res.mesh.omega[res.mesh.no_stable & ~torus])
     if len(lost):

@@ -234,6 +234,7 @@ def test_a_task_that_raises_is_recorded_and_the_study_goes_on(tmp_path):
         capture_output=True,
         text=True,
         timeout=300,
+        cwd=tmp_path,  # the default output folder is in the current directory
     )
     assert r.returncode == 1, r.stderr
     assert "failed 1" in r.stdout and "Traceback" not in r.stderr
@@ -263,7 +264,11 @@ def test_a_bad_study_file_is_one_line_naming_file_and_key(tmp_path, edit, key):
     assert text != STUDY
     path.write_text(text)
     r = subprocess.run(
-        [*NLGRD, "study", str(path), "--executor", "serial"], capture_output=True, text=True, timeout=120
+        [*NLGRD, "study", str(path), "--executor", "serial"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
     )
     assert r.returncode == 2
     line = r.stderr.strip()
