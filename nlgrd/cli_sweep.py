@@ -17,6 +17,7 @@ from nlgrd.io.command_line import (
     pyplot,
     snap_to_grid,
 )
+from nlgrd.io.model_checks import check_pitch_line_velocity
 
 
 class _Progress:
@@ -122,7 +123,7 @@ def cmd_sweep(args) -> int:
         None if args.continuation else values,
     )
     omegas = unit.omega(values)
-    _check_pitch_line_velocity(option, text, gp, float(omegas.max()))
+    check_pitch_line_velocity(gp, float(omegas.max()), option, repr(text))
     pyplot()
     from nlgrd.nonlinear.auto_period import transitions
 
@@ -161,26 +162,6 @@ def cmd_sweep(args) -> int:
     if found is not None:
         print(f"wrote {_beside(out, 'orbits')} and {_beside(out, 'branches')}")
     return status
-
-
-#: Largest pitch-line velocity [m/s]. A thin steel rim turning at v carries the hoop
-#: stress rho v^2 (Timoshenko 1956, Strength of Materials II, sec. 30): 700 MPa at 300 m/s
-#: with rho = 7850 kg/m^3, beyond any gear's strength; the model neglects the
-#: centrifugal loads that govern well before.
-MAX_PITCH_LINE_VELOCITY = 300.0
-
-
-def _check_pitch_line_velocity(option: str, text: str, gp, omega_max: float) -> None:
-    """Refuse a range whose top speed moves the pinion's pitch circle faster than
-    :data:`MAX_PITCH_LINE_VELOCITY` (v = omega r_w / z1, omega the mesh frequency [rad/s])."""
-    g = gp.geometry
-    v = omega_max * g.operating_pitch_radius_pinion / g.teeth_pinion
-    if v > MAX_PITCH_LINE_VELOCITY:
-        raise ModelError(
-            option,
-            f"{text!r} reaches a pitch-line velocity of {v:.3g} m/s, above the model's limit of "
-            f"{MAX_PITCH_LINE_VELOCITY:g} m/s (a steel rim's hoop stress rho v^2 is 700 MPa there)",
-        )
 
 
 def _check_period_options(args, period: int) -> None:

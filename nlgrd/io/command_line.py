@@ -84,7 +84,10 @@ def parse_range(text: str, name: str = "--rpm"):
     if count is None:
         return np.array(values)
     if values[0] >= values[1]:
-        raise ModelError(name, f"START must be below STOP, got {text!r} (the sweep direction is --direction)")
+        raise ModelError(
+            name,
+            f"START must be below STOP, got {text!r} (a range goes up; a sweep's --direction sets the sense)",
+        )
     try:
         start, stop = (Fraction(p.strip()) for p in text.split(":")[:2])
     except ValueError:  # a form float() reads and Fraction() does not

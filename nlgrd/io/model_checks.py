@@ -43,7 +43,15 @@ import numpy as np
 from nlgrd.errors import ModelError
 from nlgrd.rotor.system import RotorSystem
 
-__all__ = ["check_model", "check_gear_files", "check_lste_files", "check_stiffness_files", "tooth_depth"]
+__all__ = [
+    "MAX_PITCH_LINE_VELOCITY",
+    "check_gear_files",
+    "check_lste_files",
+    "check_model",
+    "check_pitch_line_velocity",
+    "check_stiffness_files",
+    "tooth_depth",
+]
 
 #: An LSTE fluctuation this many times the total backlash is refused. Real LSTEs are a
 #: few um against backlashes of tens to hundreds of um; a factor 100 (two orders of
@@ -72,12 +80,49 @@ def _check_materials(system: RotorSystem) -> None:
     ]
     for where, m in owners:
         for field, (low, high, unit) in MATERIAL_RANGES.items():
-            value = getattr(m, field, None)
+            value, u = getattr(m, field, None), "" if unit == "-" else f" {unit}"
             if value is not None and not low <= value <= high:
                 raise ModelError(
                     f"{where}.{field}",
-                    f"{value!r} {unit} is outside the range of solids, {low:g} to {high:g} {unit}",
+                    f"{value!r}{u} is outside the range of solids, {low:g} to {high:g}{u}",
                 )
+
+
+#: Largest pitch-line velocity [m/s] of a sweep. A thin steel rim turning at v carries
+#: the hoop stress rho v^2 (Timoshenko 1956, Strength of Materials II, sec. 30): 700 MPa
+#: at 300 m/s with rho = 7850 kg/m^3, at the strength of gear steels; the model neglects
+#: the centrifugal loads that govern well before.
+MAX_PITCH_LINE_VELOCITY = 300.0
+
+
+def check_pitch_line_velocity(gear_pair, omega: float, key: str, given: str) -> None:
+    """Refuse a mesh frequency that moves the pinion's pitch circle faster than
+    :data:`MAX_PITCH_LINE_VELOCITY`: v = omega r_w1 / z1.
+
+    Parameters
+    ----------
+    gear_pair : nlgrd.gear.mesh.GearMesh
+        The gear pair whose mesh frequency ``omega`` is.
+    omega : float
+        The highest mesh frequency of the range [rad/s].
+    key : str
+        The option or key of the range, named in the error (``--rpm``, ``analysis.rpm``).
+    given : str
+        The range as the user gave it, quoted in the error.
+
+    Raises
+    ------
+    ModelError
+        When the pitch-line velocity exceeds the limit.
+    """
+    g = gear_pair.geometry
+    v = omega * g.operating_pitch_radius_pinion / g.teeth_pinion
+    if v > MAX_PITCH_LINE_VELOCITY:
+        raise ModelError(
+            key,
+            f"{given} reaches a pitch-line velocity of {v:.3g} m/s, above the model's limit of "
+            f"{MAX_PITCH_LINE_VELOCITY:g} m/s (a steel rim's hoop stress rho v^2 is 700 MPa there)",
+        )
 
 
 def _check_duplicate_meshes(system: RotorSystem) -> None:
