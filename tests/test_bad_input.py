@@ -11,9 +11,17 @@ to prove the exit status of the real command.
 
 from __future__ import annotations
 
+import os
+import socket
+import subprocess
 import sys
+import time
+import tomllib
 from pathlib import Path
+from types import SimpleNamespace
 
+import numpy as np
+import pandas as pd
 import pytest
 
 import nlgrd.nonlinear.geared
@@ -501,3 +509,272 @@ def test_bad_study_file(tmp_path, capsys, monkeypatch, edit, key):
     line = one_line(err)
     assert rc == 2 and line.startswith(f"nlgrd: error: {path}: {key}"), line
     assert not (tmp_path / "s").exists()  # nothing ran
+
+
+# ----------------------------------------------------------------------- reports, schedulers
+
+NB = "01_kubo_dynamic_factor"
+NB_FILE = ROOT / "notebooks" / f"{NB}.ipynb"
+REPORT_CASES = {
+    "no such notebook (issue)": (["report", "99_nothing"], "notebook: no notebook '99_nothing'"),
+    "points a word (issue)": (
+        ["report", NB, "-p", "points", "abc"],
+        "parameters.points: the notebook expects int",
+    ),
+    "H fractional": (["report", NB, "-p", "H", "2.5"], "parameters.H: the notebook expects int or None"),
+    "fast a word": (["report", NB, "-p", "fast", "maybe"], "parameters.fast: the notebook expects bool"),
+    "fast a number": (["report", NB, "-p", "fast", "1"], "parameters.fast: the notebook expects bool"),
+    "rpm_min a word": (
+        ["report", NB, "-p", "rpm_min", "low"],
+        "parameters.rpm_min: the notebook expects float",
+    ),
+    "damping band a number": (
+        ["report", NB, "-p", "damping_band", "0.1"],
+        "parameters.damping_band: the notebook",
+    ),
+    "model file a number": (
+        ["report", NB, "-p", "model_file", "3"],
+        "parameters.model_file: the notebook expects str",
+    ),
+    "unknown parameter": (["report", NB, "-p", "pionts", "3"], "parameters.pionts: not a parameter"),
+    "out_dir given": (["report", NB, "-p", "out_dir", "x"], "-p out_dir"),
+    "workers 0": (["report", NB, "--workers", "0"], "--workers"),
+    "batch file missing": (["report", NB, "--batch", "no_such_batch.toml"], "no_such_batch.toml"),
+    "executor unknown": (["report", NB, "--executor", "threads"], "--executor"),
+    "report tls without certificates (issue)": (
+        ["report", NB, "--scheduler", "tls://127.0.0.1:8786"],
+        "--scheduler: tls://127.0.0.1:8786 needs the client's TLS certificates: set "
+        "distributed.comm.tls.ca-file",
+    ),
+    "report scheduler without scheme": (
+        ["report", NB, "--scheduler", "head:8786"],
+        "--scheduler: expected tcp://",
+    ),
+    "report timeout negative": (["report", NB, "--connect-timeout", "-1"], "--connect-timeout"),
+    "study tls without certificates (issue)": (
+        ["study", ROOT / "data" / "studies" / "kubo_jump_band.toml", "--scheduler", "tls://head:8786"],
+        "--scheduler: tls://head:8786 needs the client's TLS certificates",
+    ),
+    "study scheduler http": (
+        ["study", ROOT / "data" / "studies" / "kubo_jump_band.toml", "--scheduler", "http://head:8786"],
+        "--scheduler: expected tcp://",
+    ),
+    "study timeout zero": (
+        ["study", ROOT / "data" / "studies" / "kubo_jump_band.toml", "--connect-timeout", "0"],
+        "--connect-timeout",
+    ),
+    "study timeout a word": (
+        ["study", ROOT / "data" / "studies" / "kubo_jump_band.toml", "--connect-timeout", "soon"],
+        "--connect-timeout",
+    ),
+    "study workers 0": (
+        ["study", ROOT / "data" / "studies" / "kubo_jump_band.toml", "--workers", "0"],
+        "--workers",
+    ),
+    "study file missing": (["study", "no_such_study.toml"], "no_such_study.toml"),
+}
+
+
+@pytest.fixture
+def no_run(monkeypatch):
+    """Running a notebook or a study task fails the test: the input must be refused before."""
+    import nlgrd.studies.batch_reports
+    import nlgrd.studies.study_runner
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("a run started before the input was checked")
+
+    monkeypatch.setattr(nlgrd.studies.batch_reports, "run_report", forbidden)
+    monkeypatch.setattr(nlgrd.studies.study_runner, "run_task", forbidden)
+
+
+@pytest.mark.usefixtures("no_run")
+@pytest.mark.parametrize(("argv", "fragment"), list(REPORT_CASES.values()), ids=list(REPORT_CASES))
+def test_bad_report_or_study_option(tmp_path, capsys, monkeypatch, argv, fragment):
+    monkeypatch.chdir(tmp_path)
+    for name in [k for k in os.environ if k.startswith("DASK_DISTRIBUTED__COMM__TLS")]:
+        monkeypatch.delenv(name)
+    rc, _, err = run(capsys, *argv)
+    line = one_line(err)
+    assert rc == 2 and fragment in line, line
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_closed_scheduler_port_fails_fast(tmp_path, capsys, monkeypatch):
+    """A scheduler address where nothing listens (a loopback port just freed) is one line
+    naming --scheduler within about the connect timeout (1 s here), not Dask's 30 s."""
+    monkeypatch.chdir(tmp_path)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    study = ROOT / "data" / "studies" / "kubo_jump_band.toml"
+    t0 = time.perf_counter()
+    rc, _, err = run(
+        capsys, "study", study, "--scheduler", f"tcp://127.0.0.1:{port}", "--connect-timeout", "1"
+    )
+    elapsed = time.perf_counter() - t0
+    line = one_line(err)
+    assert rc == 2 and line.startswith(
+        f"nlgrd: error: --scheduler: no Dask scheduler answered at tcp://127.0.0.1:{port}"
+    )
+    assert elapsed < 10, elapsed  # loading the study takes a few s; Dask's default wait alone is 30 s
+
+
+# ----------------------------------------------------------------------- faults and outputs
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["sweep", KUBO, "--rpm", "5:1:10"],
+        ["sweep", KUBO, "--rpm", "1e9:2e9:3"],
+        ["report", "99_nothing"],
+        ["modes", TWO, "--rpm", "fast"],
+    ],
+    ids=["rpm down", "rpm 1e9", "no notebook", "modes rpm a word"],
+)
+def test_the_real_command_exits_2_with_one_line(tmp_path, argv):
+    """The installed command as a user runs it: status 2, one line, nothing on stdout."""
+    r = subprocess.run([*NLGRD, *map(str, argv)], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert r.stderr.startswith("nlgrd: error: ") and "Traceback" not in r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_grid_values_are_the_decimal_values_of_the_range():
+    """START + i (STOP - START) / (COUNT - 1) in exact rational arithmetic, then the nearest
+    float: every value prints as the decimal number the user's range means (checked
+    against integer arithmetic, independent of floats), where ``numpy.linspace`` gives
+    e.g. 0.30000000000000004 for 0:1:11."""
+    from nlgrd.io.command_line import parse_range
+
+    grid = parse_range("4000:16000:241")
+    assert [repr(float(v)) for v in grid] == [repr(float(4000 + 50 * i)) for i in range(241)]
+    tenths = parse_range("0:1:11")
+    assert [repr(float(v)) for v in tenths] == [repr(i / 10) for i in range(11)]  # i/10: correctly rounded
+    assert repr(float(np.linspace(0, 1, 11)[3])) == "0.30000000000000004"  # what the old grid wrote
+
+
+def test_speeds_written_as_given_after_their_round_trip():
+    """rpm -> mesh frequency [rad/s] -> rpm differs from the typed value by ulps
+    (10600.000000000004); the CSV's column is the typed grid again, and a value that is no
+    grid point (a fold's landing) is kept."""
+    from nlgrd.io.command_line import parse_range, snap_to_grid
+
+    grid = parse_range("4000:16000:241")
+    scale = 25 * np.pi / 30  # Kubo: 25 pinion teeth, mesh frequency per pinion rpm
+    trip = (grid * scale) / scale
+    assert np.any(trip != grid)  # the round trip does leave noise
+    frame = pd.DataFrame({"pinion_speed [rpm]": np.append(trip, 10612.5)})
+    snap_to_grid(frame, "pinion_speed [rpm]", grid)
+    assert frame["pinion_speed [rpm]"].tolist() == [*grid.tolist(), 10612.5]
+
+
+def test_a_sweep_whose_every_point_fails_exits_1(tmp_path, capsys, monkeypatch):
+    """A run in which no point converged is a failure (exit 1, one error line), not a
+    success: the real sweep is run on two points and its points marked not converged."""
+    real = nlgrd.nonlinear.geared.geared_sweep
+
+    def failing(*args, **kwargs):
+        res = real(*args, **kwargs)
+        res.mesh.converged[:] = False
+        return res
+
+    monkeypatch.setattr(nlgrd.nonlinear.geared, "geared_sweep", failing)
+    out = tmp_path / "s.csv"
+    argv = ["sweep", KUBO, "--rpm", "6000:7000:2", "--harmonics", "3", "--no-stability", "--direction", "up"]
+    rc, stdout, err = run(capsys, *argv, "--out", out)
+    assert rc == 1 and "2 not converged" in stdout, stdout
+    assert (
+        "Traceback" not in err
+        and err.strip().splitlines()[-1] == "nlgrd: error: no point of the sweep converged"
+    )
+
+
+def test_outputs_go_to_the_current_directory(tmp_path, capsys, monkeypatch):
+    """``nlgrd study data/studies/x.toml`` writes ./x/ and ``nlgrd report`` ./reports/,
+    not into the source tree, when run from elsewhere."""
+    import nlgrd.studies.batch_reports
+    import nlgrd.studies.study_runner
+
+    seen = {}
+
+    def fake_study(study, out, **kwargs):
+        seen["study"] = Path(out)
+        return nlgrd.studies.study_runner.StudyRun(1, 1, 0, 0, False, Path(out))
+
+    def fake_batch(notebook, runs, out, **kwargs):
+        seen["report"] = Path(out)
+        return {"run": {"error": None}}
+
+    monkeypatch.setattr(nlgrd.studies.study_runner, "run_study", fake_study)
+    monkeypatch.setattr(nlgrd.studies.batch_reports, "run_batch", fake_batch)
+    monkeypatch.chdir(tmp_path)
+    rc, _, _ = run(capsys, "study", ROOT / "data" / "studies" / "kubo_jump_band.toml")
+    assert rc == 0 and seen["study"].resolve() == tmp_path / "kubo_jump_band"
+    rc, out, _ = run(capsys, "report", NB, "-p", "fast", "True")
+    assert rc == 0 and seen["report"].resolve() == tmp_path / "reports" / f"batch-{NB}"
+    assert f"wrote reports/batch-{NB}/index.html" in out
+
+
+def test_cancelled_task_is_counted_as_cancelled(tmp_path, capsys, monkeypatch):
+    """A task with no record at the end (cancelled with the client) is 'cancelled (rerun to
+    resume)' on screen and in the summary, not 'failed'; exit status 1."""
+    import nlgrd.studies.study_runner as runner
+    from nlgrd.studies.study_file import load_study
+
+    study_text = STUDY.replace("values = [50e-6, 100e-6]", "values = [50e-6]").replace(
+        "range = [0.02, 0.08, 4]", "values = [0.02, 0.08]"
+    )
+    path = tmp_path / "c.toml"
+    path.write_text(study_text)
+
+    def one_cancelled(todo, handle, on_result):  # the serial runner, the second task cancelled
+        handle(runner.run_task(todo[0]))
+
+    monkeypatch.setattr(runner, "_serial", one_cancelled)
+    monkeypatch.chdir(tmp_path)
+    rc, out, err = run(capsys, "study", path, "--executor", "serial", "--no-progress")
+    assert rc == 1 and "failed 0, cancelled 1 (rerun to resume)" in out, out + err
+    summary = pd.read_csv(tmp_path / "c" / "summary.csv")
+    assert sorted(summary["status"]) == ["cancelled", "done"]
+    assert load_study(path).name == "bad input"
+
+
+def test_report_build_names_the_final_paths(tmp_path, capsys):
+    """``make reports`` builds in a staging folder renamed at the end: its ``wrote`` lines
+    name the published path."""
+    from nlgrd.studies.reports import _cli
+
+    build = SimpleNamespace(stage=tmp_path / ".reports.staging-1", out=tmp_path / "reports")
+    _cli(["modes", str(TWO), "--out", str(build.stage / "models")], build)
+    out = capsys.readouterr().out
+    assert f"wrote {build.out / 'models' / 'two_shaft_modes.csv'}" in out
+    assert str(build.stage) not in out
+
+
+def test_experimental_file_lists_every_problem(tmp_path):
+    """Three independent faults (a missing header key, a word for a speed, an unknown
+    direction) are all named in the one line."""
+    from nlgrd.errors import ModelError
+    from nlgrd.studies.experimental import load_experimental
+
+    path = tmp_path / "x.csv"
+    path.write_text(
+        "# figure: 1\n# digitisation: by hand\n# calibration: axes\n# uncertainty: 1 %\n"
+        "# case: kubo\n# quantity: dslr\npinion_speed_rpm,value,direction\n"
+        "4000,1.1,up\nfast,1.2,up\n5000,1.3,sideways\n"
+    )
+    with pytest.raises(ModelError) as info:
+        load_experimental(path)
+    text = str(info.value)
+    assert "\n" not in text and text.startswith(str(path))
+    assert "header.source" in text and "line 9" in text and "'sideways'" in text and "2 more" in text
+
+
+def test_licence_is_an_spdx_expression():
+    """setuptools >= 77 reads ``license = "MIT"`` (PEP 639) without its deprecation warning
+    for the table form."""
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert data["project"]["license"] == "MIT"
+    assert "setuptools>=77" in data["build-system"]["requires"]

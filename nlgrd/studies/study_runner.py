@@ -348,6 +348,7 @@ def run_study(
     unique = list({s.key: s for s in specs}.values())
     todo = [s for s in unique if not store.done(s.key)]
     skipped = len(unique) - len(todo)
+    client = connect(scheduler, connect_timeout) if scheduler is not None and todo else None
     bar = _progress(len(unique), skipped, progress)
     computed = 0
 
@@ -366,7 +367,7 @@ def run_study(
         elif scheduler is None and executor == "serial":
             _serial(todo, handle, on_result)
         else:
-            _run_on_cluster(todo, handle, scheduler, workers, on_result, connect_timeout)
+            _run_on_cluster(todo, handle, client, workers, on_result)
     except KeyboardInterrupt:
         interrupted = True
     finally:
@@ -379,11 +380,12 @@ def run_study(
     return StudyRun(len(unique), skipped, computed, failed, interrupted, out, cancelled)
 
 
-def _run_on_cluster(todo, handle, scheduler, workers, on_result, connect_timeout=None) -> None:
+def _run_on_cluster(todo, handle, client, workers, on_result) -> None:
+    """On ``client`` (an existing scheduler's, closed at the end) or an embedded cluster."""
     from distributed import Client
 
-    if scheduler is not None:
-        with connect(scheduler, connect_timeout) as client:
+    if client is not None:
+        with client:
             _on_dask(client, todo, handle, on_result)
         return
     with local_cluster(workers) as cluster, Client(cluster) as client:
