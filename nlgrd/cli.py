@@ -294,6 +294,13 @@ def _lste_from_file(mesh, out: Outputs, csv: Path, png: Path, plt) -> tuple[str,
     return summary, computed
 
 
+class _Parser(argparse.ArgumentParser):
+    """An option the parser refuses is one line too (no usage block), exit status 2."""
+
+    def error(self, message):
+        self.exit(2, f"nlgrd: error: {_one_line(message)} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``nlgrd``.
 
@@ -304,7 +311,7 @@ def build_parser() -> argparse.ArgumentParser:
         ``study`` and ``report``;
         each sets ``func`` to its ``cmd_*`` function.
     """
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="nlgrd",
         description="Nonlinear dynamics of geared rotor systems (finite-element shafts, "
         "spur gear mesh with backlash, harmonic balance).",
@@ -335,7 +342,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     c.add_argument("model", help="model file (TOML)")
     c.add_argument(
-        "--rpm", default="0:10000:51", help="speed range START:STOP:COUNT [rpm] (default 0:10000:51)"
+        "--rpm",
+        default="0:10000:51",
+        help="speed range START:STOP:COUNT [rpm], START < STOP (default 0:10000:51)",
     )
     c.add_argument("--n-modes", type=int, default=10, help="modes to follow, >= 1 (default 10)")
     c.add_argument(
@@ -373,11 +382,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     rng = sw.add_mutually_exclusive_group()
     rng.add_argument(
-        "--rpm", help="pinion speed range START:STOP:COUNT [rpm]; with --continuation START:STOP[:COUNT]"
+        "--rpm",
+        help="pinion speed range START:STOP:COUNT [rpm], START < STOP (--direction sets up or down; a "
+        "range written down, 5:1:10, is refused); the grid is START + i (STOP - START) / (COUNT - 1) "
+        "written as given; pitch-line velocity at most 300 m/s; with --continuation START:STOP[:COUNT]",
     )
     rng.add_argument(
         "--hz",
-        help="mesh frequency range (a link sweep: base frequency) START:STOP:COUNT [Hz]; with "
+        help="mesh frequency range (a link sweep: base frequency) START:STOP:COUNT [Hz], START < STOP; with "
         "--continuation START:STOP[:COUNT]",
     )
     sw.add_argument(
@@ -482,8 +494,9 @@ def main(argv: list[str] | None = None) -> int:
         except ModelError as err:
             if debug:
                 traceback.print_exc()
-            if err.file is None and err.key and not err.key.startswith("-"):
-                err = err.within(file=args.model)  # raised by an analysis: the model is the culprit
+            model = getattr(args, "model", None)
+            if err.file is None and model and err.key and not err.key.startswith("-"):
+                err = err.within(file=model)  # raised by an analysis: the model is the culprit
             print(f"nlgrd: error: {_one_line(err)}", file=sys.stderr)
             return 2
         except Exception as err:  # noqa: BLE001 - the command line never shows a traceback

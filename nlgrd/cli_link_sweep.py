@@ -6,6 +6,7 @@ path (``--period``), and a figure of one of them."""
 from __future__ import annotations
 
 import math
+import sys
 
 from nlgrd.errors import ModelError
 from nlgrd.io.command_line import Outputs, harmonics_line
@@ -112,6 +113,9 @@ def link_sweep_command(args, system, values, out, png) -> int:
     )
     _periods(r, unit=(60 * plan.speed_per_base, "rpm") if args.rpm is not None else (1.0, "Hz"))
     print(f"wrote {out} and {png}")
+    if bad == len(r):
+        print("nlgrd: error: no point of the sweep converged", file=sys.stderr)
+        return 1
     return 0
 
 

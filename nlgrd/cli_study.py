@@ -19,6 +19,17 @@ SCHEDULER_HELP = (
     "the certificates of your Dask configuration, distributed.comm.tls.*); overrides --executor"
 )
 
+TIMEOUT_HELP = "seconds to wait for --scheduler to answer (default 10)"
+
+
+def _check_connection(args) -> None:
+    from nlgrd.studies.study_runner import check_scheduler
+
+    t = args.connect_timeout
+    if t is not None and not (t > 0 and t < float("inf")):
+        raise ModelError("--connect-timeout", f"must be a positive number of seconds, got {t}")
+    check_scheduler(args.scheduler)
+
 
 def _literal(text: str) -> Any:
     """A ``-p`` value: a Python literal (number, bool, None, list ...) or else the text."""
@@ -45,12 +56,17 @@ def add_parsers(sub) -> None:
         "finished tasks: an interrupted study resumes. Exit status 1 when a task failed.",
     )
     st.add_argument("study", help="study file (TOML)")
-    st.add_argument("--out", default=None, help="output folder (default: STUDY's name without .toml)")
+    st.add_argument(
+        "--out",
+        default=None,
+        help="output folder (default: STUDY's file name without .toml, in the current directory)",
+    )
     st.add_argument("--executor", choices=["local", "serial"], default="local", help=EXECUTOR_HELP)
     st.add_argument("--scheduler", default=None, help=SCHEDULER_HELP)
     st.add_argument(
         "--workers", type=int, default=None, help="workers of the embedded cluster (default: cores)"
     )
+    st.add_argument("--connect-timeout", type=float, default=None, help=TIMEOUT_HELP)
     st.add_argument("--no-progress", action="store_true", help="no progress bar")
     st.set_defaults(func=cmd_study)
     rp = sub.add_parser(
@@ -66,12 +82,17 @@ def add_parsers(sub) -> None:
         "-p", nargs=2, action="append", default=[], metavar=("NAME", "VALUE"), help="a notebook parameter"
     )
     rp.add_argument("--batch", default=None, help="TOML file of [[runs]] tables (parameters, optional name)")
-    rp.add_argument("--out", default=None, help="output folder (default: reports/batch-<notebook>)")
+    rp.add_argument(
+        "--out",
+        default=None,
+        help="output folder (default: reports/batch-<notebook> in the current directory)",
+    )
     rp.add_argument("--executor", choices=["local", "serial"], default="local", help=EXECUTOR_HELP)
     rp.add_argument("--scheduler", default=None, help=SCHEDULER_HELP)
     rp.add_argument(
         "--workers", type=int, default=None, help="workers of the embedded cluster (default: cores)"
     )
+    rp.add_argument("--connect-timeout", type=float, default=None, help=TIMEOUT_HELP)
     rp.set_defaults(func=cmd_report)
 
 
@@ -97,8 +118,9 @@ def cmd_study(args) -> int:
     from nlgrd.studies.study_runner import run_study
 
     args.model = args.study  # errors without a file name are the study file's
+    _check_connection(args)
     study = load_study(args.study)
-    out = Path(args.out) if args.out else Path(args.study).with_suffix("")
+    out = Path(args.out) if args.out else Path(Path(args.study).stem)  # the current directory
     if out.exists() and not out.is_dir():
         raise ModelError("--out", f"{out} exists and is not a folder")
     where = f"scheduler {args.scheduler}" if args.scheduler else f"executor {args.executor}"
@@ -110,16 +132,17 @@ def cmd_study(args) -> int:
         scheduler=args.scheduler,
         workers=args.workers,
         progress=not args.no_progress,
+        connect_timeout=args.connect_timeout,
     )
     print(
         f"tasks: {run.tasks}, computed {run.computed}, skipped (finished before) {run.skipped}, "
-        f"failed {run.failed}"
+        f"failed {run.failed}" + (f", cancelled {run.cancelled} (rerun to resume)" if run.cancelled else "")
     )
     if run.interrupted:
         print(f"nlgrd: interrupted; finished tasks are kept in {out}/tasks: rerun to resume", file=sys.stderr)
         return 130
     print(f"wrote {out}/summary.csv, summary.parquet, grid.parquet, points.parquet")
-    return 1 if run.failed else 0
+    return 1 if run.failed or run.cancelled else 0
 
 
 def cmd_report(args) -> int:
@@ -151,13 +174,22 @@ def cmd_report(args) -> int:
     args.model = str(nb)
     if args.workers is not None and args.workers < 1:
         raise ModelError("--workers", f"must be at least 1, got {args.workers}")
+    _check_connection(args)
     common = {name: _literal(value) for name, value in args.p}
     if "out_dir" in common:
         raise ModelError("-p out_dir", "the batch sets out_dir; give --out")
     runs = read_batch(args.batch, common)
-    out = Path(args.out) if args.out else NOTEBOOKS.parent / "reports" / f"batch-{nb.stem}"
+    out = Path(args.out) if args.out else Path("reports") / f"batch-{nb.stem}"  # the current directory
     print(f"report {nb.name}: {len(runs)} run(s) into {out}", flush=True)
-    records = run_batch(nb, runs, out, executor=args.executor, scheduler=args.scheduler, workers=args.workers)
+    records = run_batch(
+        nb,
+        runs,
+        out,
+        executor=args.executor,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        connect_timeout=args.connect_timeout,
+    )
     for name, rec in records.items():
         print(f"  {name}: {'done' if rec['error'] is None else 'failed: ' + rec['error']}")
     print(f"wrote {out}/index.html")

@@ -16,14 +16,18 @@ from nlgrd.io.command_line import (
     parse_range,
     parse_span,
     pyplot,
+    snap_to_grid,
 )
+from nlgrd.io.model_checks import check_pitch_line_velocity
 
 
 class _Unit:
     """Mesh frequencies [rad/s] to and from the unit the range was given in (rpm or Hz)."""
 
-    def __init__(self, rpm: bool, mesh_per_pinion: float):
+    def __init__(self, rpm: bool, mesh_per_pinion: float, grid=None):
         self.name = "rpm" if rpm else "Hz"
+        self.column = "pinion_speed [rpm]" if rpm else "mesh_frequency [Hz]"
+        self.grid = grid  # the values as given, written in place of their round trip
         # mesh frequency [rad/s] per pinion speed [rad/s]: N_p |s_p|
         self.scale = mesh_per_pinion * math.pi / 30 if rpm else 2 * math.pi
 
@@ -99,9 +103,12 @@ def cmd_sweep(args) -> int:
     quantity = check_quantity(args.quantity or "dslr")
     gp = system.gear_pairs[0]
     unit = _Unit(
-        args.rpm is not None, gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
+        args.rpm is not None,
+        gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio),
+        None if args.continuation else values,
     )
     omegas = unit.omega(values)
+    check_pitch_line_velocity(gp, float(omegas.max()), option, repr(text))
     pyplot()
     from nlgrd.nonlinear.auto_period import transitions
 
@@ -135,7 +142,7 @@ def cmd_sweep(args) -> int:
         from nlgrd.cli_orbits import search_command
 
         found = search_command(model, res, omegas, *search, unit)
-    _write_sweep(res, quantity, out, png, found=found)
+    _write_sweep(res, quantity, out, png, found=found, unit=unit)
     status = _summary(args, res, unit, out, png, transitions)
     if found is not None:
         print(f"wrote {_beside(out, 'orbits')} and {_beside(out, 'branches')}")
@@ -179,7 +186,7 @@ def _period_command(args, system, omegas, unit, quantity, out, png, search) -> i
             file=sys.stderr,
         )
         return 1
-    _write_sweep(res, quantity, out, png, found=(orbits, branches))
+    _write_sweep(res, quantity, out, png, found=(orbits, branches), unit=unit)
     m = res.mesh
     ok = m.converged & ~m.no_stable
     print(
@@ -205,9 +212,12 @@ def _beside(out, name: str):
     return out.with_name(f"{out.stem}_{name}.csv")
 
 
-def _write_sweep(res, quantity, out, png, extra=None, found=None) -> None:
+def _write_sweep(res, quantity, out, png, extra=None, found=None, unit=None) -> None:
+    frame = res.to_frame()
+    if unit is not None and unit.grid is not None:
+        snap_to_grid(frame, unit.column, unit.grid)
     with Outputs() as files:
-        files.csv(res.to_frame(), out)
+        files.csv(frame, out)
         ax = res.plot(quantity=quantity)
         if found is not None:
             from nlgrd.cli_orbits import draw_branches
@@ -269,7 +279,7 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
         a1.set_title(f"spectra at {unit(res.mesh.omega[i])} {unit.name} (the largest RMS DTE)")
         fig.tight_layout()
         extra = (fig, out.with_name(out.stem + "_spectrum.png"))
-    _write_sweep(res, quantity, out, png, extra)
+    _write_sweep(res, quantity, out, png, extra, unit=unit)
     if extra is not None:
         print(f"wrote {extra[1]}")
     return _summary(args, res, unit, out, png, transitions)
@@ -288,6 +298,10 @@ def _summary(args, res, unit, out, png, transitions) -> int:
             f"not converged (NaN in the CSV, flagged converged = False) at {unit.name}: "
             + ", ".join(unit(w) for w in bad)
         )
+    if len(bad) == len(res.mesh):
+        print(f"wrote {out} and {png}")
+        print("nlgrd: error: no point of the sweep converged", file=sys.stderr)
+        return 1
     torus = np.isfinite(res.mesh.secondary_frequency)
     lost = np.atleast_1d(res.mesh.omega[res.mesh.no_stable & ~torus])
     if len(lost):

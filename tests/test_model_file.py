@@ -200,7 +200,7 @@ def _awkward_system() -> RotorSystem:
     other_steel = Material(
         "steel", density=7800.0, young_modulus=2.0e11, poisson_ratio=0.29, loss_factor=0.002
     )
-    odd = Material('odd "name"\\ with\ttab', density=1.0e-3 + 0.1 + 0.2, young_modulus=1.2345678901234567e9)
+    odd = Material('odd "name"\\ with\ttab', density=1.0e3 + 0.1 + 0.2, young_modulus=1.2345678901234567e9)
     e1 = ShaftElement(0.1 + 0.2, 0.05, 0.0, steel)
     e2 = ShaftElement(
         1e-3 / 3, 0.05, 0.02, other_steel, axial_force=-1.5e3, shear=False, rotary_inertia=False

@@ -15,6 +15,7 @@ import math
 import os
 import sys
 import tempfile
+from fractions import Fraction
 from pathlib import Path
 
 from nlgrd.errors import ModelError
@@ -23,7 +24,7 @@ from nlgrd.errors import ModelError
 #: are hours of computing; a larger COUNT is a typing slip.
 MAX_POINTS = 100_000
 
-_RANGE = f"START:STOP:COUNT (COUNT from 2 to {MAX_POINTS}) or one number"
+_RANGE = f"START:STOP:COUNT (START < STOP, COUNT from 2 to {MAX_POINTS}) or one number"
 _SPAN = "START:STOP or START:STOP:COUNT (START != STOP)"
 
 
@@ -66,17 +67,65 @@ def parse_range(text: str, name: str = "--rpm"):
     Returns
     -------
     numpy.ndarray
-        The COUNT values from START to STOP (``numpy.linspace``), or the one value.
+        The COUNT values START + i (STOP - START) / (COUNT - 1), or the one value. Each is
+        the float nearest the exact decimal value (computed in rational arithmetic from
+        the text as typed), so ``4000:16000:241`` gives 10600.0, not
+        ``numpy.linspace``'s 10600.000000000004, and the tables print the grid as typed.
 
     Raises
     ------
     ModelError
-        When the text is not of that form, a number is not finite or COUNT is out of range.
+        When the text is not of that form, a number is not finite, START >= STOP (a
+        range goes up; the sweep's ``--direction`` chooses the sense) or COUNT is out of
+        range.
     """
     import numpy as np
 
     values, count = _split(text, name, (1, 3), _RANGE)
-    return np.array(values) if count is None else np.linspace(values[0], values[1], count)
+    if count is None:
+        return np.array(values)
+    if values[0] >= values[1]:
+        raise ModelError(
+            name,
+            f"START must be below STOP, got {text!r} (a range goes up; a sweep's --direction sets the sense)",
+        )
+    try:
+        start, stop = (Fraction(p.strip()) for p in text.split(":")[:2])
+    except ValueError:  # a form float() reads and Fraction() does not
+        start, stop = (Fraction(v) for v in values)
+    step = (stop - start) / (count - 1)
+    return np.array([float(start + i * step) for i in range(count)])
+
+
+def snap_to_grid(frame, column: str, grid) -> None:
+    """Write the grid values as given in place of their round trip through rad/s.
+
+    A speed converted to a frequency [rad/s] and back differs from the typed one by a few
+    ulps (``10600.000000000004``); each value of ``frame[column]`` within 1e-9 of the grid's
+    span of a grid value is replaced by it, in place. Others (a fold's landing, a
+    continuation) are kept.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        A result table; nothing happens when it has no ``column``.
+    column : str
+        The column in the range's unit, e.g. ``"pinion_speed [rpm]"``.
+    grid : array_like
+        The values of the range (:func:`parse_range`), in that unit.
+    """
+    import numpy as np
+
+    if column not in frame.columns:
+        return
+    grid = np.sort(np.asarray(grid, dtype=float))
+    values = frame[column].to_numpy(dtype=float)
+    i = np.clip(np.searchsorted(grid, values), 1, max(len(grid) - 1, 1))
+    lo, hi = grid[np.minimum(i - 1, len(grid) - 1)], grid[np.minimum(i, len(grid) - 1)]
+    near = np.where(np.abs(values - lo) <= np.abs(values - hi), lo, hi)
+    scale = max(float(np.ptp(grid)), float(np.max(np.abs(grid))))
+    close = np.abs(values - near) <= 1e-9 * scale
+    frame[column] = np.where(close, near, values)
 
 
 def parse_span(text: str, name: str) -> tuple[float, float, int | None]:

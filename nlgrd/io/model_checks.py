@@ -21,7 +21,10 @@ Checks
   is). Gear meshes do not count as supports: they act along the line of action only
   and lose contact in the backlash. A model without bearings (a free-free rotor) is
   legal.
+- A material's density, Young's modulus and Poisson ratio lie in the ranges of solids
+  (:data:`MATERIAL_RANGES`); the shear modulus E / 2(1 + nu) then does too.
 - A damping ratio is at most 1 (critical damping); a loss factor at most 2 (η = 2ζ).
+- No two gear pairs mesh the same two gears (the mesh given twice).
 - The static mesh deflection W_0 / k_h is less than the tooth depth.
 - An unbalance sits on a shaft that turns (speed ratio not 0).
 - An LSTE file is readable and its peak-to-peak value is below the tooth depth and
@@ -40,13 +43,100 @@ import numpy as np
 from nlgrd.errors import ModelError
 from nlgrd.rotor.system import RotorSystem
 
-__all__ = ["check_model", "check_gear_files", "check_lste_files", "check_stiffness_files", "tooth_depth"]
+__all__ = [
+    "MAX_PITCH_LINE_VELOCITY",
+    "check_gear_files",
+    "check_lste_files",
+    "check_model",
+    "check_pitch_line_velocity",
+    "check_stiffness_files",
+    "tooth_depth",
+]
 
 #: An LSTE fluctuation this many times the total backlash is refused. Real LSTEs are a
 #: few um against backlashes of tens to hundreds of um; a factor 100 (two orders of
 #: magnitude) leaves room for near-zero-backlash studies and still catches a file in
 #: um read as metres (a factor 1e6).
 LSTE_BACKLASH_FACTOR = 100.0
+
+
+#: Ranges of the solids a shaft or gear can be made of (Ashby 2011, Materials Selection
+#: in Mechanical Design, 4th ed., ch. 4 property charts): density up to osmium's
+#: 22.6e3 kg/m^3 (no lower bound beyond > 0: a near-massless shaft, as in Kubo's rig,
+#: is a modelling choice); Young's modulus from soft polymers (0.1 GPa) to diamond
+#: (1.2 TPa); Poisson's ratio of isotropic engineering solids 0 to 0.5. A modulus in
+#: GPa or MPa, or a density in g/m^3, falls outside.
+MATERIAL_RANGES = {
+    "density": (0.0, 25e3, "kg/m^3"),
+    "young_modulus": (1e8, 1.2e12, "Pa"),
+    "poisson_ratio": (0.0, 0.5, "-"),
+}
+
+
+def _check_materials(system: RotorSystem) -> None:
+    owners = [(f"materials.{name}", m) for name, m in _materials(system).items()]
+    owners += [
+        (f"gear_pairs[{i}].geometry", g.geometry) for i, g in enumerate(system.gear_pairs) if _is_gear_mesh(g)
+    ]
+    for where, m in owners:
+        for field, (low, high, unit) in MATERIAL_RANGES.items():
+            value, u = getattr(m, field, None), "" if unit == "-" else f" {unit}"
+            if value is not None and not low <= value <= high:
+                raise ModelError(
+                    f"{where}.{field}",
+                    f"{value!r}{u} is outside the range of solids, {low:g} to {high:g}{u}",
+                )
+
+
+#: Largest pitch-line velocity [m/s] of a sweep. A thin steel rim turning at v carries
+#: the hoop stress rho v^2 (Timoshenko 1956, Strength of Materials II, sec. 30): 700 MPa
+#: at 300 m/s with rho = 7850 kg/m^3, at the strength of gear steels; the model neglects
+#: the centrifugal loads that govern well before.
+MAX_PITCH_LINE_VELOCITY = 300.0
+
+
+def check_pitch_line_velocity(gear_pair, omega: float, key: str, given: str) -> None:
+    """Refuse a mesh frequency that moves the pinion's pitch circle faster than
+    :data:`MAX_PITCH_LINE_VELOCITY`: v = omega r_w1 / z1.
+
+    Parameters
+    ----------
+    gear_pair : nlgrd.gear.mesh.GearMesh
+        The gear pair whose mesh frequency ``omega`` is.
+    omega : float
+        The highest mesh frequency of the range [rad/s].
+    key : str
+        The option or key of the range, named in the error (``--rpm``, ``analysis.rpm``).
+    given : str
+        The range as the user gave it, quoted in the error.
+
+    Raises
+    ------
+    ModelError
+        When the pitch-line velocity exceeds the limit.
+    """
+    g = gear_pair.geometry
+    v = omega * g.operating_pitch_radius_pinion / g.teeth_pinion
+    if v > MAX_PITCH_LINE_VELOCITY:
+        raise ModelError(
+            key,
+            f"{given} reaches a pitch-line velocity of {v:.3g} m/s, above the model's limit of "
+            f"{MAX_PITCH_LINE_VELOCITY:g} m/s (a steel rim's hoop stress rho v^2 is 700 MPa there)",
+        )
+
+
+def _check_duplicate_meshes(system: RotorSystem) -> None:
+    seen: dict[frozenset, int] = {}
+    for i, g in enumerate(system.gear_pairs):
+        nodes = frozenset({(g.pinion_shaft, g.pinion_node), (g.gear_shaft, g.gear_node)})
+        if nodes in seen:
+            j = seen[nodes]
+            raise ModelError(
+                f"gear_pairs[{i}]",
+                f"meshes the same two gears as gear_pairs[{j}] (shaft {g.pinion_shaft} node "
+                f"{g.pinion_node} with shaft {g.gear_shaft} node {g.gear_node}): give each mesh once",
+            )
+        seen[nodes] = i
 
 
 def check_model(system: RotorSystem) -> None:
@@ -67,6 +157,7 @@ def check_model(system: RotorSystem) -> None:
         turn, a static mesh deflection above the tooth depth), naming the key path.
     """
     _check_shaft_names(system)
+    _check_materials(system)
     _check_support(system)
     _check_damping(system)
     for i, u in enumerate(system.unbalance):
@@ -75,6 +166,7 @@ def check_model(system: RotorSystem) -> None:
                 f"unbalance[{i}].shaft",
                 f"shaft {u.shaft} does not turn (speed_ratio = 0): no unbalance force",
             )
+    _check_duplicate_meshes(system)
     for i, g in enumerate(system.gear_pairs):
         if _is_gear_mesh(g):
             _check_static_deflection(g, f"gear_pairs[{i}]")

@@ -182,6 +182,7 @@ def run_batch(
     executor: str = "local",
     scheduler: str | None = None,
     workers: int | None = None,
+    connect_timeout: float | None = None,
 ) -> dict[str, dict]:
     """Run every run of a batch, then write ``out/index.html``; returns the records by name.
 
@@ -199,6 +200,8 @@ def run_batch(
         Address of an existing Dask scheduler.
     workers : int or None
         Worker processes of the embedded cluster.
+    connect_timeout : float or None
+        Seconds allowed to reach ``scheduler`` [s].
 
     Returns
     -------
@@ -225,12 +228,10 @@ def run_batch(
     else:
         from distributed import Client
 
-        from nlgrd.studies.study_runner import default_workers, local_cluster
+        from nlgrd.studies.study_runner import connect, default_workers, local_cluster
 
         if scheduler is not None:
-            from distributed.security import Security
-
-            with Client(scheduler, security=Security()) as client:
+            with connect(scheduler, connect_timeout) as client:
                 results = client.gather([client.submit(run_report, *j, pure=False) for j in jobs])
         else:
             with (

@@ -128,6 +128,17 @@ def _number(text: str, column: str, line: int, file: str) -> float:
     return v
 
 
+def _raise(problems: list[tuple[str, str]], file: str) -> None:
+    """Raise one :class:`ModelError` listing every problem found (none: return)."""
+    if not problems:
+        return
+    (key, message), rest = problems[0], problems[1:]
+    if rest:
+        others = "; ".join(f"{k}: {m}" if k else m for k, m in rest)
+        message = f"{message}; and {len(rest)} more problem(s): {others}"
+    raise ModelError(key, message, file)
+
+
 def load_experimental(path: str | os.PathLike) -> ExperimentalSet:
     """Read and check one data file (format: ``data/experimental/README.md``).
 
@@ -157,6 +168,7 @@ def load_experimental(path: str | os.PathLike) -> ExperimentalSet:
         raise ModelError("", "no such file", file) from None
     except UnicodeDecodeError as err:
         raise ModelError("", f"not UTF-8 text ({err.reason})", file) from None
+    problems: list[tuple[str, str]] = []  # every one is listed, not only the first
     header: dict[str, str] = {}
     body: list[tuple[int, str]] = []
     for n, raw in enumerate(text.splitlines(), 1):
@@ -165,7 +177,8 @@ def load_experimental(path: str | os.PathLike) -> ExperimentalSet:
             continue
         if line.startswith("#"):
             if body:
-                raise ModelError("header", f"line {n}: comment lines must come before the table", file)
+                problems.append(("header", f"line {n}: comment lines must come before the table"))
+                continue
             entry = line[1:].strip()
             if ":" in entry:
                 key, value = entry.split(":", 1)
@@ -175,45 +188,53 @@ def load_experimental(path: str | os.PathLike) -> ExperimentalSet:
         body.append((n, raw))
     for key in REQUIRED_HEADER:
         if not header.get(key):
-            raise ModelError(f"header.{key}", f"missing: add a line '# {key}: ...'", file)
-    quantity = header["quantity"]
-    if quantity not in QUANTITIES:
-        raise ModelError(
-            "header.quantity", f"unknown quantity {quantity!r}; one of {sorted(QUANTITIES)}", file
-        )
+            problems.append((f"header.{key}", f"missing: add a line '# {key}: ...'"))
+    quantity = header.get("quantity", "")
+    if quantity and quantity not in QUANTITIES:
+        problems.append(("header.quantity", f"unknown quantity {quantity!r}; one of {sorted(QUANTITIES)}"))
     if not body:
-        raise ModelError("", "no table after the header", file)
+        problems.append(("", "no table after the header"))
+        _raise(problems, file)
     rows = list(csv.reader([r for _, r in body]))
     columns = [c.strip() for c in rows[0]]
     xs = [c for c in columns if c in X_COLUMNS]
     if len(xs) != 1:
-        raise ModelError(
-            "columns", f"need exactly one of {sorted(X_COLUMNS)} as abscissa, got columns {columns}", file
+        problems.append(
+            ("columns", f"need exactly one of {sorted(X_COLUMNS)} as abscissa, got columns {columns}")
         )
+        _raise(problems, file)
     unknown = [c for c in columns if c not in (*X_COLUMNS, "value", "direction")]
-    if unknown:
-        raise ModelError(unknown[0], f"unknown column; allowed: {xs[0]}, value, direction", file)
-    for c in ("value", "direction"):
-        if c not in columns:
-            raise ModelError(c, "missing column", file)
+    problems += [(c, f"unknown column; allowed: {xs[0]}, value, direction") for c in unknown]
+    missing = [c for c in ("value", "direction") if c not in columns]
+    problems += [(c, "missing column") for c in missing]
     if len(set(columns)) != len(columns):
-        raise ModelError("columns", f"repeated column name in {columns}", file)
+        problems.append(("columns", f"repeated column name in {columns}"))
+    if missing or len(set(columns)) != len(columns):
+        _raise(problems, file)
     ix, iv, idr = columns.index(xs[0]), columns.index("value"), columns.index("direction")
     x, v, d = [], [], []
     for (n, _), row in zip(body[1:], rows[1:], strict=True):
         if len(row) != len(columns):
-            raise ModelError("columns", f"line {n}: {len(row)} fields, the header has {len(columns)}", file)
-        xv = _number(row[ix].strip(), xs[0], n, file)
-        if xv <= 0:
-            raise ModelError(xs[0], f"line {n}: must be positive, got {row[ix].strip()!r}", file)
-        x.append(xv)
-        v.append(_number(row[iv].strip(), "value", n, file))
+            problems.append(("columns", f"line {n}: {len(row)} fields, the header has {len(columns)}"))
+            continue
+        try:
+            xv = _number(row[ix].strip(), xs[0], n, file)
+            if xv <= 0:
+                raise ModelError(xs[0], f"line {n}: must be positive, got {row[ix].strip()!r}", file)
+            x.append(xv)
+        except ModelError as err:
+            problems.append((err.key, err.message))
+        try:
+            v.append(_number(row[iv].strip(), "value", n, file))
+        except ModelError as err:
+            problems.append((err.key, err.message))
         dv = row[idr].strip().lower()
         if dv not in DIRECTIONS:
-            raise ModelError("direction", f"line {n}: {row[idr].strip()!r} is not one of {DIRECTIONS}", file)
+            problems.append(("direction", f"line {n}: {row[idr].strip()!r} is not one of {DIRECTIONS}"))
         d.append(dv)
-    if len(x) < 2:
-        raise ModelError("value", f"need at least two points, got {len(x)}", file)
+    if len(body) - 1 < 2:
+        problems.append(("value", f"need at least two points, got {len(body) - 1}"))
+    _raise(problems, file)
     return ExperimentalSet(
         path=file,
         case=header["case"],

@@ -5,6 +5,7 @@ notebook made deterministic (no timestamps or absolute paths) and exported to HT
 
 from __future__ import annotations
 
+import ast
 import os
 from collections.abc import Mapping
 from pathlib import Path
@@ -77,6 +78,43 @@ def check_parameters(notebook: str | os.PathLike, parameters: Mapping[str, Any])
             f"not a parameter of the notebook (misspelt?); it declares {', '.join(sorted(declared))}",
             str(notebook),
         )
+    for name in sorted(parameters):
+        kind, optional = _declared_type(declared[name])
+        value = parameters[name]
+        if kind is None or (optional and value is None) or _is(value, kind):
+            continue
+        raise ModelError(
+            f"parameters.{name}",
+            f"the notebook expects {kind}{' or None' if optional else ''} (its parameters cell), "
+            f"got {type(value).__name__} {value!r}",
+            str(notebook),
+        )
+
+
+_TYPE_NAMES = ("bool", "int", "float", "str", "list", "dict")
+
+
+def _declared_type(info: Mapping[str, Any]) -> tuple[str | None, bool]:
+    """(type name, None allowed) of a parameter: its annotation (``points: "int" = None``,
+    meaning int or None), else the type of its default; (None, True) when unknown."""
+    try:
+        default = ast.literal_eval(info.get("default", "None"))
+    except (ValueError, SyntaxError):
+        return None, True
+    annotation = (info.get("inferred_type_name") or "").strip("\"' ")
+    if annotation in _TYPE_NAMES:
+        return annotation, default is None
+    kind = type(default).__name__
+    if default is None or kind not in _TYPE_NAMES:
+        return None, True
+    return ("list" if kind == "tuple" else kind), False
+
+
+def _is(value: Any, kind: str) -> bool:
+    if kind in ("int", "float") and isinstance(value, bool):
+        return False
+    allowed = {"int": int, "float": (int, float), "bool": bool, "str": str, "list": (list, tuple)}
+    return isinstance(value, allowed.get(kind, dict))
 
 
 def relative_path(path: Path, start: Path) -> str:

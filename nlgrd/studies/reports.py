@@ -116,13 +116,21 @@ def _captions(folder: Path, captions: Mapping[str, str]) -> None:
         record_caption(folder / name, text)
 
 
-def _cli(argv: list[str]) -> None:
-    """Run an ``nlgrd`` command; its Ctrl-C (status 130, stderr dropped) interrupts the build."""
-    buffer = io.StringIO()
-    with contextlib.redirect_stderr(buffer):
+def _cli(argv: list[str], build: Build | None = None) -> None:
+    """Run an ``nlgrd`` command; its Ctrl-C (status 130, stderr dropped) interrupts the build.
+
+    Its output names the files where they will be once published (``build.out``), not in
+    the stage, which is gone when the run ends."""
+    buffer, printed = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stderr(buffer), contextlib.redirect_stdout(printed):
         status = cli_main(argv)
     if status == INTERRUPTED:
         raise KeyboardInterrupt(f"nlgrd {argv[0]}")
+    text = printed.getvalue()
+    if build is not None:
+        text = text.replace(str(build.stage), str(build.out))
+    sys.stdout.write(text)
+    sys.stdout.flush()
     sys.stderr.write(buffer.getvalue())
     if status:
         raise ReportError(f"nlgrd {argv[0]} {Path(argv[1]).name} exited with status {status}")
@@ -149,8 +157,8 @@ def build_model_reports(build: Build) -> None:
     captions = {}
     for i, model in enumerate(models, 1):
         print(f"[{i}/{len(models)}] {model.name}: modes and Campbell diagram", flush=True)
-        _cli(["modes", str(model), "--out", str(target)])
-        _cli(["campbell", str(model), "--rpm", rpm, "--orders", "1", "--out", str(target)])
+        _cli(["modes", str(model), "--out", str(target)], build)
+        _cli(["campbell", str(model), "--rpm", rpm, "--orders", "1", "--out", str(target)], build)
         captions[f"{model.stem}_modes.png"] = (
             f"The first six modes of {model.name} at standstill: amplitude along each shaft of each "
             "DOF family (lateral, torsional, axial) holding at least 5 % of the mode's kinetic "
@@ -203,7 +211,7 @@ def build_gear_reports(build: Build) -> None:
     for model in sorted((ROOT / "data" / "models").glob("*.toml")):
         if "[[gear_pairs]]" in model.read_text():
             print(f"{model.name}: loaded static transmission error", flush=True)
-            _cli(["lste", str(model), "--out", str(target)])
+            _cli(["lste", str(model), "--out", str(target)], build)
             geared.append(model.name)
             captions[f"{model.stem}_lste.png"] = (
                 f"The gear pair of {model.name} at its static load over two mesh cycles: loaded static "

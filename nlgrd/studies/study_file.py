@@ -291,6 +291,8 @@ def _analysis(data: dict, w: _Where) -> Analysis:
     start = _number(r[0], f"{key}[0]", w, positive=True)
     stop = _number(r[1], f"{key}[1]", w, positive=True)
     count = _integer(r[2], f"{key}[2]", w, 1, 100_000)
+    if (count > 1 and start >= stop) or (count == 1 and start != stop):
+        raise w.error(key, f"must go up, START < STOP (one speed: START = STOP and COUNT 1), got {r!r}")
     direction = t.get("direction", "both")
     if direction not in ("up", "down", "both"):
         raise w.error("analysis.direction", f"must be 'up', 'down' or 'both', got {direction!r}")
@@ -302,6 +304,30 @@ def _analysis(data: dict, w: _Where) -> Analysis:
     if not isinstance(stability, bool):
         raise w.error("analysis.stability", f"must be true or false, got {stability!r}")
     return Analysis(unit, start, stop, count, direction, harmonics, tolerance, stability)
+
+
+def _check_speeds(system, analysis: Analysis, w: _Where) -> None:
+    """The sweep's top speed within the model's pitch-line velocity limit."""
+    from nlgrd.io.model_checks import check_pitch_line_velocity
+
+    meshes = [g for g in system.gear_pairs if hasattr(g, "geometry")]
+    if not meshes:
+        return
+    g = meshes[0]
+    if analysis.unit == "rpm":
+        omega = (
+            analysis.stop
+            * math.pi
+            / 30
+            * g.geometry.teeth_pinion
+            * abs(system.shafts[g.pinion_shaft].speed_ratio)
+        )
+    else:
+        omega = 2 * math.pi * analysis.stop
+    try:
+        check_pitch_line_velocity(g, omega, f"analysis.{analysis.unit}", f"{analysis.stop:g} {analysis.unit}")
+    except ModelError as err:
+        raise w.error(err.key, err.message) from None
 
 
 def _axis_name(keys: tuple[str, ...], raw: dict, scaled: bool, key: str, w: _Where) -> str:
@@ -328,7 +354,10 @@ def _axis(raw: Any, i: int, w: _Where) -> Axis:
     if kind == "range":
         allowed.add("spacing")
     if kind == "distribution":
-        allowed |= set(DISTRIBUTIONS.get(raw["distribution"], ()))
+        dist = raw["distribution"]
+        if not isinstance(dist, str) or dist not in DISTRIBUTIONS:
+            raise w.error(f"{key}.distribution", f"must be one of {', '.join(DISTRIBUTIONS)}, got {dist!r}")
+        allowed |= set(DISTRIBUTIONS[dist])
     for k in sorted(set(raw) - allowed):
         raise w.error(f"{key}.{k}", f"unknown key; valid keys here: {', '.join(sorted(allowed))}")
     keys = raw.get("key")
@@ -444,10 +473,11 @@ def load_study(path: str | os.PathLike) -> Study:
     except tomllib.TOMLDecodeError as err:
         raise w.error("model", f"{data['model']!r} is not valid TOML: {err}") from None
     try:
-        model_from_file_data(model, str(model_file))
+        system = model_from_file_data(model, str(model_file))
     except ModelError as err:
         raise w.error("model", str(err)) from None
     analysis = _analysis(data, w)
+    _check_speeds(system, analysis, w)
     raw_axes = data.get("axes", [])
     if not isinstance(raw_axes, list):
         raise w.error("axes", "must be an array of tables ([[axes]])")

@@ -42,7 +42,88 @@ from nlgrd.studies.index_page import write_json, write_text
 from nlgrd.studies.study_file import Study
 from nlgrd.studies.study_tasks import TaskSpec, run_task, task_specs
 
-__all__ = ["ResultStore", "StudyRun", "local_cluster", "run_study"]
+__all__ = [
+    "CONNECT_TIMEOUT",
+    "ResultStore",
+    "StudyRun",
+    "check_scheduler",
+    "connect",
+    "local_cluster",
+    "run_study",
+]
+
+#: Seconds allowed to reach an existing scheduler (``--connect-timeout``). Dask's own
+#: default (30 s) retries a closed port for half a minute; a scheduler that answers does
+#: so in milliseconds on a LAN.
+CONNECT_TIMEOUT = 10.0
+
+_TLS_HELP = (
+    "set distributed.comm.tls.ca-file, distributed.comm.tls.client.cert and "
+    "distributed.comm.tls.client.key in your Dask configuration (e.g. ~/.config/dask/distributed.yaml, "
+    "or the environment variables DASK_DISTRIBUTED__COMM__TLS__CA_FILE, ..._CLIENT__CERT, ..._CLIENT__KEY)"
+)
+
+
+def check_scheduler(scheduler: str | None) -> None:
+    """Refuse a scheduler address that cannot work, before anything runs.
+
+    Parameters
+    ----------
+    scheduler : str or None
+        ``tcp://HOST:PORT`` or ``tls://HOST:PORT``; None: nothing to check.
+
+    Raises
+    ------
+    ModelError
+        Naming ``--scheduler``: another scheme, or ``tls://`` without the TLS files of the
+        Dask configuration (the message says which keys to set).
+    """
+    if scheduler is None:
+        return
+    scheme, sep, rest = scheduler.partition("://")
+    if not sep or scheme not in ("tcp", "tls") or not rest:
+        raise ModelError("--scheduler", f"expected tcp://HOST:PORT or tls://HOST:PORT, got {scheduler!r}")
+    if scheme == "tls":
+        from distributed.security import Security
+
+        sec = Security()
+        if not (sec.tls_ca_file and sec.tls_client_cert):
+            raise ModelError("--scheduler", f"{scheduler} needs the client's TLS certificates: {_TLS_HELP}")
+
+
+def connect(scheduler: str, timeout: float | None = None):
+    """A Dask client of the scheduler at ``scheduler``, or one line saying why not.
+
+    Parameters
+    ----------
+    scheduler : str
+        Its address (checked by :func:`check_scheduler`).
+    timeout : float or None
+        Seconds allowed to connect [s]; None: :data:`CONNECT_TIMEOUT`.
+
+    Returns
+    -------
+    distributed.Client
+
+    Raises
+    ------
+    ModelError
+        Naming ``--scheduler`` when the address is refused or nothing answers in time.
+    """
+    from distributed import Client
+    from distributed.security import Security
+
+    check_scheduler(scheduler)
+    timeout = CONNECT_TIMEOUT if timeout is None else timeout
+    try:
+        return Client(scheduler, security=Security(), timeout=timeout)
+    except (OSError, TimeoutError) as err:
+        raise ModelError(
+            "--scheduler",
+            f"no Dask scheduler answered at {scheduler} within {timeout:g} s ({type(err).__name__}); "
+            "is it running? (--connect-timeout sets the wait)",
+        ) from None
+
 
 EXECUTORS = ("local", "serial")
 
@@ -156,6 +237,9 @@ class StudyRun:
         Stopped by Ctrl-C (the tables are not written).
     out : pathlib.Path
         The output folder.
+    cancelled : int
+        Tasks with no record: cancelled (Ctrl-C, a lost client) before they finished; a
+        rerun runs them.
     """
 
     tasks: int
@@ -164,6 +248,7 @@ class StudyRun:
     failed: int
     interrupted: bool
     out: Path
+    cancelled: int = 0
 
 
 def _progress(total: int, initial: int, enabled: bool):
@@ -188,6 +273,8 @@ def _on_dask(client, specs: list[TaskSpec], handle: Callable[[dict], None], on_r
     try:
         for future in as_completed(futures):
             spec = futures[future]
+            if future.status == "cancelled":  # no record: a rerun runs it again
+                continue
             if future.status == "finished":
                 result = future.result()
             else:  # raised outside run_task: a worker lost too often, a pickling error
@@ -217,6 +304,7 @@ def run_study(
     workers: int | None = None,
     progress: bool = True,
     on_result: Callable[[Any], None] | None = None,
+    connect_timeout: float | None = None,
 ) -> StudyRun:
     """Run every unfinished task of ``study`` and write its tables into ``out``.
 
@@ -237,6 +325,8 @@ def run_study(
         A progress bar with ETA on standard error.
     on_result : callable or None
         Called with the Dask client (None when serial) after each finished task (tests).
+    connect_timeout : float or None
+        Seconds allowed to reach ``scheduler`` [s] (:func:`connect`).
 
     Returns
     -------
@@ -251,12 +341,14 @@ def run_study(
         raise ModelError("--executor", f"must be one of {', '.join(EXECUTORS)}, got {executor!r}")
     if workers is not None and workers < 1:
         raise ModelError("--workers", f"must be at least 1, got {workers}")
+    check_scheduler(scheduler)
     out = Path(out)
     store = ResultStore(out)
     specs = task_specs(study)
     unique = list({s.key: s for s in specs}.values())
     todo = [s for s in unique if not store.done(s.key)]
     skipped = len(unique) - len(todo)
+    client = connect(scheduler, connect_timeout) if scheduler is not None and todo else None
     bar = _progress(len(unique), skipped, progress)
     computed = 0
 
@@ -275,24 +367,25 @@ def run_study(
         elif scheduler is None and executor == "serial":
             _serial(todo, handle, on_result)
         else:
-            _run_on_cluster(todo, handle, scheduler, workers, on_result)
+            _run_on_cluster(todo, handle, client, workers, on_result)
     except KeyboardInterrupt:
         interrupted = True
     finally:
         bar.close()
-    failed = sum(store.read(s.key) is None or store.read(s.key).get("error") is not None for s in unique)
+    records = [store.read(s.key) for s in unique]
+    failed = sum(r is not None and r.get("error") is not None for r in records)
+    cancelled = sum(r is None for r in records)
     if not interrupted:
         write_tables(study, specs, store)
-    return StudyRun(len(unique), skipped, computed, failed, interrupted, out)
+    return StudyRun(len(unique), skipped, computed, failed, interrupted, out, cancelled)
 
 
-def _run_on_cluster(todo, handle, scheduler, workers, on_result) -> None:
+def _run_on_cluster(todo, handle, client, workers, on_result) -> None:
+    """On ``client`` (an existing scheduler's, closed at the end) or an embedded cluster."""
     from distributed import Client
 
-    if scheduler is not None:
-        from distributed.security import Security
-
-        with Client(scheduler, security=Security()) as client:
+    if client is not None:
+        with client:
             _on_dask(client, todo, handle, on_result)
         return
     with local_cluster(workers) as cluster, Client(cluster) as client:
@@ -326,13 +419,16 @@ def summary_table(study: Study, specs: list[TaskSpec], store: ResultStore) -> pd
     rows = []
     sampled = study.samples if any(a.sampled for a in study.axes) else 0
     for s in specs:
-        record = store.read(s.key) or {"error": "not run"}
+        record = store.read(s.key)
         row: dict[str, Any] = {"task": s.index}
         if sampled:
             row["sample"] = s.index % sampled
         row.update(s.parameters)
-        row["status"] = "failed" if record.get("error") else "done"
-        row["error"] = record.get("error") or ""
+        if record is None:
+            row["status"], row["error"], record = "cancelled", "cancelled (rerun to resume)", {}
+        else:
+            row["status"] = "failed" if record.get("error") else "done"
+            row["error"] = record.get("error") or ""
         row.update(record.get("summary") or {})
         row["key"] = s.key
         rows.append(row)
