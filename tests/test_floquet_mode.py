@@ -103,7 +103,7 @@ def unstable_points():
 def test_dominant_eigenvector_is_carried_to_mu_v_by_the_variational_equation(unstable_points):
     model, res, rows = unstable_points
     red = model.reduced
-    mesh = red.mesh
+    mesh = red.metrics.mesh
     kinds = set()
     for i in rows[:4]:
         w = float(res.omega[i])
@@ -132,5 +132,5 @@ def test_a_wrong_monodromy_is_caught(unstable_points):
     lam, V = np.linalg.eig(mode.monodromy.T)
     j = int(np.argmax(np.abs(lam)))
     v = V[:, j] / np.linalg.norm(V[:, j])
-    end = _propagate(ss, red.mesh, res.harmonics[i][red.mesh.coord], w, v)
+    end = _propagate(ss, red.metrics.mesh, res.harmonics[i][red.metrics.mesh.coord], w, v)
     assert np.linalg.norm(end - lam[j] * v) > 1e-3
