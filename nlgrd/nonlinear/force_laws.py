@@ -320,6 +320,36 @@ class ParametricMesh(BacklashMesh):
         kt = self.stiffness * np.abs(iv.state[where]) * evaluate(self.stiffness_variation, mid)
         return breaks, kt[:, None, None]
 
+    def tangent_function(self, y: NDArray) -> tuple[NDArray, object, NDArray]:
+        """The tangent as a function of θ for a Magnus product (:mod:`nlgrd.nonlinear.floquet`).
+
+        Parameters
+        ----------
+        y : ndarray (1, 2H+1)
+            Real harmonics of δ [m].
+
+        Returns
+        -------
+        breaks : ndarray (n+1,)
+            The exact contact changes over one period [rad]; the tangent is smooth between them.
+        tangent : callable
+            θ (k,) [rad] -> k_h ρ(θ) |state| (k, 1, 1) [N/m].
+        varies : ndarray of bool (n,)
+            Whether the tangent varies on each piece (False: constant there, zero in separation).
+        """
+        iv = self.intervals(np.asarray(y, dtype=float).reshape(-1))
+        breaks = np.append(iv.start, iv.end[-1])
+        state = np.abs(iv.state).astype(float)
+
+        def tangent(theta):
+            theta = np.asarray(theta, dtype=float)
+            rel = np.mod(theta - breaks[0], 2 * np.pi) + breaks[0]
+            seg = np.clip(np.searchsorted(breaks, rel, side="right") - 1, 0, state.size - 1)
+            k = self.stiffness * state[seg] * evaluate(self.stiffness_variation, theta)
+            return k[:, None, None]
+
+        return breaks, tangent, state > 0
+
     def force_time(self, y: NDArray, theta: NDArray) -> NDArray:
         """Elastic mesh force k_h ρ(θ) f(δ - e) at angles θ for δ samples y (1, N)."""
         return super().force_time(y, theta) * evaluate(self.stiffness_variation, theta)
