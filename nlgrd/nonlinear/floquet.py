@@ -81,7 +81,7 @@ REVISIT_RTOL = 1e-8
 METHODS = ("auto", "dense", "expm")
 #: Smooth tangents (laws with ``tangent_function``): Magnus steps per period of the first
 #: product; doubled until the largest multiplier modulus is converged to ``MAGNUS_ATOL``.
-MAGNUS_FIRST_STEPS = 16
+MAGNUS_FIRST_STEPS = 8
 #: The largest Magnus step count per period tried; its result is returned with its estimate.
 MAGNUS_MAX_STEPS = 4096
 #: Accepted error estimate of max |μ| [-] (a tenth of the stability band STABLE_RTOL = 1e-6

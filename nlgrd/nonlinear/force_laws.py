@@ -258,15 +258,17 @@ class ParametricMesh(BacklashMesh):
     Kahraman & Singh (1991, J. Sound Vib. 146:135) and Özgüven & Houser (1988, J. Sound
     Vib. 125:71). Its exact harmonics are the product of ρ's with those of the backlash
     force, taken to the harmonics the product reaches (a sampled product of two band-limited
-    signals, exact); its Floquet segments split each contact interval into cells with ρ at
-    their midpoints (``n_cells`` per period, second order in the cell width).
+    signals, exact). Floquet takes its tangent as a function of θ (:meth:`tangent_function`,
+    Magnus steps refined to a tolerance); :meth:`tangent_segments` (Hill's method, the
+    ``"expm"`` reference) splits each contact interval into cells with ρ at their midpoints
+    (``n_cells`` per period, second order in the cell width).
 
     Parameters
     ----------
     stiffness_variation : array_like
         Real harmonics [ρ_0, a_1, b_1, ...] of ρ(θ) = k(θ)/k_h [-]; ρ_0 = 1 by convention.
     n_cells : int
-        Cells per period of the Floquet segments.
+        Cells per period of :meth:`tangent_segments`.
     Other parameters as :class:`BacklashMesh` (``method`` "exact" only).
     """
 
