@@ -508,8 +508,9 @@ def floquet_analysis(
     Laws with a smooth tangent (``tangent_function``: a Hertzian or radial clearance, a
     parametric mesh k(θ)) take the fourth-order Magnus product (:func:`_magnus_monodromy`)
     on the pieces between the union of all laws' contact changes, ``MAGNUS_FIRST_STEPS``
-    steps per period doubled until the step-doubling estimate of max |μ| is within
-    ``MAGNUS_ATOL`` (at most ``MAGNUS_MAX_STEPS``; ``converged`` says if it got there).
+    (at least H + 1, rounded up to a power of 2) steps per period doubled until the
+    step-doubling estimate of max |μ| is within ``MAGNUS_ATOL`` (at most
+    ``MAGNUS_MAX_STEPS``; ``converged`` says if it got there).
     Piecewise-constant tangents keep the exact product, one exponential per interval.
 
     Parameters
@@ -534,7 +535,8 @@ def floquet_analysis(
         pieces = _smooth_pieces(nonlinearities, Y, state_space.W.shape[1])
         if pieces is not None:
             dominant = method == "auto" and 2 * state_space.M.shape[0] > DENSE_STATE_LIMIT
-            return _magnus(state_space.deflated if deflate else state_space, pieces, omega, dominant)
+            ss = state_space.deflated if deflate else state_space
+            return _magnus(ss, pieces, omega, dominant, (Y.shape[1] - 1) // 2)
     if method == "expm":
         ss = state_space.deflated if deflate else state_space
         breaks, Kt = _tangent_pieces(nonlinearities, Y, ss.W.shape[1])
@@ -586,13 +588,15 @@ def _eigen(Phi: NDArray, side: NDArray, dense: bool) -> NDArray[np.complex128]:
     return np.concatenate([mu, side[np.abs(side) >= (1 - BAND) * np.max(np.abs(mu))]])
 
 
-def _magnus(ss: LinearStateSpace, pieces, omega: float, dominant: bool) -> FloquetResult:
-    """The Magnus product refined by step doubling (:func:`floquet_analysis`)."""
+def _magnus(ss: LinearStateSpace, pieces, omega: float, dominant: bool, H: int) -> FloquetResult:
+    """The Magnus product refined by step doubling (:func:`floquet_analysis`), from at
+    least H + 1 steps per period (rounded up to a power of 2): 2H + 2 Gauss points, more
+    than the 2H + 1 samples that resolve the orbit's H harmonics."""
     breaks, K0, active = pieces
     prep = _prepared(ss)
     dense = not (dominant and 2 * prep.N > DENSE_STATE_LIMIT)
     side = np.exp(prep.side * (breaks[-1] - breaks[0]) / omega)
-    steps, prev = MAGNUS_FIRST_STEPS, None
+    steps, prev = max(MAGNUS_FIRST_STEPS, 1 << int(np.ceil(np.log2(H + 1)))), None
     while True:
         Phi, count = _magnus_monodromy(prep, breaks, K0, active, omega, steps)
         mu = _eigen(Phi, side, dense)
