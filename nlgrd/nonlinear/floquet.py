@@ -133,6 +133,8 @@ def _smooth_pieces(nonlinearities: Sequence, harmonics: NDArray, n: int):
     """Union breaks over one period of every law's exact breaks (contact changes), the
     constant part of the n x n tangent per piece, and per piece the laws whose tangent
     varies there: [(coords, tangent function)], or None when no law has a smooth tangent."""
+    if not any(hasattr(nl, "tangent_function") for nl in nonlinearities):
+        return None
     parts, smooth = [], False
     for nl in nonlinearities:
         idx = list(nl.coords)
