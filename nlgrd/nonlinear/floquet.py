@@ -87,6 +87,10 @@ MAGNUS_MAX_STEPS = 4096
 #: Accepted error estimate of max |μ| [-] (a tenth of the stability band STABLE_RTOL = 1e-6
 #: of nlgrd.nonlinear.results: a verdict can only change within 1e-7 of that band).
 MAGNUS_ATOL = 1e-7
+#: A Magnus step is halved until its commutator term √3 h²/12 ‖S₂ - S₁‖₁ (S = M⁻¹(K + W K_t
+#: Wᵀ)) is at most this: the second term of the series must stay a correction of the first,
+#: or the step's exponential is meaningless (it overflowed on a stiff contact at 8 steps).
+MAGNUS_COMMUTATOR = 1.0
 #: The estimate also compares, as sets, the multipliers within this fraction of the largest
 #: modulus (their position, not only max |μ|: a complex pair that is still turning).
 MAGNUS_LEADING = 0.1
@@ -169,14 +173,18 @@ def _smooth_pieces(nonlinearities: Sequence, harmonics: NDArray, n: int):
     return breaks, K0, active
 
 
-def _magnus_monodromy(prep: _Prepared, breaks, K0, active, omega: float, steps: int) -> tuple[NDArray, int]:
+def _magnus_monodromy(
+    prep: _Prepared, breaks, K0, active, omega: float, steps: int, least: NDArray | None = None
+) -> tuple[NDArray, NDArray]:
     """Φ by the fourth-order Magnus method with two Gauss points per step (Iserles & Nørsett
     1999, Phil. Trans. R. Soc. A 357:983; Blanes, Casas, Oteo & Ros 2009, Phys. Rep.
     470:151, §5): Ω = h/2 (C₁ + C₂) + √3 h²/12 [C₂, C₁], exp(Ω) per step, about ``steps``
-    steps per period spread over the pieces by length (at least one each); one exact
-    exponential on a piece where no tangent varies. In the scaled state (w_s η, η') of
-    :func:`_exponentials`, where C₂ - C₁ = [[0, 0], [X, 0]], X = -(S₂ - S₁)/w_s, gives
-    [C₂, C₁] = [[-w_s X, 0], [M⁻¹D X, w_s X]]. Returns Φ and the number of exponentials."""
+    steps per period spread over the pieces by length (at least one each, at least
+    ``least[i]`` on piece i, and halved until the commutator term is below
+    ``MAGNUS_COMMUTATOR``); one exact exponential on a piece where no tangent varies. In
+    the scaled state (w_s η, η') of :func:`_exponentials`, where C₂ - C₁ = [[0, 0], [X, 0]],
+    X = -(S₂ - S₁)/w_s, gives [C₂, C₁] = [[-w_s X, 0], [M⁻¹D X, w_s X]]. Returns Φ and the
+    exponentials per piece."""
     N = prep.N
     g = np.sqrt(3.0) / 6.0
     lengths = np.diff(breaks)
@@ -185,14 +193,21 @@ def _magnus_monodromy(prep: _Prepared, breaks, K0, active, omega: float, steps: 
         if not active[i]:
             plan.append((i, None))
             continue
-        m = max(1, int(np.ceil(steps * L / (2 * np.pi))))
-        h = L / m
-        a = breaks[i] + h * np.arange(m)
-        th = np.concatenate([a + h * (0.5 - g), a + h * (0.5 + g)])
-        Kt = np.broadcast_to(K0[i], (th.size, *K0[i].shape)).copy()
-        for idx, fn in active[i]:
-            Kt[np.ix_(np.arange(th.size), idx, idx)] += fn(th)
+        m = max(1, int(np.ceil(steps * L / (2 * np.pi))), 0 if least is None else int(least[i]))
+        while True:
+            h = L / m
+            a = breaks[i] + h * np.arange(m)
+            th = np.concatenate([a + h * (0.5 - g), a + h * (0.5 + g)])
+            Kt = np.broadcast_to(K0[i], (th.size, *K0[i].shape)).copy()
+            for idx, fn in active[i]:
+                Kt[np.ix_(np.arange(th.size), idx, idx)] += fn(th)
+            dK = np.abs(Kt[m:] - Kt[:m]).sum(axis=1).max(axis=1)  # ‖ΔK_t‖₁ per step
+            bound = np.sqrt(3.0) / 12.0 * (h / omega) ** 2 * prep.coupling * float(dK.max())
+            if bound <= MAGNUS_COMMUTATOR or m >= MAGNUS_MAX_STEPS:
+                break
+            m *= 2
         plan.append((i, (m, h, Kt)))
+    counts = np.array([1 if p is None else p[0] for _, p in plan])
     stiff_mid = [prep.stiffness(K0[i]) if p is None else prep.stiffness(p[2][0]) for i, p in plan]
     ws = np.sqrt(max(max(float(np.linalg.norm(k, 1)) for k in stiff_mid), 1e-300))
     base = np.zeros((2 * N, 2 * N))
@@ -219,7 +234,7 @@ def _magnus_monodromy(prep: _Prepared, breaks, K0, active, omega: float, steps: 
             Om[N:, :N] += c * (prep.MD @ X)
             Om[N:, N:] += c * ws * X
             Es.append(expm(Om))
-    return _product(Es), len(Es)
+    return _product(Es), counts
 
 
 def _state_sequence(breaks: NDArray, Kt: NDArray) -> tuple[list[NDArray], list[tuple[int, float]]]:
@@ -284,6 +299,11 @@ class _Prepared:
             Mr, Kr, Dr = (Y[np.ix_(r, r)] for Y in (ss.M, ss.K, ss.D))
             A[n:] = -np.linalg.solve(Mr, np.column_stack([Kr, Dr]))
             self.side = np.linalg.eigvals(A)
+
+    @property
+    def coupling(self) -> float:
+        """‖M⁻¹W‖₁ ‖Wᵀ‖₁: bounds ‖M⁻¹ W ΔK Wᵀ‖₁ by it times ‖ΔK‖₁."""
+        return float(np.linalg.norm(self.MW, 1) * np.linalg.norm(self.Wt, 1))
 
     def stiffness(self, kt: NDArray) -> NDArray:
         """M⁻¹ (K + W K_t Wᵀ) on the mesh block."""
@@ -599,16 +619,20 @@ def _magnus(ss: LinearStateSpace, pieces, omega: float, dominant: bool, H: int) 
     dense = not (dominant and 2 * prep.N > DENSE_STATE_LIMIT)
     side = np.exp(prep.side * (breaks[-1] - breaks[0]) / omega)
     steps, prev = max(MAGNUS_FIRST_STEPS, 1 << int(np.ceil(np.log2(H + 1)))), None
-    while True:
-        Phi, count = _magnus_monodromy(prep, breaks, K0, active, omega, steps)
-        mu = _eigen(Phi, side, dense)
+    least = None
+    while True:  # every piece's step count doubles from one product to the next
+        Phi, counts = _magnus_monodromy(prep, breaks, K0, active, omega, steps, least)
+        mu = _eigen(Phi, side, dense) if np.all(np.isfinite(Phi)) else np.array([np.inf + 0j])
         top = float(np.max(np.abs(mu)))
         lead = mu[np.abs(mu) >= (1 - MAGNUS_LEADING) * top]
         if prev is not None:
             err = max(abs(top - prev[0]), _set_distance(lead, prev[1]))
-            if err <= MAGNUS_ATOL or 2 * steps > MAGNUS_MAX_STEPS:
-                return FloquetResult(mu, count, err, err <= MAGNUS_ATOL)
-        prev, steps = (top, lead), 2 * steps
+            if not err > MAGNUS_ATOL or 2 * steps > MAGNUS_MAX_STEPS:
+                return FloquetResult(mu, int(counts.sum()), err, bool(err <= MAGNUS_ATOL))
+        active_counts = counts[[bool(a) for a in active]]
+        prev, steps, least = (top, lead), 2 * steps, 2 * counts
+        if active_counts.size and active_counts.min() > MAGNUS_MAX_STEPS:
+            return FloquetResult(mu, int(counts.sum()), float("inf"), False)
 
 
 def _set_distance(a: NDArray, b: NDArray) -> float:
