@@ -258,15 +258,17 @@ class ParametricMesh(BacklashMesh):
     Kahraman & Singh (1991, J. Sound Vib. 146:135) and Özgüven & Houser (1988, J. Sound
     Vib. 125:71). Its exact harmonics are the product of ρ's with those of the backlash
     force, taken to the harmonics the product reaches (a sampled product of two band-limited
-    signals, exact); its Floquet segments split each contact interval into cells with ρ at
-    their midpoints (``n_cells`` per period, second order in the cell width).
+    signals, exact). Floquet takes its tangent as a function of θ (:meth:`tangent_function`,
+    Magnus steps refined to a tolerance); :meth:`tangent_segments` (Hill's method, the
+    ``"expm"`` reference) splits each contact interval into cells with ρ at their midpoints
+    (``n_cells`` per period, second order in the cell width).
 
     Parameters
     ----------
     stiffness_variation : array_like
         Real harmonics [ρ_0, a_1, b_1, ...] of ρ(θ) = k(θ)/k_h [-]; ρ_0 = 1 by convention.
     n_cells : int
-        Cells per period of the Floquet segments.
+        Cells per period of :meth:`tangent_segments`.
     Other parameters as :class:`BacklashMesh` (``method`` "exact" only).
     """
 
@@ -319,6 +321,36 @@ class ParametricMesh(BacklashMesh):
         where = np.clip(np.searchsorted(iv.start, mid, side="right") - 1, 0, iv.state.size - 1)
         kt = self.stiffness * np.abs(iv.state[where]) * evaluate(self.stiffness_variation, mid)
         return breaks, kt[:, None, None]
+
+    def tangent_function(self, y: NDArray) -> tuple[NDArray, object, NDArray]:
+        """The tangent as a function of θ for a Magnus product (:mod:`nlgrd.nonlinear.floquet`).
+
+        Parameters
+        ----------
+        y : ndarray (1, 2H+1)
+            Real harmonics of δ [m].
+
+        Returns
+        -------
+        breaks : ndarray (n+1,)
+            The exact contact changes over one period [rad]; the tangent is smooth between them.
+        tangent : callable
+            θ (k,) [rad] -> k_h ρ(θ) |state| (k, 1, 1) [N/m].
+        varies : ndarray of bool (n,)
+            Whether the tangent varies on each piece (False: constant there, zero in separation).
+        """
+        iv = self.intervals(np.asarray(y, dtype=float).reshape(-1))
+        breaks = np.append(iv.start, iv.end[-1])
+        state = np.abs(iv.state).astype(float)
+
+        def tangent(theta):
+            theta = np.asarray(theta, dtype=float)
+            rel = np.mod(theta - breaks[0], 2 * np.pi) + breaks[0]
+            seg = np.clip(np.searchsorted(breaks, rel, side="right") - 1, 0, state.size - 1)
+            k = self.stiffness * state[seg] * evaluate(self.stiffness_variation, theta)
+            return k[:, None, None]
+
+        return breaks, tangent, state > 0
 
     def force_time(self, y: NDArray, theta: NDArray) -> NDArray:
         """Elastic mesh force k_h ρ(θ) f(δ - e) at angles θ for δ samples y (1, N)."""

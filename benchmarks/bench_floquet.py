@@ -1,0 +1,117 @@
+"""Per-point cost with Floquet stability of geared link models, and the Floquet share
+(issue 34, item 1 and 5).
+
+Run from the repository root::
+
+    .venv/bin/python benchmarks/bench_floquet.py [--stage-points 3]
+
+Up sweeps (``link_sweep``, fixed H, one BLAS thread) side by side in one process:
+two_shaft.toml (one mesh), the same rotor with the pinion's free-end bearing replaced by
+a 20 µm Hertzian clearance (1e10 N/m^1.5, 1e3 N s/m), idler_train.toml (two meshes), 15
+mesh frequencies 1000-1700 Hz at H = 9, and two_stage.toml (base 5 x input speed, H =
+45) on fewer points. Each model is warmed up on 2 points first (pole-residue set-up).
+The time inside ``floquet_multipliers`` is measured by wrapping it where the sweep
+modules imported it; the points without a stable orbit are counted apart, since their
+cost is the landing search, not Floquet. Figures in benchmarks/README.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+import nlgrd.nonlinear.floquet as floquet
+from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+from nlgrd.nonlinear.links import BearingClearance
+
+MODELS = Path(__file__).resolve().parents[1] / "data" / "models"
+_SPENT = {"t": 0.0, "n": 0}
+
+
+def _wrap() -> None:
+    """Time every call of floquet_multipliers, wherever a module imported it."""
+    original = floquet.floquet_multipliers
+
+    def timed(*args, **kwargs):
+        t0 = time.perf_counter()
+        try:
+            return original(*args, **kwargs)
+        finally:
+            _SPENT["t"] += time.perf_counter() - t0
+            _SPENT["n"] += 1
+
+    for name, mod in list(sys.modules.items()):
+        if name.startswith("nlgrd") and getattr(mod, "floquet_multipliers", None) is original:
+            mod.floquet_multipliers = timed
+
+
+def cases(stage_points: int):
+    two = load_model(MODELS / "two_shaft.toml")
+    grid = 2 * np.pi * np.linspace(1000.0, 1700.0, 15)
+    bearings = tuple(b for i, b in enumerate(two.bearings) if i != 1)
+    clear = dataclasses.replace(
+        two,
+        bearings=bearings,
+        bearing_clearances=(BearingClearance("B1", 0, 8, 20e-6, 1e10, exponent=1.5, damping=1e3),),
+    )
+    yield "two_shaft, 1 mesh", build_link_model(two), grid, 9
+    yield "two_shaft, mesh + 20 µm Hertzian clearance", build_link_model(clear), grid, 9
+    yield "idler_train, 2 meshes", build_link_model(load_model(MODELS / "idler_train.toml")), grid, 9
+    if stage_points:
+        stage = build_link_model(load_model(MODELS / "two_stage.toml"))
+        yield (
+            "two_stage, 2 meshes, base 5 x shaft",
+            stage,
+            np.linspace(grid[0], grid[-1], stage_points) / 5,
+            45,
+        )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--stage-points", type=int, default=3)
+    ap.add_argument("--models", type=int, default=4, help="the first this many models only")
+    args = ap.parse_args()
+    _wrap()
+    rows = []
+    with threadpool_limits(1):
+        for _, (label, model, omegas, H) in zip(range(args.models), cases(args.stage_points), strict=False):
+            link_sweep(model, omegas[:2], H=H, directions="up")  # warm-up, pole-residue set-up
+            _SPENT.update(t=0.0, n=0)
+            t0 = time.perf_counter()
+            r = link_sweep(model, omegas, H=H, directions="up").result
+            total = time.perf_counter() - t0
+            stable = r.converged & r.stable.astype(bool)
+            per, fl = 1e3 * total / omegas.size, 1e3 * _SPENT["t"] / omegas.size
+            rows.append((label, per))
+            print(
+                f"{label}: {per:.1f} ms per point, Floquet {fl:.1f} ms per point "
+                f"({_SPENT['n']} calls, {100 * _SPENT['t'] / total:.0f} %), "
+                f"{int(stable.sum())}/{omegas.size} stable",
+                flush=True,
+            )
+            if not stable.all() and stable.any():  # the stable points alone: no landing search
+                _SPENT.update(t=0.0, n=0)
+                t0 = time.perf_counter()
+                link_sweep(model, omegas[stable], H=H, directions="up")
+                t = time.perf_counter() - t0
+                print(
+                    f"  the {int(stable.sum())} stable points alone: "
+                    f"{1e3 * t / stable.sum():.1f} ms per point, "
+                    f"Floquet {1e3 * _SPENT['t'] / stable.sum():.1f} ms per point",
+                    flush=True,
+                )
+    base = rows[0][1]
+    for label, per in rows[1:]:
+        print(f"{label}: {per / base:.1f}x one mesh", flush=True)
+
+
+if __name__ == "__main__":
+    main()
