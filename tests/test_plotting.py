@@ -424,6 +424,18 @@ def test_index_page_lists_every_figure_with_its_caption_and_settings(tmp_path):
     assert page == index_html(tmp_path, fast=True, parts=("models",), root=ROOT)
 
 
+def test_index_page_says_no_measured_curve_is_shipped_and_how_to_add_one(tmp_path):
+    """Issue 36, item 5: the index names the loader and the format file, both of which exist."""
+    import nlgrd.studies.experimental as experimental
+    from nlgrd.studies.reports import ROOT
+
+    page = index_html(tmp_path, fast=True, parts=(), root=ROOT)
+    assert "Measured curves: none is shipped." in page
+    assert "data/experimental/README.md" in page and "load_experimental" in page
+    assert (ROOT / "data" / "experimental" / "README.md").is_file()
+    assert callable(experimental.load_experimental)
+
+
 def test_period_two_points_are_drawn_ringed_and_lost_points_marked_by_kind():
     """The response kinds a ``period="auto"`` sweep writes: a period-2 orbit is a response
     (drawn at its value, ringed, counted), a quasi-periodic point and one without a stable
