@@ -565,3 +565,18 @@ def test_the_note_that_no_measurement_is_shipped_is_a_legend_entry_on_the_figure
     ax = plot_sweep(sweep_result(), ax=ax)
     texts = [t.get_text() for t in ax.get_legend().get_texts()]
     assert texts[0] == NO_MEASUREMENT_TEXT and "no measured curve shipped" in texts[0]
+
+
+def test_a_short_legend_that_would_cover_points_goes_outside():
+    """Issue 36, item 6: K&B Fig. 8 (fast run) had a 6-entry legend over two sweep points.
+    Points on a 30 x 30 grid fill the axes, so no inside place is free: the legend goes to
+    the right of the axes (renderer extents, in pixels)."""
+    _, ax = plt.subplots()
+    g = np.linspace(0.0, 1.0, 30)
+    xx, yy = np.meshgrid(g, g)
+    ax.plot(xx.ravel(), yy.ravel(), ".", ls="none", label="points")
+    legend = place_legend(ax)
+    ax.figure.tight_layout()
+    ax.figure.canvas.draw()
+    assert len(legend.get_texts()) == 1
+    assert _extent(legend, ax.figure).x0 >= _extent(ax, ax.figure).x1 - 1e-6

@@ -126,7 +126,8 @@ def axis_label(column: str) -> str:
 
 
 def place_legend(ax, fontsize: float = 8, inside: int = LEGEND_INSIDE, **kwargs):
-    """The legend of ``ax``: inside (best place) up to ``inside`` entries, else outside on the right.
+    """The legend of ``ax``: inside (best place) up to ``inside`` entries if it covers no drawn
+    point there, else outside on the right.
 
     Parameters
     ----------
@@ -152,7 +153,9 @@ def place_legend(ax, fontsize: float = 8, inside: int = LEGEND_INSIDE, **kwargs)
     if not handles:
         return None
     if len(handles) <= inside:
-        return ax.legend(handles, labels, fontsize=fontsize, **kwargs)
+        legend = ax.legend(handles, labels, fontsize=fontsize, **kwargs)
+        if not _covers_points(ax, legend):
+            return legend
     kwargs.pop("loc", None)
     kwargs.pop("bbox_to_anchor", None)
     return ax.legend(
@@ -164,6 +167,23 @@ def place_legend(ax, fontsize: float = 8, inside: int = LEGEND_INSIDE, **kwargs)
         borderaxespad=0,
         **kwargs,
     )
+
+
+def _covers_points(ax, legend) -> bool:
+    """Whether ``legend`` (as placed now) lies over a point of a line drawn in data coordinates."""
+    box = legend.get_window_extent(ax.figure.canvas.get_renderer())
+    for line in ax.get_lines():
+        if line.get_transform() != ax.transData:
+            continue
+        xy = np.column_stack([np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float)])
+        xy = xy[np.all(np.isfinite(xy), axis=1)]
+        if xy.size == 0:
+            continue
+        px = ax.transData.transform(xy)
+        inside = (px[:, 0] > box.x0) & (px[:, 0] < box.x1) & (px[:, 1] > box.y0) & (px[:, 1] < box.y1)
+        if np.any(inside):
+            return True
+    return False
 
 
 def note_no_measurement(ax, text: str = NO_MEASUREMENT_TEXT):
