@@ -46,7 +46,7 @@ NC_HEIGHT = 0.015
 #: Most legend entries drawn inside the axes (:func:`place_legend`).
 LEGEND_INSIDE = 8
 #: Note of :func:`note_no_measurement`.
-NO_MEASUREMENT_TEXT = "no measured curve shipped (to add one: data/experimental/README.md)"
+NO_MEASUREMENT_TEXT = "no measured curve shipped\n(to add one: data/experimental/README.md)"
 
 #: Readable axis labels of table columns (:func:`axis_label`).
 COLUMN_LABELS = {
