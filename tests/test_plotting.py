@@ -533,6 +533,9 @@ def test_a_long_legend_goes_outside_the_axes_and_a_short_one_stays_inside():
     assert len(legend.get_texts()) > LEGEND_INSIDE
     assert _extent(legend, fig).x0 >= _extent(ax, fig).x1 - 1e-6
     assert _extent(legend, fig).x1 <= fig.bbox.x1 + 1  # and within the figure
+    # the figure grew by the legend's width: the axes keep more than half of the
+    # default 6.4 in (fig. 6 of notebook 01 had its axes squeezed to a third)
+    assert fig.get_figwidth() > 6.4 and _extent(ax, fig).width / fig.dpi > 0.5 * 6.4
     _, ax2 = plt.subplots()
     plot_sweep_frame(sweep_frame(), X, Y, ax=ax2)
     place_legend(ax2)

@@ -158,15 +158,23 @@ def place_legend(ax, fontsize: float = 8, inside: int = LEGEND_INSIDE, **kwargs)
             return legend
     kwargs.pop("loc", None)
     kwargs.pop("bbox_to_anchor", None)
-    return ax.legend(
-        handles,
-        labels,
-        fontsize=fontsize,
-        loc="upper left",
-        bbox_to_anchor=(1.01, 1.0),
-        borderaxespad=0,
-        **kwargs,
-    )
+    outside = {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "borderaxespad": 0}
+    legend = ax.legend(handles, labels, fontsize=fontsize, **outside, **kwargs)
+    _widen_for(ax, legend)
+    return legend
+
+
+def _widen_for(ax, legend) -> None:
+    """Widen the figure by the width of an outside legend, so that the axes keep their size.
+
+    The width added is kept on the axes: a legend redrawn on the same axes widens the
+    figure only by what it adds."""
+    fig = ax.figure
+    width = legend.get_window_extent(fig.canvas.get_renderer()).width / fig.dpi + 0.3  # [in], with the gap
+    added = getattr(ax, "_nlgrd_legend_width", 0.0)
+    if width > added:
+        fig.set_size_inches(fig.get_figwidth() + width - added, fig.get_figheight())
+        ax._nlgrd_legend_width = width
 
 
 def _covers_points(ax, legend) -> bool:
