@@ -283,7 +283,7 @@ def _lste_from_file(mesh, out: Outputs, csv: Path, png: Path, plt) -> tuple[str,
         computed = res.k_mean
         ax.plot(res.phase, res.lste * 1e6, "C0--", lw=1, label="computed from the geometry (not used)")
     ax.set_xlabel("mesh phase [cycles]")
-    ax.set_ylabel("LSTE [um]")
+    ax.set_ylabel("LSTE [µm]")
     ax.legend(fontsize=8)
     fig.tight_layout()
     out.figure(fig, png)

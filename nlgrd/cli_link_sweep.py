@@ -90,13 +90,15 @@ def link_sweep_command(args, system, values, out, png) -> int:
     frame.insert(1, "shaft_speed [rpm]", frame["base_frequency [Hz]"] * plan.speed_per_base * 60)
     x_col = "shaft_speed [rpm]" if args.rpm is not None else "base_frequency [Hz]"
     plt = pyplot()
+    from nlgrd.plotting.common import axis_label, place_legend
+
     fig, ax = plt.subplots(figsize=(7, 4))
     for direction, part in frame.groupby("direction", sort=False):
         ax.plot(part[x_col], part[column], ".-", label=f"sweep {direction}")
-    ax.set_xlabel(x_col)
-    ax.set_ylabel(label)
+    ax.set_xlabel(axis_label(x_col))
+    ax.set_ylabel(axis_label(column))
     ax.set_title(f"{(system.name or 'model')[:60]}\nbase frequency: {plan.name}, H = {H}", fontsize=9)
-    ax.legend()
+    place_legend(ax)
     fig.tight_layout()
     with Outputs() as files:
         files.csv(frame, out)

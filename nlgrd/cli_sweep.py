@@ -37,6 +37,19 @@ class _Unit:
     def __call__(self, omega, digits: int = 1) -> str:
         return f"{omega / self.scale:.{digits}f}"
 
+    @property
+    def axis(self) -> tuple[str, float]:
+        """The figures' abscissa: (label, value per mesh frequency [Hz])."""
+        what = "pinion speed" if self.name == "rpm" else "mesh frequency"
+        return f"{what} [{self.name}]", 2 * math.pi / self.scale
+
+
+def _title(system, args) -> str:
+    """The figures' title: the model's name (its file's when it has none)."""
+    from pathlib import Path
+
+    return (getattr(system, "name", None) or Path(args.model).stem)[:80]
+
 
 def cmd_sweep(args) -> int:
     """Nonlinear harmonic-balance sweep (or continuation) of the geared model: CSV, PNG, summary.
@@ -142,7 +155,7 @@ def cmd_sweep(args) -> int:
         from nlgrd.cli_orbits import search_command
 
         found = search_command(model, res, omegas, *search, unit)
-    _write_sweep(res, quantity, out, png, found=found, unit=unit)
+    _write_sweep(res, quantity, out, png, found=found, unit=unit, title=_title(system, args))
     status = _summary(args, res, unit, out, png, transitions)
     if found is not None:
         print(f"wrote {_beside(out, 'orbits')} and {_beside(out, 'branches')}")
@@ -186,7 +199,7 @@ def _period_command(args, system, omegas, unit, quantity, out, png, search) -> i
             file=sys.stderr,
         )
         return 1
-    _write_sweep(res, quantity, out, png, found=(orbits, branches), unit=unit)
+    _write_sweep(res, quantity, out, png, found=(orbits, branches), unit=unit, title=_title(system, args))
     m = res.mesh
     ok = m.converged & ~m.no_stable
     print(
@@ -212,20 +225,26 @@ def _beside(out, name: str):
     return out.with_name(f"{out.stem}_{name}.csv")
 
 
-def _write_sweep(res, quantity, out, png, extra=None, found=None, unit=None) -> None:
+def _write_sweep(res, quantity, out, png, extra=None, found=None, unit=None, title=None) -> None:
+    from nlgrd.plotting.common import place_legend
+    from nlgrd.plotting.nonlinear import MESH_HZ, plot_sweep
+
+    xaxis = unit.axis if unit is not None else MESH_HZ
     frame = res.to_frame()
     if unit is not None and unit.grid is not None:
         snap_to_grid(frame, unit.column, unit.grid)
     with Outputs() as files:
         files.csv(frame, out)
-        ax = res.plot(quantity=quantity)
+        ax = plot_sweep(res.mesh, quantity=quantity, xaxis=xaxis, title=title)
         if found is not None:
             from nlgrd.cli_orbits import draw_branches
 
             files.csv(found[0], _beside(out, "orbits"))
             files.csv(found[1], _beside(out, "branches"))
-            draw_branches(ax, found[1], "mesh_frequency [Hz]", quantity)
-            ax.legend(fontsize=7)
+            x = "pinion_speed [rpm]" if unit is not None and unit.name == "rpm" else "mesh_frequency [Hz]"
+            draw_branches(ax, found[1], x, quantity)
+            ax.set_xlabel(xaxis[0])
+            place_legend(ax, fontsize=7)
         ax.figure.tight_layout()
         files.figure(ax.figure, png)
         if extra is not None:
@@ -279,7 +298,7 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
         a1.set_title(f"spectra at {unit(res.mesh.omega[i])} {unit.name} (the largest RMS DTE)")
         fig.tight_layout()
         extra = (fig, out.with_name(out.stem + "_spectrum.png"))
-    _write_sweep(res, quantity, out, png, extra, unit=unit)
+    _write_sweep(res, quantity, out, png, extra, unit=unit, title=_title(system, args))
     if extra is not None:
         print(f"wrote {extra[1]}")
     return _summary(args, res, unit, out, png, transitions)
@@ -390,7 +409,13 @@ def _continuation(args, system, model, unit, omegas, count, quantity, out, png) 
         ax = None
         for name, res in traces.items():
             ax = plot_continuation(
-                res, quantity=quantity, ax=ax, color="k" if name == "up" else "C3", label=name
+                res,
+                quantity=quantity,
+                ax=ax,
+                color="k" if name == "up" else "C3",
+                label=name,
+                xaxis=unit.axis,
+                title=_title(system, args),
             )
         ax.figure.tight_layout()
         files.figure(ax.figure, png)

@@ -24,9 +24,18 @@ import pytest  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 
 from nlgrd.plotting import save_figure  # noqa: E402
-from nlgrd.plotting.common import NC_HEIGHT, stability_codes  # noqa: E402
+from nlgrd.plotting.common import (  # noqa: E402
+    LEGEND_INSIDE,
+    NC_HEIGHT,
+    NO_MEASUREMENT_TEXT,
+    axis_label,
+    note_no_measurement,
+    place_legend,
+    stability_codes,
+)
 from nlgrd.plotting.nonlinear import plot_continuation, plot_sweep, plot_sweep_frame  # noqa: E402
 from nlgrd.plotting.rotor import campbell_breaks, plot_campbell  # noqa: E402
+from nlgrd.plotting.studies import study_curves, study_distribution, study_map  # noqa: E402
 from nlgrd.studies.index_page import NO_CAPTION, index_html  # noqa: E402
 
 X, Y = "mesh_frequency [Hz]", "dte_rms [um]"
@@ -261,8 +270,41 @@ def test_continuation_keeps_the_arc_order_and_dashes_the_unstable_branch():
     xs = np.asarray(dashed[0].get_xdata(), float)
     xs = xs[np.isfinite(xs)]
     assert np.any(np.diff(xs) < 0)  # not re-sorted by frequency: it runs back along the fold
-    assert by_label(ax, "HB curve, unstable")[0].get_markerfacecolor() == "none"
+    assert by_label(ax, "HB curve, unstable")[0] is dashed[0]
     assert by_label(ax, "HB turning points")
+
+
+def test_continuation_tells_stability_by_line_style_not_by_a_marker_per_point():
+    """Issue 36, item 6: a continuation of 1200 points drew 1200 overlapping markers. Now
+    the stable parts are one solid line, the unstable ones one dashed line, each in the
+    legend once, and the only markers are the turning points' stars."""
+    s = np.linspace(-1.2, 1.2, 1200)
+    res = continuation_result()
+    stable = np.abs(s) > 0.577
+    res.curve = SimpleNamespace(
+        omega=2 * np.pi * (500 + 100 * (s**3 - s)),
+        direction=np.array(["curve"] * s.size),
+        converged=np.ones(s.size, dtype=bool),
+        stable=stable,
+        floquet_max=np.where(stable, 0.9, 1.5),
+        metrics={"dte_rms": 1e-6 * (3 + s)},
+    )
+    ax = plot_continuation(res, color="k", label="HB")
+    styles = {ln.get_label(): ln.get_linestyle() for ln in data_lines(ax)}
+    assert styles["HB curve"] == "-" and styles["HB curve, unstable"] == "--"
+    markers = [ln for ln in ax.get_lines() if ln.get_marker() not in ("None", "none", "", None)]
+    assert [ln.get_label() for ln in markers] == ["HB turning points"]
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert texts == ["HB curve", "HB curve, unstable", "HB turning points"]
+
+
+def test_continuation_without_stability_is_dotted_and_says_so():
+    res = continuation_result()
+    res.curve.stable = np.full(res.curve.omega.size, np.nan, dtype=object)
+    res.curve.floquet_max = np.full(res.curve.omega.size, np.nan)
+    ax = plot_continuation(res, color="k", label="HB")
+    (line,) = by_label(ax, "HB curve, stability not computed")
+    assert line.get_linestyle() == ":"
 
 
 def campbell_result(ns=11):
@@ -382,6 +424,18 @@ def test_index_page_lists_every_figure_with_its_caption_and_settings(tmp_path):
     assert page == index_html(tmp_path, fast=True, parts=("models",), root=ROOT)
 
 
+def test_index_page_says_no_measured_curve_is_shipped_and_how_to_add_one(tmp_path):
+    """Issue 36, item 5: the index names the loader and the format file, both of which exist."""
+    import nlgrd.studies.experimental as experimental
+    from nlgrd.studies.reports import ROOT
+
+    page = index_html(tmp_path, fast=True, parts=(), root=ROOT)
+    assert "Measured curves: none is shipped." in page
+    assert "data/experimental/README.md" in page and "load_experimental" in page
+    assert (ROOT / "data" / "experimental" / "README.md").is_file()
+    assert callable(experimental.load_experimental)
+
+
 def test_period_two_points_are_drawn_ringed_and_lost_points_marked_by_kind():
     """The response kinds a ``period="auto"`` sweep writes: a period-2 orbit is a response
     (drawn at its value, ringed, counted), a quasi-periodic point and one without a stable
@@ -410,3 +464,122 @@ def test_period_two_points_are_drawn_ringed_and_lost_points_marked_by_kind():
     for mark in (quasi, none):
         assert mark.get_transform() != ax.transData
     assert not any("period 2" in ln.get_label() and "down" in ln.get_label() for ln in ax.get_lines())
+
+
+def test_sweep_axis_is_in_the_unit_the_range_was_given_in_with_the_title():
+    """Issue 36, item 3: ``--rpm`` drew mesh frequency [Hz]. With ``xaxis`` (label, value per
+    mesh Hz) the points sit at the speeds the user gave: 600 Hz of a 20-tooth pinion is
+    600 * 60 / 20 = 1800 rpm (exact arithmetic, so a 1e-12 tolerance)."""
+    res = sweep_result()
+    ax = plot_sweep(res, "dte_rms", xaxis=("pinion speed [rpm]", 60 / 20), title="kubo.toml")
+    assert ax.get_xlabel() == "pinion speed [rpm]"
+    assert ax.get_title() == "kubo.toml"
+    (up,) = [ln for ln in ax.get_lines() if ln.get_label() == "up"]
+    np.testing.assert_allclose(up.get_xdata(), res.omega[[0, 3, 4, 5]] / (2 * np.pi) * 3, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("column", "label"),
+    [
+        ("base_frequency [Hz]", "base frequency [Hz]"),
+        ("mesh_frequency [Hz]", "mesh frequency [Hz]"),
+        ("gear_pairs[0].damping_ratio [-]", "mesh damping ratio ζ [-]"),
+        ("gear_pairs[1].geometry.backlash [m]", "mesh 2 backlash 2b [m]"),
+        ("mesh1.dte_rms [um]", "mesh1: RMS of alternating DTE [µm]"),
+        ("dte_rms [um]", "RMS of alternating DTE [µm]"),
+    ],
+)
+def test_raw_column_names_become_readable_axis_labels(column, label):
+    assert axis_label(column) == label
+
+
+def test_no_figure_labels_an_axis_with_a_raw_column_name():
+    """Sweep frames and study figures label their axes through axis_label: no underscore,
+    no model-key path, no "um"."""
+    ax = plot_sweep_frame(sweep_frame().rename(columns={X: "base_frequency [Hz]"}), "base_frequency [Hz]", Y)
+    summary = pd.DataFrame(
+        {
+            "gear_pairs[0].damping_ratio [-]": [0.01, 0.01, 0.05, 0.05],
+            "gear_pairs[0].geometry.backlash [m]": [1e-4, 2e-4, 1e-4, 2e-4],
+            "dte_rms_max [um]": [1.0, 2.0, 3.0, 4.0],
+        }
+    )
+    maps = study_map(summary, "gear_pairs[0].damping_ratio [-]", "gear_pairs[0].geometry.backlash [m]",
+                     "dte_rms_max [um]")  # fmt: skip
+    curves = study_curves(summary, "gear_pairs[0].damping_ratio [-]", "dte_rms_max [um]",
+                          "gear_pairs[0].geometry.backlash [m]")  # fmt: skip
+    dist = study_distribution(summary, "dte_rms_max [um]")
+    labels = [a.get_xlabel() for a in (ax, maps, curves, dist)] + [a.get_ylabel() for a in (ax, maps, curves)]
+    labels += [t.get_text() for t in curves.get_legend().get_texts()]
+    assert labels[0] == "base frequency [Hz]" and labels[1] == "mesh damping ratio ζ [-]"
+    for text in labels:
+        assert "_" not in text and "[um]" not in text and "gear_pairs" not in text, text
+
+
+def _extent(artist, fig):
+    return artist.get_window_extent(fig.canvas.get_renderer())
+
+
+def test_a_long_legend_goes_outside_the_axes_and_a_short_one_stays_inside():
+    """Issue 36, item 6: legends of 17-21 entries covered the curves. Five series of up and
+    down sweeps with unstable and unknown points give more than LEGEND_INSIDE entries: the
+    legend's box must not overlap the axes' box (renderer extents, in pixels)."""
+    ax = None
+    for k in range(5):
+        ax = plot_sweep(sweep_result(), ax=ax, label=f"s{k}", series=k)
+    fig = ax.figure
+    fig.tight_layout()
+    legend = ax.get_legend()
+    assert len(legend.get_texts()) > LEGEND_INSIDE
+    assert _extent(legend, fig).x0 >= _extent(ax, fig).x1 - 1e-6
+    assert _extent(legend, fig).x1 <= fig.bbox.x1 + 1  # and within the figure
+    # the figure grew by the legend's width: the axes keep more than half of the
+    # default 6.4 in (fig. 6 of notebook 01 had its axes squeezed to a third)
+    assert fig.get_figwidth() > 6.4 and _extent(ax, fig).width / fig.dpi > 0.5 * 6.4
+    _, ax2 = plt.subplots()
+    plot_sweep_frame(sweep_frame(), X, Y, ax=ax2)
+    place_legend(ax2)
+    ax2.figure.canvas.draw()
+    assert _extent(ax2, ax2.figure).contains(*_extent(ax2.get_legend(), ax2.figure).p0)
+
+
+def test_campbell_order_labels_stay_inside_the_axes():
+    """Issue 36, item 6: the order labels were written at the last speed, right of the axes,
+    or above it where an order line leaves through the top. Every label's extent must lie
+    within the axes' extent (1 px of slack for rounding of the text box)."""
+    res = campbell_result()
+    res.orders = {"1x": 1.0, "2x": 2.0, "0.5x": 0.5, "10x": 10.0}
+    ax = plot_campbell(res)
+    fig = ax.figure
+    fig.canvas.draw()
+    box = _extent(ax, fig)
+    names = [t for t in ax.texts if t.get_text() in res.orders]
+    assert len(names) == 4
+    for t in names:
+        e = _extent(t, fig)
+        assert box.x0 - 1 <= e.x0 and e.x1 <= box.x1 + 1 and box.y0 - 1 <= e.y0 and e.y1 <= box.y1 + 1, (
+            t.get_text()
+        )
+
+
+def test_the_note_that_no_measurement_is_shipped_is_a_legend_entry_on_the_figure():
+    _, ax = plt.subplots()
+    note_no_measurement(ax)
+    ax = plot_sweep(sweep_result(), ax=ax)
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert texts[0] == NO_MEASUREMENT_TEXT and "no measured curve shipped" in texts[0]
+
+
+def test_a_short_legend_that_would_cover_points_goes_outside():
+    """Issue 36, item 6: K&B Fig. 8 (fast run) had a 6-entry legend over two sweep points.
+    Points on a 30 x 30 grid fill the axes, so no inside place is free: the legend goes to
+    the right of the axes (renderer extents, in pixels)."""
+    _, ax = plt.subplots()
+    g = np.linspace(0.0, 1.0, 30)
+    xx, yy = np.meshgrid(g, g)
+    ax.plot(xx.ravel(), yy.ravel(), ".", ls="none", label="points")
+    legend = place_legend(ax)
+    ax.figure.tight_layout()
+    ax.figure.canvas.draw()
+    assert len(legend.get_texts()) == 1
+    assert _extent(legend, ax.figure).x0 >= _extent(ax, ax.figure).x1 - 1e-6

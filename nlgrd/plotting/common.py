@@ -13,6 +13,13 @@ Sweeps and curves (:mod:`.nonlinear`, and the notebooks through it):
 - Values beyond a given scale (``ylim``): a caret on the edge of the axes at their
   frequency, with the count and the largest value in the legend; the line breaks there
   instead of running off the axes.
+- Dense curves (continuation, ``markers=False`` of :func:`draw_points`): no markers, the
+  line style alone tells stable (solid), unstable (dashed) and not computed (dotted).
+- Axis labels are words with units, never raw table columns (:func:`axis_label`).
+- Legends with more than :data:`LEGEND_INSIDE` entries go outside the axes, on the right
+  (:func:`place_legend`), so that they never cover the curves.
+- A figure of a case the paper compared with measurements says on it when no measured
+  curve is loaded (:func:`note_no_measurement`).
 """
 
 from __future__ import annotations
@@ -36,6 +43,177 @@ STABLE, UNSTABLE, UNKNOWN = 1, 0, -1
 UNKNOWN_TEXT = "stability not computed"
 #: Height of the not-converged crosses (axes fraction).
 NC_HEIGHT = 0.015
+#: Most legend entries drawn inside the axes (:func:`place_legend`).
+LEGEND_INSIDE = 8
+#: Note of :func:`note_no_measurement`.
+NO_MEASUREMENT_TEXT = "no measured curve shipped\n(to add one: data/experimental/README.md)"
+
+#: Readable axis labels of table columns (:func:`axis_label`).
+COLUMN_LABELS = {
+    "mesh_frequency [Hz]": "mesh frequency [Hz]",
+    "base_frequency [Hz]": "base frequency [Hz]",
+    "pinion_speed [rpm]": "pinion speed [rpm]",
+    "shaft_speed [rpm]": "shaft speed [rpm]",
+    "speed [rpm]": "speed [rpm]",
+    "dte_rms [um]": "RMS of alternating DTE [µm]",
+    "dte_mean [um]": "mean DTE [µm]",
+    "dte_p2p [um]": "peak-to-peak DTE [µm]",
+    "force_max [N]": "max mesh force [N]",
+    "force_min [N]": "min mesh force [N]",
+    "dslr [-]": "DSLR = max W / W0 [-]",
+    "contact_loss_fraction [-]": "contact-loss fraction [-]",
+    "floquet_max [-]": "largest Floquet multiplier |μ| [-]",
+}
+#: Words of the last part of a column name (the parameter), with their symbol.
+_WORDS = {
+    "damping_ratio": "damping ratio ζ",
+    "backlash": "backlash 2b",
+    "half_backlash": "half backlash b",
+    "static_load": "static load W0",
+    "torque": "torque T",
+    "stiffness": "stiffness k",
+    "damping": "damping c",
+    "mass": "mass m",
+    "dte_rms": "RMS of alternating DTE",
+    "dte_p2p": "peak-to-peak DTE",
+    "dte_mean": "mean DTE",
+    "dslr": "DSLR",
+}
+#: Owners of a model key (``gear_pairs[0].x``): the word that names them on an axis.
+_OWNERS = {"gear_pairs": "mesh", "bearings": "bearing", "shafts": "shaft", "bearing_clearances": "clearance"}
+#: Units written as in print.
+_UNITS = {"um": "µm", "-": "-"}
+
+
+def axis_label(column: str) -> str:
+    """A readable axis label with its unit for a table column or model key.
+
+    Known columns (:data:`COLUMN_LABELS`) get their words; a model key such as
+    ``gear_pairs[0].damping_ratio [-]`` becomes "mesh damping ratio ζ [-]" (the second
+    mesh "mesh 2 ...", link columns "LINK: ..."); underscores become spaces, "um" "µm".
+
+    Parameters
+    ----------
+    column : str
+        A column name, "name [unit]" or a bare name.
+
+    Returns
+    -------
+    str
+        The label.
+    """
+    import re
+
+    column = str(column)
+    if column in COLUMN_LABELS:
+        return COLUMN_LABELS[column]
+    name, _, unit = column.partition(" [")
+    unit = unit[:-1] if unit.endswith("]") else unit
+    unit = _UNITS.get(unit, unit)
+    parts = name.split(".")
+    leaf = parts[-1]
+    words = _WORDS.get(leaf, leaf.replace("_", " "))
+    owner = ""
+    for part in parts[:-1]:
+        m = re.fullmatch(r"(\w+)\[(\d+)\]", part)
+        if m and m.group(1) in _OWNERS:
+            k = int(m.group(2))
+            owner = _OWNERS[m.group(1)] + (f" {k + 1}" if k else "")
+        elif not m and part not in ("geometry", "material", "links") and len(parts) == 2:
+            owner = f"{part}:"  # a link's column: "LINK.quantity"
+    text = f"{owner} {words}".strip()
+    return f"{text} [{unit}]" if unit else text
+
+
+def place_legend(ax, fontsize: float = 8, inside: int = LEGEND_INSIDE, **kwargs):
+    """The legend of ``ax``: inside (best place) up to ``inside`` entries if it covers no drawn
+    point there, else outside on the right.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes whose labelled artists make the legend.
+    fontsize : float
+        Font size [pt].
+    inside : int
+        Most entries drawn inside the axes.
+    **kwargs
+        Passed to ``ax.legend`` (e.g. ``handles``); ``loc`` is used only inside.
+
+    Returns
+    -------
+    matplotlib.legend.Legend or None
+        The legend, or None when no artist is labelled.
+    """
+    handles, labels = kwargs.pop("handles", None), kwargs.pop("labels", None)
+    if handles is None:
+        handles, labels = ax.get_legend_handles_labels()
+    elif labels is None:
+        labels = [h.get_label() for h in handles]
+    if not handles:
+        return None
+    if len(handles) <= inside:
+        legend = ax.legend(handles, labels, fontsize=fontsize, **kwargs)
+        if not _covers_points(ax, legend):
+            return legend
+    kwargs.pop("loc", None)
+    kwargs.pop("bbox_to_anchor", None)
+    outside = {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "borderaxespad": 0}
+    legend = ax.legend(handles, labels, fontsize=fontsize, **outside, **kwargs)
+    _widen_for(ax, legend)
+    return legend
+
+
+def _widen_for(ax, legend) -> None:
+    """Widen the figure by the width of an outside legend, so that the axes keep their size.
+
+    The width added is kept on the axes: a legend redrawn on the same axes widens the
+    figure only by what it adds."""
+    fig = ax.figure
+    width = legend.get_window_extent(fig.canvas.get_renderer()).width / fig.dpi + 0.3  # [in], with the gap
+    added = getattr(ax, "_nlgrd_legend_width", 0.0)
+    if width > added:
+        fig.set_size_inches(fig.get_figwidth() + width - added, fig.get_figheight())
+        ax._nlgrd_legend_width = width
+
+
+def _covers_points(ax, legend) -> bool:
+    """Whether ``legend`` (as placed now) lies over a point of a line drawn in data coordinates."""
+    box = legend.get_window_extent(ax.figure.canvas.get_renderer())
+    for line in ax.get_lines():
+        if line.get_transform() != ax.transData:
+            continue
+        xy = np.column_stack([np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float)])
+        xy = xy[np.all(np.isfinite(xy), axis=1)]
+        if xy.size == 0:
+            continue
+        px = ax.transData.transform(xy)
+        inside = (px[:, 0] > box.x0) & (px[:, 0] < box.x1) & (px[:, 1] > box.y0) & (px[:, 1] < box.y1)
+        if np.any(inside):
+            return True
+    return False
+
+
+def note_no_measurement(ax, text: str = NO_MEASUREMENT_TEXT):
+    """State on ``ax``, as an entry of its legend (no symbol), that no measured curve is shipped.
+
+    A legend entry rather than a text on the curves: the legend is placed where it covers
+    nothing (:func:`place_legend`). Call it before drawing the legend.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes of a figure the paper compared with measurements.
+    text : str
+        The note.
+
+    Returns
+    -------
+    matplotlib.lines.Line2D
+        The empty artist that carries the note.
+    """
+    (note,) = ax.plot([], [], ls="none", marker="", label=text)
+    return note
 
 
 def get_ax(ax=None, figsize=(7, 4)):
@@ -167,6 +345,7 @@ def draw_points(
     label: str,
     *,
     lines: bool = True,
+    markers: bool = True,
     ms: float = 3.5,
     lw: float = 1.0,
     alpha: float = 1.0,
@@ -195,6 +374,10 @@ def draw_points(
         Legend label of the stable markers; the others add the suffixes above.
     lines : bool
         Join consecutive finite points (False: markers only).
+    markers : bool
+        Draw the markers (False, for dense curves: lines only, labelled ``label`` solid
+        (stable), ``label + ", unstable"`` dashed and ``label + ", stability not
+        computed"`` dotted where both ends are unknown).
     ms : float
         Marker size of the stable points [pt] (unstable 1.4 times, unknown 1.3 times it).
     lw : float
@@ -212,15 +395,28 @@ def draw_points(
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     codes = np.asarray(codes, dtype=int)
     artists = []
+    if not markers:
+        lines = True
     if lines and x.size > 1:
         ok = np.isfinite(x) & np.isfinite(y)
         seg = ok[:-1] & ok[1:]
         bad = (codes[:-1] == UNSTABLE) | (codes[1:] == UNSTABLE)
-        for keep, ls in ((seg & ~bad, "-"), (seg & bad, "--")):
+        unknown = (codes[:-1] == UNKNOWN) & (codes[1:] == UNKNOWN) & ~bad
+        if markers:
+            kinds = ((seg & ~bad, "-", None), (seg & bad, "--", None))
+        else:
+            kinds = (
+                (seg & ~bad & ~unknown, "-", label),
+                (seg & bad, "--", f"{label}, unstable"),
+                (seg & unknown, ":", f"{label}, {UNKNOWN_TEXT}"),
+            )
+        for keep, ls, lab in kinds:
             if np.any(keep):
                 px, py = _pieces(x, y, keep)
-                (ln,) = ax.plot(px, py, ls=ls, color=colour, lw=lw, alpha=alpha, zorder=zorder)
+                (ln,) = ax.plot(px, py, ls=ls, color=colour, lw=lw, alpha=alpha, zorder=zorder, label=lab)
                 artists.append(ln)
+    if not markers:
+        return artists
     shown = np.isfinite(y)
     styles = (
         (STABLE, label, {"mfc": colour, "fillstyle": "full"}),

@@ -14,14 +14,19 @@ import pandas as pd
 from nlgrd.plotting.common import (
     DIRECTION_MARKERS,
     UNKNOWN,
+    axis_label,
     clip_to_scale,
     direction_colours,
     draw_points,
     flags,
     get_ax,
     mark_not_converged,
+    place_legend,
     stability_codes,
 )
+
+#: Default abscissa of the sweep figures: (label, factor from the mesh frequency [Hz]).
+MESH_HZ = ("mesh frequency [Hz]", 1.0)
 
 _LABELS = {
     "dte_rms": ("RMS of alternating DTE [µm]", 1e6),
@@ -69,6 +74,7 @@ def plot_sweep_frame(
     *,
     ylim: tuple[float | None, float | None] | None = None,
     lines: bool = True,
+    markers: bool = True,
     sort: bool = True,
     ms: float = 3.5,
     lw: float = 1.0,
@@ -89,9 +95,9 @@ def plot_sweep_frame(
         concatenated. Rows with an optional ``response`` column other than "periodic" that
         converged are marked apart on the bottom edge ("no stable periodic response").
     x : str
-        Column of the abscissa (also the x label).
+        Column of the abscissa (its :func:`~nlgrd.plotting.common.axis_label` is the x label).
     y : str
-        Column of the values drawn (also the y label).
+        Column of the values drawn (its axis label is the y label).
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure when None.
     label : str, optional
@@ -102,6 +108,9 @@ def plot_sweep_frame(
         The scale: values beyond it become carets on the edge, noted in the legend.
     lines : bool
         Join consecutive converged points (False: markers only).
+    markers : bool
+        Draw markers (False: lines only, the line style telling the stability; for
+        dense curves such as continuations).
     sort : bool
         Draw each direction in order of ``x`` (False: in the table's order, e.g. along
         the arc length of a continuation curve).
@@ -142,6 +151,7 @@ def plot_sweep_frame(
             DIRECTION_MARKERS.get(d, "o"),
             name,
             lines=lines,
+            markers=markers,
             ms=ms,
             lw=lw,
             alpha=alpha,
@@ -151,8 +161,8 @@ def plot_sweep_frame(
             _mark_responses(ax, part["response"].astype(str).to_numpy(), conv, xv, yv, colour, name, ms)
     if ylim is not None:
         ax.set_ylim(*[lim if lim is not None else cur for lim, cur in zip(ylim, ax.get_ylim(), strict=True)])
-    ax.set_xlabel(x)
-    ax.set_ylabel(y)
+    ax.set_xlabel(axis_label(x))
+    ax.set_ylabel(axis_label(y))
     return ax
 
 
@@ -224,8 +234,12 @@ def plot_sweep(
     label: str | None = None,
     series: int | tuple | dict | None = None,
     ylim: tuple[float | None, float | None] | None = None,
+    *,
+    xaxis: tuple[str, float] = MESH_HZ,
+    title: str | None = None,
 ):
-    """Sweep curve(s) of a :class:`~nlgrd.nonlinear.results.SweepResult` against mesh frequency [Hz].
+    """Sweep curve(s) of a :class:`~nlgrd.nonlinear.results.SweepResult` against mesh frequency
+    (or the speed the range was given in, ``xaxis``).
 
     Up ▲ and down ▼ in different colours; stable filled/solid, unstable open/dashed,
     unknown stability half-filled and stated in the legend; non-converged points as
@@ -247,19 +261,36 @@ def plot_sweep(
     ylim : (low, high), optional
         The scale, in the units of the axis label: values beyond it become carets on the
         edge, noted in the legend.
+    xaxis : (str, float)
+        The abscissa's label and its value per mesh frequency [Hz] (e.g. ("pinion speed
+        [rpm]", 60 / (N_p |s_p|)) for a range given in rpm).
+    title : str, optional
+        Title of the axes (e.g. the model's name).
 
     Returns
     -------
     matplotlib.axes.Axes
         The axes drawn on.
     """
-    ax = plot_sweep_frame(
-        sweep_table(result, quantity), "mesh_frequency [Hz]", "value", ax, label, series, ylim=ylim
-    )
-    ax.set_xlabel("mesh frequency [Hz]")
-    ax.set_ylabel(_LABELS.get(quantity, (quantity, 1.0))[0])
-    ax.legend(fontsize=8)
+    table = _in_unit(sweep_table(result, quantity), xaxis)
+    ax = plot_sweep_frame(table, "x", "value", ax, label, series, ylim=ylim)
+    _finish(ax, quantity, xaxis, title)
     return ax
+
+
+def _in_unit(table: pd.DataFrame, xaxis: tuple[str, float]) -> pd.DataFrame:
+    """``table`` with column "x": its mesh frequency [Hz] in the unit of ``xaxis``."""
+    table = table.copy()
+    table["x"] = table["mesh_frequency [Hz]"] * float(xaxis[1])
+    return table
+
+
+def _finish(ax, quantity: str, xaxis: tuple[str, float], title: str | None) -> None:
+    ax.set_xlabel(xaxis[0])
+    ax.set_ylabel(_LABELS.get(quantity, (axis_label(quantity), 1.0))[0])
+    if title:
+        ax.set_title(title, fontsize=9)
+    place_legend(ax)
 
 
 def plot_continuation(
@@ -269,11 +300,14 @@ def plot_continuation(
     color: str = "k",
     label: str = "HB",
     ylim: tuple[float | None, float | None] | None = None,
+    *,
+    xaxis: tuple[str, float] = MESH_HZ,
+    title: str | None = None,
 ):
-    """Continuation curve along its arc length: stable solid/filled, unstable dashed/open.
+    """Continuation curve along its arc length, lines only: stable solid, unstable dashed.
 
-    Points of unknown stability are half-filled and stated in the legend; turning
-    points are marked with stars.
+    Parts of unknown stability are dotted and stated in the legend; turning points are
+    marked with stars. No marker per point: a curve has hundreds to thousands of them.
 
     Parameters
     ----------
@@ -292,6 +326,10 @@ def plot_continuation(
     ylim : (low, high), optional
         The scale, in the units of the axis label: values beyond it become carets on the
         edge, noted in the legend.
+    xaxis : (str, float)
+        The abscissa's label and its value per mesh frequency [Hz] (see :func:`plot_sweep`).
+    title : str, optional
+        Title of the axes.
 
     Returns
     -------
@@ -299,17 +337,15 @@ def plot_continuation(
         The axes drawn on.
     """
     ax = get_ax(ax)
-    table = sweep_table(result.curve, quantity)
+    table = _in_unit(sweep_table(result.curve, quantity), xaxis)
     plot_sweep_frame(
-        table, "mesh_frequency [Hz]", "value", ax, label, {"curve": color}, ylim=ylim, sort=False, ms=2.5
+        table, "x", "value", ax, label, {"curve": color}, ylim=ylim, sort=False, markers=False, lw=1.2
     )
-    f, y = table["mesh_frequency [Hz]"].to_numpy(), table["value"].to_numpy()
+    f, y = table["x"].to_numpy(), table["value"].to_numpy()
     turning = np.asarray(result.turning_indices, dtype=int)
     if turning.size:
         ax.plot(f[turning], y[turning], "*", color=color, ms=8, ls="none", label=f"{label} turning points")
-    ax.set_xlabel("mesh frequency [Hz]")
-    ax.set_ylabel(_LABELS.get(quantity, (quantity, 1.0))[0])
-    ax.legend(fontsize=8)
+    _finish(ax, quantity, xaxis, title)
     return ax
 
 

@@ -106,6 +106,27 @@ def campbell_breaks(result, crossing_gap: float = 0.01):
     return breaks | near[1:] | near[:-1]
 
 
+def _label_order(ax, label: str, rpm, f_order, top) -> None:
+    """The name of an excitation order at the end of its line inside the axes: at the right
+    edge, or where the line leaves through the top (right-aligned, below the edge)."""
+    x, y = float(rpm[-1]), float(f_order[-1])
+    va = "bottom"
+    if top is not None and y > top:
+        inside = np.nonzero(np.asarray(f_order) <= top)[0]
+        if inside.size == 0:
+            return
+        i = int(inside[-1])
+        # the line crosses f = top between rpm[i] and rpm[i + 1] (linear in speed)
+        x = (
+            float(np.interp(top, [f_order[i], f_order[i + 1]], [rpm[i], rpm[i + 1]]))
+            if i + 1 < len(rpm)
+            else x
+        )
+        y, va = top, "top"
+    ax.annotate(label, (x, y), xytext=(-2, -2 if va == "top" else 2), textcoords="offset points",
+                ha="right", va=va, fontsize=7)  # fmt: skip
+
+
 def plot_campbell(result, ax=None, crossing_gap: float = 0.01):
     """Damped natural frequencies against speed, order lines and critical speeds.
 
@@ -182,9 +203,11 @@ def plot_campbell(result, ax=None, crossing_gap: float = 0.01):
                 label=f"unstable (ζ < 0): open, dashed ({n_unstable} points)",
             )
         )
+    top = np.nanmax(F) * 1.05 if np.any(np.isfinite(F)) else None
     for label, order in result.orders.items():
-        ax.plot(rpm, order * result.speeds / (2 * np.pi), "k:", lw=0.8)
-        ax.annotate(label, (rpm[-1], order * result.speeds[-1] / (2 * np.pi)), fontsize=7)
+        f_order = order * result.speeds / (2 * np.pi)
+        ax.plot(rpm, f_order, "k:", lw=0.8)
+        _label_order(ax, label, rpm, f_order, top)
     if result.orders:
         handles.append(Line2D([], [], color="k", ls=":", lw=0.8, label="excitation orders"))
     crit = list(result.critical_speeds)
@@ -199,8 +222,9 @@ def plot_campbell(result, ax=None, crossing_gap: float = 0.01):
         handles.append(
             Line2D([], [], color="k", marker="D", ms=4, ls="none", label=f"critical speeds ({len(crit)})")
         )
-    if np.any(np.isfinite(F)):
-        ax.set_ylim(0, np.nanmax(F) * 1.05)
+    if top is not None:
+        ax.set_ylim(0, top)
+    ax.set_xlim(rpm[0], rpm[-1])
     ax.set_xlabel("speed [rpm]")
     ax.set_ylabel("damped natural frequency [Hz]")
     ax.set_title(

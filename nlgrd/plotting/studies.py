@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from nlgrd.plotting.common import get_ax
+from nlgrd.plotting.common import axis_label, get_ax, place_legend
 
 __all__ = ["study_curves", "study_distribution", "study_map"]
 
@@ -32,9 +32,8 @@ def _edges(values: NDArray) -> NDArray:
 
 
 def _short(column: str) -> str:
-    """``gear_pairs[0].geometry.backlash [m]`` -> ``backlash [m]``."""
-    name, _, unit = column.partition(" [")
-    return name.rsplit(".", 1)[-1] + (f" [{unit}" if unit else "")
+    """``gear_pairs[0].geometry.backlash [m]`` -> ``mesh backlash 2b [m]`` (:func:`axis_label`)."""
+    return axis_label(column)
 
 
 def _value(value) -> str:
@@ -86,7 +85,7 @@ def study_map(
     z = np.ma.masked_invalid(table.to_numpy(dtype=float))
     ex, ey = _edges(xs), _edges(ys)
     mesh = ax.pcolormesh(ex, ey, z, cmap=cmap, shading="flat")
-    ax.figure.colorbar(mesh, ax=ax, label=quantity)
+    ax.figure.colorbar(mesh, ax=ax, label=axis_label(quantity))
     for i, yv in enumerate(ys):
         for j, xv in enumerate(xs):
             if z.mask is not np.ma.nomask and z.mask[i, j]:
@@ -116,8 +115,8 @@ def study_map(
         ax.set_xscale("log")
     if np.all(ys > 0) and ys.size > 2 and np.ptp(np.diff(np.log(ys))) < 1e-9:
         ax.set_yscale("log")
-    ax.set_xlabel(x)
-    ax.set_ylabel(y)
+    ax.set_xlabel(axis_label(x))
+    ax.set_ylabel(axis_label(y))
     return ax
 
 
@@ -151,10 +150,10 @@ def study_curves(
         part = part.sort_values(x)
         label = None if family is None else f"{_short(family)} = {_value(value)}"
         ax.plot(part[x], part[quantity], style, label=label)
-    ax.set_xlabel(x)
-    ax.set_ylabel(quantity)
+    ax.set_xlabel(axis_label(x))
+    ax.set_ylabel(axis_label(quantity))
     if family is not None:
-        ax.legend(fontsize=8)
+        place_legend(ax)
     return ax
 
 
@@ -180,7 +179,7 @@ def study_distribution(summary: pd.DataFrame, quantity: str, ax=None, bins: int 
     v = summary[quantity].to_numpy(dtype=float)
     ok = np.sort(v[np.isfinite(v)])
     ax.hist(ok, bins=np.histogram_bin_edges(ok, bins=bins), color="0.75", edgecolor="0.4")
-    ax.set_xlabel(quantity)
+    ax.set_xlabel(axis_label(quantity))
     ax.set_ylabel("tasks")
     twin = ax.twinx()
     twin.step(ok, np.arange(1, ok.size + 1) / ok.size, where="post", color="C0")

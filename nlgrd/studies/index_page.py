@@ -36,9 +36,22 @@ _CONVENTIONS = (
     "points filled and joined by solid lines, unstable points open and joined by dashed lines, "
     "points whose stability was not computed half-filled (the legend says so); points without a "
     "converged solution are crosses on the bottom edge, counted in the legend; values beyond the "
-    "scale are carets on the edge, counted with their extreme value in the legend. Campbell "
+    "scale are carets on the edge, counted with their extreme value in the legend. Continuation "
+    "curves have no marker per point: stable parts solid, unstable dashed, stability not computed "
+    "dotted. Long legends sit to the right of the axes. Campbell "
     "diagrams join a mode's points only where its whirl and kind stay the same and no other mode "
     "comes near (no lines across veerings or crossings)."
+)
+#: What the index says about measured curves (none is shipped) and how to add one.
+MEASURED = (
+    "Measured curves: none is shipped. The figures the paper compared with measurements "
+    "(Kubo's rig, Fig. 5 of Maliha et al. 2004, in 01_kubo_dynamic_factor; Kahraman & "
+    "Blankenship's rig, Fig. 8, in 02_kahraman_blankenship_dte) say so on the figure. To add "
+    "one: digitise the curve into a CSV file in data/experimental/ with the header keys and "
+    "columns of data/experimental/README.md (case kubo or kahraman_blankenship); check it with "
+    "nlgrd.studies.experimental.load_experimental, which names the file, key, column and line of "
+    "every problem; then rebuild the notebook reports. The notebook overlays every data set of "
+    "its case on the figure and writes the scores to experimental_scores.csv."
 )
 _STYLE = """body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;line-height:1.4}
 table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:2px 6px;text-align:left;
@@ -291,6 +304,7 @@ def index_html(stage: Path, *, fast: bool, parts, root: Path) -> str:
         f"{' --fast' if fast else ''}</code> ({mode} mode), "
         f"parts rebuilt: {_esc(', '.join(parts))}. Each section states the mode it was built in.</p>",
         f"<p>{_esc(_CONVENTIONS)}</p>",
+        f"<p>{_esc(MEASURED)}</p>",
         "<h2>Version</h2>",
     ]
     out += _table(version_rows(root))
