@@ -104,11 +104,11 @@ class Flow:
             tau = new
         return tau
 
-    def advance(self, s: np.ndarray, periods: int = 1, jacobian: bool = True):
-        """Advance s = (x₁, x₂, v₁, v₂) at t = 0 by ``periods`` forcing periods.
+    def advance(self, s: np.ndarray, periods: int = 1, jacobian: bool = True, t_end: float | None = None):
+        """Advance s = (x₁, x₂, v₁, v₂) at t = 0 by ``periods`` forcing periods (or to ``t_end``).
 
         Returns (s at the end, monodromy ∂s_end/∂s₀ (4 x 4), contact-change times)."""
-        t_end = periods * self.T
+        t_end = periods * self.T if t_end is None else t_end
         z = np.concatenate([s, [1.0, 0.0, 1.0]])
         closed = gap(z) > 0 or (gap(z) == 0 and self.slope(z, True) > 0)
         Phi = np.eye(4)
