@@ -15,6 +15,19 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "nlgrd"
 MAX_LINES = 600
+#: Modules reviewed as one concept above MAX_LINES: (ceiling, why it is one concept).
+LONG_MODULES = {
+    "nlgrd.nonlinear.floquet": (
+        760,
+        "the monodromy of an HB orbit: its exact piecewise product, the Magnus product for "
+        "smooth tangents on the same pieces, and the verdict; the two products share the pieces",
+    ),
+    "nlgrd.plotting.common": (
+        660,
+        "the conventions every figure shares: axis labels from column names, legends placed "
+        "outside, stability line styles, the no-measurement note",
+    ),
+}
 
 #: What each subpackage may import from nlgrd (besides itself and the top-level helpers
 #: nlgrd.errors, nlgrd.cache and nlgrd.threads): the
@@ -145,9 +158,12 @@ def test_subpackages_import_only_lower_layers():
 
 @pytest.mark.parametrize("module", sorted(_modules()))
 def test_module_size(module):
-    """No module over MAX_LINES lines (docs/style.md: a module is one concept)."""
+    """No module over MAX_LINES lines (docs/style.md: a module is one concept), unless it is
+    one concept reviewed and listed in LONG_MODULES with its reason and a ceiling (a split
+    along other lines would cut the concept or its comments); docs/conventions.md."""
     n = len(_modules()[module].read_text(encoding="utf-8").splitlines())
-    assert n <= MAX_LINES, f"{module}: {n} lines"
+    limit, _reason = LONG_MODULES.get(module, (MAX_LINES, ""))
+    assert n <= limit, f"{module}: {n} lines"
 
 
 def test_no_cache_in_module_globals():

@@ -537,8 +537,10 @@ def floquet_analysis(
 
     Parameters
     ----------
-    state_space, nonlinearities, harmonics, omega, deflate, method
+    state_space, nonlinearities, harmonics, deflate, method
         As :func:`floquet_multipliers`.
+    omega : float
+        Base frequency ω of the orbit [rad/s].
 
     Returns
     -------
