@@ -1,0 +1,338 @@
+"""The analyses of any model, as ``import nlgrd`` gives them: load a model file, its modes
+and Campbell diagram, and the nonlinear response (harmonic-balance sweeps, continuation,
+orbit search, time-domain sweeps) of a model with one gear mesh or several, with or
+without bearing clearances and unbalance.
+
+Speeds are given once, in the unit the user has: ``rpm`` (the reference shaft, speed
+ratio 1) or ``hz`` (the base frequency of the model's frequency plan: the mesh frequency
+for one mesh, :class:`~nlgrd.nonlinear.frequency_plan.FrequencyPlan`). Each function
+builds the reduced model (:func:`model`) and calls the library's own analysis; the
+result is the library's result object, with ``to_frame()``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from nlgrd.errors import ModelError
+from nlgrd.rotor.system import RotorSystem
+
+__all__ = ["campbell", "continuation", "load", "model", "modes", "search_orbits", "sweep", "time_sweep"]
+
+#: Mesh harmonics of an orbit search without ``H`` (the CLI's ``--period N`` default) [-].
+SEARCH_HARMONICS = 9
+
+
+def load(path: str | os.PathLike) -> RotorSystem:
+    """Read a TOML model file (:func:`nlgrd.io.model_file.load_model`).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The model file.
+
+    Returns
+    -------
+    RotorSystem
+    """
+    from nlgrd.io.model_file import load_model
+
+    return load_model(path)
+
+
+def modes(system: RotorSystem, rpm: float = 0.0, n_modes: int = 20, damped: bool = True):
+    """Modes at reference shaft speed ``rpm`` (:func:`nlgrd.rotor.modal.modal_analysis`).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model; gear meshes at their average stiffness.
+    rpm : float
+        Reference shaft speed [rpm].
+    n_modes : int
+        Flexible modes returned [-].
+    damped : bool
+        Complex modes with damping and gyroscopics (True) or real undamped modes.
+
+    Returns
+    -------
+    ModalResult
+    """
+    from nlgrd.rotor.modal import modal_analysis
+
+    return modal_analysis(system, rpm * math.pi / 30, n_modes=n_modes, damped=damped)
+
+
+def campbell(system: RotorSystem, rpm: ArrayLike, n_modes: int = 10, orders: dict[str, float] | None = None):
+    """Campbell diagram over reference shaft speeds ``rpm`` (:func:`nlgrd.rotor.modal.campbell`).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    rpm : array_like
+        Reference shaft speeds [rpm].
+    n_modes : int
+        Modes followed [-].
+    orders : dict, optional
+        Excitation orders per unit shaft speed, e.g. ``{"1x": 1, "mesh": 25}``.
+
+    Returns
+    -------
+    CampbellResult
+    """
+    from nlgrd.rotor.modal import campbell as campbell_diagram
+
+    speeds = np.asarray(rpm, dtype=float) * math.pi / 30
+    return campbell_diagram(system, speeds, n_modes=n_modes, orders=orders)
+
+
+def _single_mesh(system: RotorSystem) -> bool:
+    """One gear pair whose excitation repeats every mesh cycle, and nothing else nonlinear:
+    the mesh-coordinate reduction serves it (its base is the mesh frequency)."""
+    from nlgrd.nonlinear.link_model import needs_links
+
+    return not needs_links(system) and system.gear_pairs[0].error_period == 1
+
+
+def model(system: RotorSystem, top: float, H: int):
+    """The reduced harmonic-balance model of ``system`` for base frequencies up to ``top``.
+
+    One gear pair alone is reduced onto its mesh coordinate
+    (:func:`nlgrd.nonlinear.geared.build_geared_model`); any other set of meshes,
+    clearances and unbalance onto all link coordinates
+    (:func:`nlgrd.nonlinear.link_model.build_link_model`). The two agree to 1e-9 on one
+    mesh (tests/test_engine_equivalence.py).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    top : float
+        Highest base frequency [rad/s].
+    H : int
+        Largest number of harmonics of the base [-].
+
+    Returns
+    -------
+    GearedModel or LinkModel
+    """
+    if _single_mesh(system):
+        from nlgrd.nonlinear.geared import build_geared_model
+
+        return build_geared_model(system, float(top), H=H)
+    from nlgrd.nonlinear.link_model import build_link_model
+
+    return build_link_model(system)
+
+
+def _speed_per_base(system: RotorSystem) -> float:
+    from nlgrd.nonlinear.frequency_plan import FrequencyPlan
+
+    shaft_orders = [abs(system.shafts[u.shaft].speed_ratio) for u in system.unbalance]
+    return FrequencyPlan.for_system(system, shaft_orders).speed_per_base
+
+
+def _omegas(system: RotorSystem, rpm, hz, name: str = "rpm") -> NDArray:
+    """Base frequencies [rad/s] from reference shaft speeds [rpm] or base frequencies [Hz]."""
+    if (rpm is None) == (hz is None):
+        raise ModelError(name, "give the speeds either as rpm (reference shaft) or as hz (base frequency)")
+    if hz is not None:
+        omegas = 2 * math.pi * np.atleast_1d(np.asarray(hz, dtype=float))
+    else:
+        omegas = np.atleast_1d(np.asarray(rpm, dtype=float)) * math.pi / 30 / _speed_per_base(system)
+    if omegas.ndim != 1 or omegas.size < 1 or not np.all(np.isfinite(omegas)) or np.any(omegas <= 0):
+        raise ModelError(name if rpm is not None else "hz", "must be positive finite speeds")
+    return omegas
+
+
+def _ladder_top(system: RotorSystem, H: int | None) -> int:
+    from nlgrd.nonlinear.harmonic_convergence import LADDER
+
+    return int(H) if H is not None else LADDER[-1]
+
+
+def sweep(
+    system: RotorSystem,
+    *,
+    rpm: ArrayLike | None = None,
+    hz: ArrayLike | None = None,
+    H: int | None = None,
+    directions: str = "both",
+    period: int | str = "auto",
+    stability: bool = True,
+    progress: Callable[[int, int], None] | None = None,
+    **options,
+):
+    """Up and/or down harmonic-balance sweep of any model.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model (one mesh or several, clearances, unbalance).
+    rpm, hz : array_like
+        Reference shaft speeds [rpm] or base frequencies [Hz]; one of them.
+    H : int, optional
+        Harmonics of the base frequency [-]; default chosen by the error estimate.
+    directions : {"both", "up", "down"}
+    period : {"auto", 1, 2}
+        "auto": period 1 where it is stable, the period-2 orbit where it lost stability
+        by period doubling.
+    stability : bool
+        Floquet stability of each point.
+    progress : callable, optional
+        ``progress(i, n)`` once per point.
+    **options
+        Further options of :func:`nlgrd.nonlinear.sweep.sweep` (``tol``, ``jump``, ...).
+
+    Returns
+    -------
+    GearedSweepResult or LinkSweepResult
+        Both with ``to_frame()`` and ``jumps()``.
+    """
+    omegas = _omegas(system, rpm, hz)
+    m = model(system, float(omegas.max()), _ladder_top(system, H))
+    common = dict(directions=directions, stability=stability, progress=progress, period=period)
+    if _single_mesh(system):
+        from nlgrd.nonlinear.geared import geared_sweep
+
+        return geared_sweep(system, omegas, H=H, model=m, **common, **options)
+    from nlgrd.nonlinear.link_model import link_sweep
+
+    return link_sweep(m, omegas, H, **common, **options)
+
+
+def continuation(
+    system: RotorSystem,
+    *,
+    rpm: tuple[float, float] | None = None,
+    hz: tuple[float, float] | None = None,
+    H: int | None = None,
+    stability: bool = True,
+    **options,
+):
+    """Pseudo-arc-length continuation of any model's response, unstable parts included.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    rpm, hz : (float, float)
+        Start and end: reference shaft speeds [rpm] or base frequencies [Hz].
+    H : int, optional
+        Harmonics of the base [-]; default chosen by the error estimate.
+    stability : bool
+        Floquet stability of each point.
+    **options
+        Further options of :func:`nlgrd.nonlinear.continuation.continuation`.
+
+    Returns
+    -------
+    ContinuationResult
+    """
+    ends = _omegas(system, rpm, hz)
+    if ends.size != 2:
+        raise ModelError("rpm" if rpm is not None else "hz", "a continuation takes (start, end)")
+    w0, w1 = (float(w) for w in ends)
+    m = model(system, max(w0, w1), _ladder_top(system, H))
+    if _single_mesh(system):
+        from nlgrd.nonlinear.geared import geared_continuation
+
+        return geared_continuation(system, w0, w1, H, model=m, stability=stability, **options)
+    from nlgrd.nonlinear.continuation import continuation as trace
+    from nlgrd.nonlinear.harmonic_convergence import LADDER, converged_continuation
+
+    if H is not None:
+        return trace(m.reduced, w0, w1, H, stability=stability, **options)
+    ladder = [h * m.top_order for h in LADDER]
+    return converged_continuation(m.reduced, w0, w1, ladder=ladder, stability=stability, **options)
+
+
+def search_orbits(
+    system: RotorSystem,
+    *,
+    rpm: float | None = None,
+    hz: float | None = None,
+    periods: tuple[int, ...] = (1, 2, 3),
+    H: int = SEARCH_HARMONICS,
+    **options,
+):
+    """Periodic orbits of the given periods at one speed, from many starts (orbits that no
+    sweep reaches: isolated branches, subharmonics).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    rpm, hz : float
+        The speed: reference shaft [rpm] or base frequency [Hz].
+    periods : tuple of int
+        Periods sought, in base periods [-].
+    H : int
+        Harmonics of the base per orbit (ν H of ω/ν for period ν) [-].
+    **options
+        Further options of :func:`nlgrd.nonlinear.orbit_search.search_orbits`.
+
+    Returns
+    -------
+    list of FoundOrbit
+    """
+    from nlgrd.nonlinear.orbit_search import search_orbits as search
+
+    omega = float(_omegas(system, rpm, hz)[0])
+    m = model(system, omega, int(H))
+    if _single_mesh(system):
+        from nlgrd.nonlinear.orbit_search import geared_model_of
+
+        model_of = geared_model_of(m)
+    else:
+        from nlgrd.nonlinear.link_model import period_model
+
+        def model_of(nu: int):
+            return m.reduced if nu == 1 else period_model(m, nu).reduced
+
+    return search(model_of, omega, int(H), periods, **options)
+
+
+def time_sweep(
+    system: RotorSystem,
+    *,
+    rpm: ArrayLike | None = None,
+    hz: ArrayLike | None = None,
+    directions: str = "both",
+    H: int = 15,
+    **options,
+):
+    """Time-domain sweep of any model, each speed continuing from the last: the
+    independent reference of :func:`sweep` (HHT-α integration of the full model).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    rpm, hz : array_like
+        Reference shaft speeds [rpm] or base frequencies [Hz].
+    directions : {"both", "up", "down"}
+    H : int
+        Harmonics kept from each steady state's last period [-].
+    **options
+        Further options of the integrator (``steps_per_period``, ``tol``, ...).
+
+    Returns
+    -------
+    SweepResult
+    """
+    omegas = _omegas(system, rpm, hz)
+    m = model(system, float(omegas.max()), int(H))
+    if _single_mesh(system):
+        from nlgrd.timedomain.geared import time_sweep as geared_time_sweep
+
+        return geared_time_sweep(m, omegas, directions, H=H, **options)
+    from nlgrd.timedomain.links import link_time_sweep
+
+    return link_time_sweep(m, omegas, directions, H=H, **options)

@@ -1,0 +1,129 @@
+"""The analyses ``import nlgrd`` gives (issue 33, item 9), on models with one mesh, a mesh
+and a bearing clearance, and a clearance without a mesh.
+
+Each check is against something the façade does not compute itself: the speed
+conversion against the tooth count of the model file, a continuation curve against
+Newton solves at its own frequencies and a fold against where a sweep without landing
+loses its branch, an orbit search against the sweep's orbit, a time-domain sweep against
+the harmonic balance, and the README's quick start run as written.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import nlgrd
+from nlgrd.nonlinear.link_model import build_link_model
+from nlgrd.nonlinear.orbit_search import same_motion
+from nlgrd.nonlinear.solvers import solve
+
+ROOT = Path(__file__).resolve().parents[1]
+CLEARANCE = ROOT / "data" / "models" / "two_shaft_clearance.toml"
+RUB = ROOT / "data" / "models" / "rub_rotor.toml"
+
+
+@pytest.fixture(scope="module")
+def clearance_model():
+    return nlgrd.load(CLEARANCE)
+
+
+def test_import_nlgrd_gives_the_analyses_and_the_model_classes():
+    for name in ("load", "modes", "campbell", "sweep", "continuation", "search_orbits", "time_sweep"):
+        assert callable(getattr(nlgrd, name)), name
+    for name in ("RotorSystem", "Shaft", "Disk", "Bearing", "GearMesh", "BearingClearance", "Unbalance"):
+        assert isinstance(getattr(nlgrd, name), type), name
+
+
+def test_speeds_in_rpm_are_the_mesh_frequency_of_the_model_files_tooth_count(clearance_model):
+    """rpm of the reference shaft x pinion teeth / 60 is the mesh frequency [Hz]: the same
+    points either way (the pinion shaft turns at speed ratio 1 in this file)."""
+    gp = clearance_model.gear_pairs[0]
+    assert clearance_model.shafts[gp.pinion_shaft].speed_ratio == 1.0
+    teeth = gp.geometry.teeth_pinion
+    rpm = np.array([2600.0, 2800.0])
+    a = nlgrd.sweep(clearance_model, rpm=rpm, H=5, directions="up", period=1, stability=False)
+    b = nlgrd.sweep(clearance_model, hz=rpm * teeth / 60, H=5, directions="up", period=1, stability=False)
+    np.testing.assert_allclose(a.result.omega, 2 * np.pi * rpm * teeth / 60, rtol=1e-14)
+    np.testing.assert_allclose(
+        a.result.harmonics, b.result.harmonics, rtol=0, atol=1e-12 * np.abs(b.result.harmonics).max()
+    )
+
+
+def test_continuation_of_a_clearance_model_is_the_newton_solution_and_finds_the_fold(clearance_model):
+    """Continuation was refused for link models; now the curve of the mesh + Hertzian
+    clearance model (H 5) is checked two ways. Up to its first turning point every curve
+    point is the solution Newton finds from the linear response at the same frequency
+    (1e-7 of the orbit: the corrector's and Newton's tolerances are 1e-9 and 1e-10 on the
+    residual). And the turning point lies within the one 1 Hz step where an up sweep
+    without landing (jump "none") loses its branch: the same fold found by another
+    algorithm, to the sweep's grid step."""
+    c = nlgrd.continuation(clearance_model, hz=(1190.0, 1215.0), H=5, stability=False)
+    assert len(c.turning_omegas) >= 1
+    fold = c.turning_omegas[0] / (2 * np.pi)
+    first = c.turning_indices[0]
+    reduced = build_link_model(clearance_model).reduced
+    for i in range(first + 1):
+        problem = reduced.at(float(c.omega[i]), 5)
+        z = np.asarray(c.curve.harmonics[i])
+        sol = solve(problem, None)
+        assert sol.converged
+        assert np.max(np.abs(np.asarray(sol.harmonics) - z)) < 1e-7 * np.max(np.abs(z))
+    grid = np.arange(1190.0, 1215.5, 1.0)
+    s = nlgrd.sweep(clearance_model, hz=grid, H=5, directions="up", period=1, stability=False, jump="none")
+    ok = np.asarray(s.result.converged, dtype=bool)
+    last = grid[ok][-1]
+    assert not ok[grid > last].any()
+    assert last <= fold <= last + 1.0
+
+
+def test_orbit_search_on_a_clearance_model_finds_the_sweeps_orbit(clearance_model):
+    """search_orbits raised on several nonlinear coordinates; the link model's period-1
+    search at 1250 Hz finds the (stable) orbit the sweep reaches, and no other."""
+    found = nlgrd.search_orbits(clearance_model, hz=1250.0, periods=(1,), H=5)
+    sweep = nlgrd.sweep(clearance_model, hz=[1250.0], H=5, directions="up", period=1)
+    assert bool(sweep.result.stable[0])
+    assert [same_motion(o.harmonics, sweep.result.harmonics[0], 1) for o in found] == [True]
+    assert found[0].stable
+
+
+def test_time_sweep_of_a_rotor_with_a_rub_ring_agrees_with_the_harmonic_balance():
+    """The rub rotor (no gear: base = shaft speed, so rpm / 60 Hz) well below its
+    critical speed, inside the clearance: the HHT-α steady state (its periodicity
+    tolerance 1e-4) and the harmonic balance give the same unbalance orbit, to 1e-4."""
+    system = nlgrd.load(RUB)
+    hb = nlgrd.sweep(system, rpm=[1000.0], H=3, directions="up", period=1)
+    np.testing.assert_allclose(hb.result.omega, [2 * np.pi * 1000.0 / 60], rtol=1e-14)
+    td = nlgrd.time_sweep(system, rpm=[1000.0], directions="up", H=3)
+    z_hb, z_td = np.asarray(hb.result.harmonics[0]), np.asarray(td.harmonics[0])
+    assert np.max(np.abs(z_td - z_hb)) < 1e-4 * np.max(np.abs(z_hb))
+
+
+def test_speeds_given_both_ways_or_neither_are_refused(clearance_model):
+    with pytest.raises(nlgrd.ModelError, match="rpm"):
+        nlgrd.sweep(clearance_model, rpm=[1000.0], hz=[1000.0])
+    with pytest.raises(nlgrd.ModelError, match="rpm"):
+        nlgrd.sweep(clearance_model)
+    with pytest.raises(nlgrd.ModelError, match="hz"):
+        nlgrd.sweep(clearance_model, hz=[-5.0])
+
+
+def test_the_readme_quick_start_runs_as_written(tmp_path, monkeypatch):
+    """The README's five-line quick start, executed as it stands (from the clone's root)."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    block = re.search(r"## Quick start.*?```python\n(.*?)```", text, re.S)
+    assert block, "README has no '## Quick start' python block"
+    code = block.group(1)
+    lines = [ln for ln in code.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    assert len(lines) <= 5
+    monkeypatch.chdir(tmp_path)  # the figure is written here, not into the clone
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    code = code.replace('"data/', f'"{ROOT.as_posix()}/data/')
+    scope: dict = {}
+    exec(compile(code, "README quick start", "exec"), scope)  # noqa: S102 - the README's own code
+    frame = scope["result"].to_frame()
+    assert frame["converged"].all()
+    assert (tmp_path / "two_shaft_sweep.png").stat().st_size > 0
