@@ -370,7 +370,7 @@ def geared_sweep(
     names = [
         b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(model.system.bearings)
     ]
-    return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), names, res.H // res.base)
+    return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), names, res.H)
 
 
 def _beyond_period_one(model: GearedModel, p1: SweepResult, omegas, directions, period, harmonic_rtol):
