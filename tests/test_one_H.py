@@ -79,10 +79,14 @@ def test_kubo_period_two_point_reports_one_H(tmp_path, captured, capsys):
 def test_period_two_alone_checks_against_H_of_the_mesh(tmp_path, captured, capsys):
     """--period 2: the period-2 branch's own estimate is against the next rung of the
     ladder after 13, 17 mesh harmonics (34 of ω/2, which the summary said before); H is
-    given, not chosen; the error shown is over the accepted points, within 0.5 %."""
+    given, not chosen; the error shown is over the accepted points, within 0.5 %; the
+    period-2 points listed are the converged ones (the list held every grid point)."""
     out = tmp_path / "kubo2.csv"
     assert main(["sweep", str(KUBO), *KUBO_DOWN, "--period", "2", "--out", str(out)]) == 0
-    line = _summary(capsys.readouterr().out)
+    text = capsys.readouterr().out
+    line = _summary(text)
+    # the one stable period-2 point, not the 110 grid points no period-2 branch reaches
+    assert "period 2 (period doubled) at rpm: 9800.0\n" in text
     (res,) = captured["results"]
     assert res.mesh.H == 13 and res.mesh.H_check == 17
     assert "H = 13 (given; largest estimated error " in line and line.split(" against H = ")[1].startswith(

@@ -264,8 +264,8 @@ class SweepResult:
     @property
     def max_harmonic_error(self) -> float:
         """The largest estimated harmonic error over the accepted points (converged, with
-        a stable response: the values written) [-]; NaN where none was estimated. Points
-        above the tolerance are not converged, so it is within the tolerance."""
+        a stable response: the values written) [-]; NaN where none was estimated. A point
+        above the estimate's tolerance is not converged and does not count."""
         keep = np.asarray(self.converged, dtype=bool) & ~np.asarray(self.no_stable, dtype=bool)
         e = np.asarray(self.harmonic_error, dtype=float)[keep]
         e = e[np.isfinite(e)]
