@@ -210,7 +210,7 @@ class GearedSweepResult:
     bearing_names : list of str
         One name per bearing (its own, or shaft and node).
     H : int
-        Number of harmonics of the mesh solution.
+        H of docs/conventions.md: harmonics of the mesh frequency, as ``mesh.H``.
     """
 
     mesh: SweepResult
