@@ -85,7 +85,7 @@ def link_sweep_command(args, system, values, out, png) -> int:
         period=parse_period(args.period),
         progress=ProgressBar("sweep"),
     )
-    H = res.result.H
+    H = res.result.H  # of the base frequency, whatever the period of the points (as the CSV's H)
     frame = res.to_frame()
     frame.insert(1, "shaft_speed [rpm]", frame["base_frequency [Hz]"] * plan.speed_per_base * 60)
     x_col = "shaft_speed [rpm]" if args.rpm is not None else "base_frequency [Hz]"

@@ -121,7 +121,7 @@ def search_command(model, res, omegas, at, periods, unit) -> tuple[pd.DataFrame,
     """
     from nlgrd.nonlinear.orbit_search import geared_model_of
 
-    H = int(np.max(res.mesh.H)) // int(res.mesh.base)
+    H = res.mesh.H
 
     def on_sweep(o, w: float, branches) -> bool:
         here = np.nonzero(
@@ -309,7 +309,7 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
         ),
     )
     check = check_harmonics(fine.reduced, on_base, nu * H_check, jumps=False)
-    res = dc.replace(res, harmonic_error=check.error, H_check=check.H_check)
+    res = dc.replace(res, harmonic_error=check.error, H_check=H_check)  # of ω, as H
     names = [
         b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(model.system.bearings)
     ]

@@ -214,7 +214,7 @@ def _period_command(args, system, omegas, unit, quantity, out, png, search) -> i
             print(f"{label} at {unit.name}: " + ", ".join(unit(w) for w in np.atleast_1d(m.omega[mask])))
     worst = np.nanmax(m.harmonic_error[ok], initial=0.0)
     print(
-        f"estimated harmonic error at most {worst:.2g} (against H = {m.H_check // nu})"
+        f"estimated harmonic error at most {worst:.2g} (against H = {m.H_check})"
         + (f": above {OUTPUT_RTOL:g}, raise --harmonics" if worst > OUTPUT_RTOL else "")
     )
     print(f"wrote {out}, {png}, {_beside(out, 'orbits')} and {_beside(out, 'branches')}")
@@ -235,6 +235,8 @@ def _write_sweep(res, quantity, out, png, extra=None, found=None, unit=None, tit
         snap_to_grid(frame, unit.column, unit.grid)
     with Outputs() as files:
         files.csv(frame, out)
+        if title is not None:  # the H of the CSV's column and the summary line
+            title = f"{title}\nH = {res.mesh.H} harmonics of the mesh frequency"
         ax = plot_sweep(res.mesh, quantity=quantity, xaxis=xaxis, title=title)
         if found is not None:
             from nlgrd.cli_orbits import draw_branches
@@ -337,7 +339,7 @@ def _summary(args, res, unit, out, png, transitions) -> int:
                 for w, f in zip(res.mesh.omega[torus], res.mesh.secondary_frequency[torus], strict=True)
             )
         )
-    two = np.atleast_1d(res.mesh.omega[(res.mesh.period == 2) & ~res.mesh.no_stable])
+    two = np.atleast_1d(res.mesh.omega[(res.mesh.period == 2) & res.mesh.converged & ~res.mesh.no_stable])
     if len(two):
         print(f"period 2 (period doubled) at {unit.name}: " + ", ".join(unit(w) for w in two))
     for j in res.jumps():

@@ -1,5 +1,5 @@
 """The figures `nlgrd sweep` writes: abscissa in the unit the range was given in, the model's
-name as title, readable axis labels (issue 36, item 3).
+name as title (a sweep's with its H, issue 36 item 1), readable axis labels (issue 36, item 3).
 
 The figures are captured where the command stages them (``Outputs.figure``), before they
 are written; the numbers drawn are checked against the CSV the same run writes.
@@ -64,7 +64,7 @@ def test_rpm_sweep_is_drawn_in_rpm_with_the_model_name(tmp_path, staged):
     assert main(argv) == 0
     (xlabel, ylabel, title, lines) = staged[0]
     assert xlabel == "pinion speed [rpm]" and not _raw(ylabel)
-    assert title == load_model(KUBO).name
+    assert title.splitlines() == [load_model(KUBO).name, "H = 5 harmonics of the mesh frequency"]
     df = pd.read_csv(out)
     up = df[df["direction"] == "up"]["pinion_speed [rpm]"].to_numpy(float)
     drawn = next(x for k, x in lines.items() if k.startswith("up"))
@@ -89,7 +89,7 @@ def test_hz_sweep_and_continuation_are_drawn_in_mesh_hz(tmp_path, staged):
     assert len(staged) == 2
     for xlabel, ylabel, title, _ in staged:
         assert xlabel == "mesh frequency [Hz]" and not _raw(ylabel)
-        assert title == load_model(KUBO).name
+        assert title.splitlines()[0] == load_model(KUBO).name
 
 
 def test_link_sweep_labels_are_readable(tmp_path, staged):

@@ -333,11 +333,11 @@ def test_period_two_branch_against_time_integration(swept):
     rows = np.nonzero((r.direction == "up") & (r.period == 2))[0]
     np.testing.assert_allclose(r.omega[rows] / (2 * np.pi), BRANCH, rtol=1e-12)
     assert len(rows) >= 15
-    odd = np.tile(subharmonic_mask(r.H, 2), (r.harmonics.shape[1], 1))
+    odd = np.tile(subharmonic_mask(r.H_stored, 2), (r.harmonics.shape[1], 1))
     worst, drift = 0.0, 0.0
     for i in rows:
         w, z = float(r.omega[i]) / 2, r.harmonics[i]
-        start = start_from_harmonics(two, w, r.H, np.where(odd, 0.95 * z, z))  # ω/2 content -5 %
+        start = start_from_harmonics(two, w, r.H_stored, np.where(odd, 0.95 * z, z))  # ω/2 content -5 %
         tr = link_time_response(
             two, w, state0=start, steps_per_period=STEPS, tol=0, max_periods=CYCLES, min_periods=CYCLES
         )
@@ -369,7 +369,7 @@ def test_doubling_where_time_integration_doubles(swept):
     z = r.harmonics[first]
     seed = np.zeros_like(z)
     seed[:, 1] = 1e-2 * float(np.max(amplitudes(z)))  # 1 % at ω/2
-    state = start_from_harmonics(two, float(r.omega[first]) / 2, r.H, z + seed)
+    state = start_from_harmonics(two, float(r.omega[first]) / 2, r.H_stored, z + seed)
     kinds = []
     for f in hz:
         tr = link_time_response(

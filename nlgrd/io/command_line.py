@@ -393,7 +393,9 @@ class Outputs:
 
 def harmonics_line(res) -> str:
     """'H = 13 (chosen; largest estimated error 0.12 % against H = 17)', or 'H = 5' when H
-    was given.
+    was given ('given; ...' when some points were estimated all the same, e.g. period-2
+    branches): H of docs/conventions.md (harmonics of the sweep's frequency, whatever the
+    period of the points), the error the largest over the accepted points.
 
     Parameters
     ----------
@@ -404,12 +406,12 @@ def harmonics_line(res) -> str:
     -------
     str
     """
-    H = res.H // res.base  # of the mesh frequency
     if res.H_check is None:
-        return f"H = {H}"
-    e = [float(x) for x in res.harmonic_error if math.isfinite(x)]
-    worst = f"{100 * max(e):.2g} %" if e else "n/a"
-    return f"H = {H} (chosen; largest estimated error {worst} against H = {res.H_check})"
+        return f"H = {res.H}"
+    worst = res.max_harmonic_error
+    text = f"{100 * worst:.2g} %" if math.isfinite(worst) else "n/a"
+    how = "chosen" if "H chosen" in res.source else "given"
+    return f"H = {res.H} ({how}; largest estimated error {text} against H = {res.H_check})"
 
 
 def pyplot():

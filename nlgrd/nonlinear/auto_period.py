@@ -191,7 +191,7 @@ def merge_periods(p1: SweepResult, p2: SweepResult) -> SweepResult:
         chosen orbit (amplitudes at the mesh harmonics); ``no_stable`` where neither is
         stable (:attr:`SweepResult.secondary_frequency` then marks a torus).
     """
-    H2 = p2.H
+    H2 = p2.H_stored
     n = len(p1)
     rows2 = rows_of(p1, p2)
     found2 = np.array([c and period_of(z, 2) == 2 for z, c in zip(p2.harmonics, p2.converged, strict=True)])
@@ -310,13 +310,13 @@ def period_only(p2: SweepResult, nu: int = 2) -> SweepResult:
     Returns
     -------
     SweepResult
-        ``period`` ν, ``amplitudes`` at the mesh harmonics, ``subharmonic_amplitude`` the
-        largest component at a base harmonic that is not a multiple of ν; a point whose
-        orbit fell back to a shorter period or was not found is not converged; an unstable
-        one has ``no_stable``.
+        ``period`` ν, ``base`` ν (``H_check`` counted as ``H``, of ω), ``amplitudes`` at the
+        mesh harmonics, ``subharmonic_amplitude`` the largest component at a base harmonic
+        that is not a multiple of ν; a point whose orbit fell back to a shorter period or
+        was not found is not converged; an unstable one has ``no_stable``.
     """
     found = np.array([c and period_of(z, nu) == nu for z, c in zip(p2.harmonics, p2.converged, strict=True)])
-    odd = subharmonic_mask(p2.H, nu)[1::2]
+    odd = subharmonic_mask(p2.H_stored, nu)[1::2]
     sub = np.array(
         [
             float(np.max(amplitudes(z)[:, odd], initial=0.0)) if f else np.nan
@@ -332,4 +332,5 @@ def period_only(p2: SweepResult, nu: int = 2) -> SweepResult:
         period=np.full(len(p2), nu),
         subharmonic_amplitude=sub,
         base=nu,
+        H_check=None if p2.H_check is None else p2.H_check * p2.base // nu,  # of ω, as H
     )

@@ -210,7 +210,7 @@ class GearedSweepResult:
     bearing_names : list of str
         One name per bearing (its own, or shaft and node).
     H : int
-        Number of harmonics of the mesh solution.
+        H of docs/conventions.md: harmonics of the mesh frequency, as ``mesh.H``.
     """
 
     mesh: SweepResult
@@ -370,7 +370,7 @@ def geared_sweep(
     names = [
         b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(model.system.bearings)
     ]
-    return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), names, res.H // res.base)
+    return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), names, res.H)
 
 
 def _beyond_period_one(model: GearedModel, p1: SweepResult, omegas, directions, period, harmonic_rtol):

@@ -343,7 +343,7 @@ def lift(
                 return None
         z[i], residual[i], iterations[i] = sol.harmonics, sol.residual, sol.iterations
         metrics.append(MeshMetrics.nan(H2) if result.no_stable[i] else model.metrics.of(sol.harmonics, w))
-    source = result.source.replace(f"H={result.H},", f"H={H2},", 1)
+    source = result.source.replace(f"H={result.H_stored},", f"H={H2},", 1)
     return assemble_result(
         result.omega,
         result.direction,

@@ -8,6 +8,7 @@ curve. The per-point output metrics are in :mod:`nlgrd.nonlinear.metrics`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -187,7 +188,7 @@ class SweepResult:
         Estimated relative error of the outputs from the truncation to H harmonics
         (:func:`nlgrd.nonlinear.harmonic_convergence.check_harmonics`); NaN where not estimated.
     H_check : int, optional
-        The H the estimate was made against (of the mesh frequency).
+        The H the estimate was made against, counted as :attr:`H` (harmonics of ω).
     no_stable : ndarray of bool
         No stable mesh-periodic response was found at the point: the harmonics are those of
         the unstable orbit the sweep reached (kept for the analysis of what grows from
@@ -207,7 +208,7 @@ class SweepResult:
         mesh-periodic points).
     base : int
         The harmonics are of ω/base (2 when some point has period 2, N for a shaft-order
-        sweep); ``H`` counts them, the ``H`` column the mesh harmonics H / base.
+        sweep): :attr:`H_stored` = base · :attr:`H` of them (docs/conventions.md, "H").
     """
 
     omega: NDArray
@@ -249,8 +250,26 @@ class SweepResult:
 
     @property
     def H(self) -> int:
-        """Number of harmonics of the solutions."""
+        """H of docs/conventions.md: the harmonics of ω (the sweep's frequency) resolved,
+        H ω the highest frequency; what the ``H`` column, the figures and the command line
+        report, whatever the period of the points."""
+        return self.H_stored // self.base
+
+    @property
+    def H_stored(self) -> int:
+        """The harmonics of ω/``base`` the arrays hold (``harmonics``: 2 H_stored + 1 per
+        coordinate), base · :attr:`H`."""
         return (self.harmonics.shape[-1] - 1) // 2
+
+    @property
+    def max_harmonic_error(self) -> float:
+        """The largest estimated harmonic error over the accepted points (converged, with
+        a stable response: the values written) [-]; NaN where none was estimated. A point
+        above the estimate's tolerance is not converged and does not count."""
+        keep = np.asarray(self.converged, dtype=bool) & ~np.asarray(self.no_stable, dtype=bool)
+        e = np.asarray(self.harmonic_error, dtype=float)[keep]
+        e = e[np.isfinite(e)]
+        return float(e.max()) if e.size else math.nan
 
     def __len__(self) -> int:
         return self.omega.size
@@ -386,7 +405,7 @@ class SweepResult:
             "iterations": iterations,
             "stable": flag(self.stable, self.stability_known),
             "floquet_max [-]": floquet_output(num(self.floquet_max)),
-            "H": pd.array(np.where(ok, self.H // self.base, 0), dtype="Int64"),
+            "H": pd.array(np.where(ok, self.H, 0), dtype="Int64"),
             "harmonic_error [-]": _significant(num(self.harmonic_error), 3),
             "response": pd.array(response_kind(self), dtype="string"),
             "period": pd.array(np.asarray(self.period, dtype=int), dtype="Int64"),

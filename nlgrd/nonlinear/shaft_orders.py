@@ -138,7 +138,7 @@ def shaft_order_sweep(
     else:
         res = sweep(reduced, base, H=N * H, **options)
     bearings = bearing_response(model, res)
-    odd = subharmonic_mask(res.H, N)[1::2]
+    odd = subharmonic_mask(res.H_stored, N)[1::2]
     side = np.array([float(np.max(amplitudes(z)[:, odd], initial=0.0)) for z in res.harmonics])
     mesh = dc.replace(
         res,
@@ -150,7 +150,7 @@ def shaft_order_sweep(
         H_check=None if res.H_check is None else res.H_check // N,
     )
     names = [b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(system.bearings)]
-    return GearedSweepResult(mesh, bearings, model.pinion_rpm(base), names, res.H // N)
+    return GearedSweepResult(mesh, bearings, model.pinion_rpm(base), names, mesh.H)
 
 
 def dte_spectrum(result: GearedSweepResult, index: int) -> tuple[NDArray, NDArray]:
