@@ -112,6 +112,7 @@ def cmd_sweep(args) -> int:
     if needs_links(system):
         if not system.gear_pairs and not system.bearing_clearances:
             raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
+        _check_link_speeds(system, values, args.rpm is not None, option, repr(text))
         return link_sweep_command(args, system, values, out, png)
     quantity = check_quantity(args.quantity or "dslr")
     gp = system.gear_pairs[0]
@@ -160,6 +161,24 @@ def cmd_sweep(args) -> int:
     if found is not None:
         print(f"wrote {_beside(out, 'orbits')} and {_beside(out, 'branches')}")
     return status
+
+
+def _check_link_speeds(system, values, in_rpm: bool, option: str, given: str) -> None:
+    """Every gear pair of a link model within the pitch-line limit at the range's top
+    (reference shaft speed from ``--rpm``, or from ``--hz`` through the frequency plan)."""
+    import math
+
+    from nlgrd.nonlinear.frequency_plan import FrequencyPlan
+
+    top = float(max(values))
+    if in_rpm:
+        speed = top * math.pi / 30
+    else:
+        orders = [abs(system.shafts[u.shaft].speed_ratio) for u in system.unbalance]
+        speed = 2 * math.pi * top * FrequencyPlan.for_system(system, orders).speed_per_base
+    for gp in system.gear_pairs:
+        mesh = speed * gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
+        check_pitch_line_velocity(gp, mesh, option, given)
 
 
 def _check_period_options(args, period: int) -> None:

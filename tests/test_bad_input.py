@@ -31,6 +31,7 @@ from nlgrd.cli import main
 ROOT = Path(__file__).resolve().parents[1]
 TWO = ROOT / "data" / "models" / "two_shaft.toml"
 KUBO = ROOT / "data" / "case_studies" / "kubo.toml"
+IDLER = ROOT / "data" / "models" / "idler_train.toml"
 NLGRD = [sys.executable, "-m", "nlgrd.cli"]
 
 CLEARANCE = """
@@ -356,6 +357,8 @@ OPTION_CASES = {
     "rpm equal ends": (["sweep", KUBO, "--rpm", "4000:4000:3"], "--rpm", "below STOP"),
     "rpm 1e9 (issue)": (["sweep", KUBO, "--rpm", "1e9:2e9:3"], "--rpm", "pitch-line velocity"),
     "hz far beyond": (["sweep", KUBO, "--hz", "1e6:2e6:3"], "--hz", "pitch-line velocity"),
+    "rpm 1e9, two meshes": (["sweep", IDLER, "--rpm", "1e9:2e9:3"], "--rpm", "pitch-line velocity"),
+    "hz far beyond, two meshes": (["sweep", IDLER, "--hz", "1e6:2e6:3"], "--hz", "pitch-line velocity"),
     "continuation beyond": (["sweep", KUBO, "--rpm", "1e5:1e6", "--continuation"], "--rpm", "pitch-line"),
     "rpm a word": (["sweep", KUBO, "--rpm", "fast"], "--rpm", "START:STOP:COUNT"),
     "rpm four parts": (["sweep", KUBO, "--rpm", "1:2:3:4"], "--rpm", "START:STOP:COUNT"),
