@@ -233,7 +233,8 @@ def continuation(
 
     Returns
     -------
-    ContinuationResult
+    ContinuationResult or LinkContinuationResult
+        The latter (a link model) with every link's outputs along the curve.
     """
     ends = _omegas(system, rpm, hz)
     if ends.size != 2:
@@ -244,13 +245,9 @@ def continuation(
         from nlgrd.nonlinear.geared import geared_continuation
 
         return geared_continuation(system, w0, w1, H, model=m, stability=stability, **options)
-    from nlgrd.nonlinear.continuation import continuation as trace
-    from nlgrd.nonlinear.harmonic_convergence import LADDER, converged_continuation
+    from nlgrd.nonlinear.link_model import link_continuation
 
-    if H is not None:
-        return trace(m.reduced, w0, w1, H, stability=stability, **options)
-    ladder = [h * m.top_order for h in LADDER]
-    return converged_continuation(m.reduced, w0, w1, ladder=ladder, stability=stability, **options)
+    return link_continuation(m, w0, w1, H, stability=stability, **options)
 
 
 def search_orbits(

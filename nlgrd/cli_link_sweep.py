@@ -12,12 +12,25 @@ from nlgrd.errors import ModelError
 from nlgrd.io.command_line import Outputs, harmonics_line
 from nlgrd.nonlinear.link_model import needs_links
 
-__all__ = ["link_sweep_command", "needs_links"]
+__all__ = ["link_quantity", "link_sweep_command", "needs_links"]
 
 
-def _quantity(text: str | None, model) -> tuple[str, str]:
+def link_quantity(text: str | None, model) -> tuple[str, str]:
     """``--quantity`` for a link model: ``LINK.QUANTITY`` or a bare quantity of the first
-    link that has it (None: the default); returns (column, label)."""
+    link that has it (None: a mesh's DSLR, else the first link's largest force).
+
+    Parameters
+    ----------
+    text : str or None
+        The option as given.
+    model : LinkModel
+        The model whose links are asked.
+
+    Returns
+    -------
+    (str, str)
+        The column ``<link>.<quantity> [unit]`` and its label.
+    """
     from nlgrd.nonlinear.link_model import metric_names
     from nlgrd.nonlinear.links import GearMeshLink
 
@@ -65,17 +78,13 @@ def link_sweep_command(args, system, values, out, png) -> int:
     from nlgrd.io.command_line import ProgressBar, pyplot
     from nlgrd.nonlinear.link_model import build_link_model, link_sweep
 
-    if args.continuation:
-        raise ModelError(
-            "--continuation", "not available yet for link models (several meshes, clearances, unbalance)"
-        )
     model = build_link_model(system)
     plan = model.receptance.plan
     if args.rpm is not None:
         omegas = np.asarray(values, dtype=float) * math.pi / 30 / plan.speed_per_base
     else:
         omegas = 2 * math.pi * np.asarray(values, dtype=float)
-    column, label = _quantity(args.quantity, model)
+    column, label = link_quantity(args.quantity, model)
     res = link_sweep(
         model,
         omegas,

@@ -24,11 +24,15 @@ from nlgrd.io.model_checks import check_pitch_line_velocity
 class _Unit:
     """Mesh frequencies [rad/s] to and from the unit the range was given in (rpm or Hz)."""
 
-    def __init__(self, rpm: bool, mesh_per_pinion: float, grid=None):
+    def __init__(
+        self, rpm: bool, mesh_per_pinion: float, grid=None, *, speed="pinion speed", base="mesh frequency"
+    ):
         self.name = "rpm" if rpm else "Hz"
-        self.column = "pinion_speed [rpm]" if rpm else "mesh_frequency [Hz]"
+        self.speed, self.base = speed, base
+        self.column = f"{speed.replace(' ', '_')} [rpm]" if rpm else f"{base.replace(' ', '_')} [Hz]"
         self.grid = grid  # the values as given, written in place of their round trip
-        # mesh frequency [rad/s] per pinion speed [rad/s]: N_p |s_p|
+        # base (mesh) frequency [rad/s] per reference (pinion) speed [rad/s]: N_p |s_p|
+        self.per_speed = mesh_per_pinion
         self.scale = mesh_per_pinion * math.pi / 30 if rpm else 2 * math.pi
 
     def omega(self, value):
@@ -40,7 +44,7 @@ class _Unit:
     @property
     def axis(self) -> tuple[str, float]:
         """The figures' abscissa: (label, value per mesh frequency [Hz])."""
-        what = "pinion speed" if self.name == "rpm" else "mesh frequency"
+        what = self.speed if self.name == "rpm" else self.base
         return f"{what} [{self.name}]", 2 * math.pi / self.scale
 
 
@@ -113,6 +117,8 @@ def cmd_sweep(args) -> int:
         if not system.gear_pairs and not system.bearing_clearances:
             raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
         _check_link_speeds(system, values, args.rpm is not None, option, repr(text))
+        if args.continuation:
+            return _link_continuation(args, system, values, count, out, png)
         return link_sweep_command(args, system, values, out, png)
     quantity = check_quantity(args.quantity or "dslr")
     gp = system.gear_pairs[0]
@@ -138,7 +144,15 @@ def cmd_sweep(args) -> int:
         return _period_command(args, system, omegas, unit, quantity, out, png, search)
     model = build_geared_model(system, float(omegas.max()), H=args.harmonics or LADDER[-1])
     if args.continuation:
-        return _continuation(args, system, model, unit, omegas, count, quantity, out, png)
+        from nlgrd.nonlinear.geared import geared_continuation
+
+        def trace(begin, end, **kwargs):
+            res = geared_continuation(
+                system, begin, end, H=args.harmonics, model=model, stability=not args.no_stability, **kwargs
+            )
+            return res, res.to_frame()
+
+        return _continuation(args, system, trace, unit, omegas, count, quantity, out, png)
     from nlgrd.nonlinear.geared import geared_sweep
 
     res = geared_sweep(
@@ -372,18 +386,41 @@ def _summary(args, res, unit, out, png, transitions) -> int:
     return 0
 
 
-def _continuation(args, system, model, unit, omegas, count, quantity, out, png) -> int:
+def _link_continuation(args, system, values, count, out, png) -> int:
+    """``--continuation`` of a link model: the curve of every link's outputs, the figure
+    of ``--quantity`` (:func:`nlgrd.cli_link_sweep.link_quantity`) along it."""
+    import dataclasses
+
+    from nlgrd.cli_link_sweep import link_quantity
+    from nlgrd.nonlinear.link_model import build_link_model, link_continuation
+
+    model = build_link_model(system)
+    plan = model.receptance.plan
+    unit = _Unit(args.rpm is not None, 1 / plan.speed_per_base, speed="shaft speed", base="base frequency")
+    column, _ = link_quantity(args.quantity, model)
+
+    def trace(begin, end, **kwargs):
+        res = link_continuation(model, begin, end, args.harmonics, stability=not args.no_stability, **kwargs)
+        metrics = {**res.curve.curve.metrics, column: res.links[column].to_numpy()}
+        curve = dataclasses.replace(res.curve, curve=dataclasses.replace(res.curve.curve, metrics=metrics))
+        return curve, res.to_frame()
+
+    return _continuation(args, system, trace, unit, unit.omega(values), count, column, out, png)
+
+
+def _continuation(args, system, trace, unit, omegas, count, quantity, out, png) -> int:
     """``--continuation``: trace the curve up from START, down from STOP, or both; check the coverage.
 
-    COUNT, when given, sets the largest step so that successive points lie at most about
-    (STOP - START) / (COUNT - 1) apart in frequency (never coarser than the default).
+    ``trace(begin, end, **step_options)`` gives the curve (a ContinuationResult whose
+    metrics hold ``quantity``) and its table. COUNT, when given, sets the largest step so
+    that successive points lie at most about (STOP - START) / (COUNT - 1) apart in
+    frequency (never coarser than the default).
     """
     import inspect
 
     import pandas as pd
 
     from nlgrd.nonlinear.continuation import continuation
-    from nlgrd.nonlinear.geared import geared_continuation
     from nlgrd.plotting.nonlinear import plot_continuation
 
     lo, hi = float(omegas.min()), float(omegas.max())
@@ -402,13 +439,10 @@ def _continuation(args, system, model, unit, omegas, count, quantity, out, png) 
                 "ds_max": ds_max,
                 "max_steps": max(defaults["max_steps"], 10 * count),
             }
-        res = geared_continuation(
-            system, begin, end, H=args.harmonics, model=model, stability=not args.no_stability, **kwargs
-        )
+        res, frame = trace(begin, end, **kwargs)
         traces[name] = res
-        frame = res.to_frame()
         frame.insert(1, "trace", name)
-        frame.insert(2, "pinion_speed [rpm]", model.pinion_rpm(res.omega))
+        frame.insert(2, f"{unit.speed.replace(' ', '_')} [rpm]", res.omega / unit.per_speed * 30 / math.pi)
         frames.append(frame)
         w = res.omega
         reached = w.max() >= hi - tol if name == "up" else w.min() <= lo + tol

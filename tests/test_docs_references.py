@@ -46,7 +46,7 @@ def stale(paths) -> list[str]:
 
 def test_resolver_rejects_a_stale_name():
     assert resolves("nlgrd.nonlinear.sweep.sweep") and resolves("nlgrd.nonlinear.results.SweepResult.omega")
-    assert not resolves("nlgrd.nonlinear.sweep.no_such_function") and not resolves("nlgrd.sweep")
+    assert not resolves("nlgrd.nonlinear.sweep.no_such_function") and not resolves("nlgrd.no_such_analysis")
 
 
 @pytest.mark.parametrize("kind", ["docs", "sources"])

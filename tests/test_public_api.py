@@ -62,13 +62,16 @@ def test_continuation_of_a_clearance_model_is_the_newton_solution_and_finds_the_
     without landing (jump "none") loses its branch: the same fold found by another
     algorithm, to the sweep's grid step."""
     c = nlgrd.continuation(clearance_model, hz=(1190.0, 1215.0), H=5, stability=False)
-    assert len(c.turning_omegas) >= 1
-    fold = c.turning_omegas[0] / (2 * np.pi)
-    first = c.turning_indices[0]
+    assert len(c.curve.turning_omegas) >= 1
+    fold = c.curve.turning_omegas[0] / (2 * np.pi)
+    first = c.curve.turning_indices[0]
+    frame = c.to_frame()
+    assert {"base_frequency [Hz]", "stable", "B1.force_max [N]", "mesh0.dslr [-]"} <= set(frame.columns)
+    assert frame["B1.force_max [N]"].notna().all()
     reduced = build_link_model(clearance_model).reduced
     for i in range(first + 1):
         problem = reduced.at(float(c.omega[i]), 5)
-        z = np.asarray(c.curve.harmonics[i])
+        z = np.asarray(c.curve.curve.harmonics[i])
         sol = solve(problem, None)
         assert sol.converged
         assert np.max(np.abs(np.asarray(sol.harmonics) - z)) < 1e-7 * np.max(np.abs(z))
@@ -127,3 +130,29 @@ def test_the_readme_quick_start_runs_as_written(tmp_path, monkeypatch):
     frame = scope["result"].to_frame()
     assert frame["converged"].all()
     assert (tmp_path / "two_shaft_sweep.png").stat().st_size > 0
+
+
+def test_cli_continuation_of_a_link_model(tmp_path, capsys):
+    """``nlgrd sweep --continuation`` was refused for link models. The mesh + clearance
+    model's curve, with every link's outputs, turns where the API's curve does (between
+    the last converged and first lost point of the landing-free sweep above: 1206-1207 Hz),
+    and the down trace from 1215 Hz covers the range."""
+    from nlgrd.cli import main
+
+    out = tmp_path / "curve.csv"
+    argv = ["sweep", str(CLEARANCE), "--hz", "1190:1215", "--continuation", "--harmonics", "5"]
+    assert main([*argv, "--no-stability", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "turning points at 1206." in text
+    import pandas as pd
+
+    frame = pd.read_csv(out)
+    assert {"base_frequency [Hz]", "shaft_speed [rpm]", "B1.force_max [N]", "mesh0.dslr [-]"} <= set(
+        frame.columns
+    )
+    teeth = nlgrd.load(CLEARANCE).gear_pairs[0].geometry.teeth_pinion
+    np.testing.assert_allclose(
+        frame["shaft_speed [rpm]"], frame["base_frequency [Hz]"] * 60 / teeth, rtol=1e-12
+    )
+    assert set(frame["trace"]) == {"up", "down"}
+    assert (tmp_path / "curve.png").stat().st_size > 0

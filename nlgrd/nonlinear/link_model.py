@@ -22,13 +22,20 @@ from numpy.typing import NDArray
 from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.auto_period import beyond_period_one, check_period
+from nlgrd.nonlinear.continuation import continuation
 from nlgrd.nonlinear.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
-from nlgrd.nonlinear.harmonic_convergence import LADDER, OUTPUT_RTOL, converged_sweep, next_harmonics
+from nlgrd.nonlinear.harmonic_convergence import (
+    LADDER,
+    OUTPUT_RTOL,
+    converged_continuation,
+    converged_sweep,
+    next_harmonics,
+)
 from nlgrd.nonlinear.link_reduction import LinkReceptance
 from nlgrd.nonlinear.links import GearMeshLink
 from nlgrd.nonlinear.metrics import PointMetrics
-from nlgrd.nonlinear.results import SweepResult
+from nlgrd.nonlinear.results import ContinuationResult, SweepResult
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.rotor.assembly import assemble
 from nlgrd.rotor.loads import Unbalance  # re-exported: moved to nlgrd.rotor (the model file holds it)
@@ -478,6 +485,100 @@ def link_sweep(
             row.update({f"{link.name}.{k}": v for k, v in values.items()})
         rows.append(row)
     return LinkSweepResult(res, pd.DataFrame(rows))
+
+
+def _link_rows(model: LinkModel, res: SweepResult, usable: NDArray) -> pd.DataFrame:
+    """Every link's outputs at the period-1 points of ``res`` (NaN where not ``usable``)."""
+    rows = []
+    for i in range(len(res)):
+        row = {}
+        for link, sl in zip(model.links, model.receptance.slices, strict=True):
+            if usable[i]:
+                values = link.metrics(np.asarray(res.harmonics[i])[sl], float(res.omega[i]))
+            else:
+                values = dict.fromkeys(metric_names(link), np.nan)
+            row.update({f"{link.name}.{k}": v for k, v in values.items()})
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+@dataclass(frozen=True)
+class LinkContinuationResult:
+    """A continuation curve of a link model with every link's outputs along it.
+
+    Attributes
+    ----------
+    curve : ContinuationResult
+        The curve (stable and unstable parts, turning points).
+    links : pandas.DataFrame
+        One row per curve point: ``<link>.<quantity>`` columns, for stable and unstable
+        points alike (the curve's ``stable`` column tells which).
+    """
+
+    curve: ContinuationResult
+    links: pd.DataFrame
+
+    @property
+    def omega(self) -> NDArray:
+        """Base frequencies along the curve [rad/s]."""
+        return self.curve.omega
+
+    def to_frame(self) -> pd.DataFrame:
+        """The curve's table (frequency column ``base_frequency [Hz]``) with the link columns.
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        frame = self.curve.to_frame()
+        drop = [c for c in frame.columns if c.startswith(("dte_", "force_", "dslr", "contact_loss", "back_"))]
+        frame = frame.drop(columns=drop).rename(columns={"mesh_frequency [Hz]": "base_frequency [Hz]"})
+        return pd.concat([frame, self.links], axis=1)
+
+
+def link_continuation(
+    model: LinkModel,
+    omega_start: float,
+    omega_end: float,
+    H: int | None = None,
+    *,
+    rtol: float = OUTPUT_RTOL,
+    **options,
+) -> LinkContinuationResult:
+    """Pseudo-arc-length continuation of a link model with the links' outputs.
+
+    Parameters
+    ----------
+    model : LinkModel
+        From :func:`build_link_model`.
+    omega_start, omega_end : float
+        Base frequencies where the curve starts and towards which it goes [rad/s].
+    H : int, optional
+        Harmonics of the base [-]; default chosen by the error estimate
+        (:func:`~nlgrd.nonlinear.harmonic_convergence.converged_continuation` on the
+        ladder times the model's ``top_order``, as :func:`link_sweep`).
+    rtol : float
+        Tolerance of the estimated relative error of the outputs when H is chosen [-].
+    **options
+        Further options of :func:`nlgrd.nonlinear.continuation.continuation`
+        (``stability``, ``ds_max``, ...).
+
+    Returns
+    -------
+    LinkContinuationResult
+    """
+    top = max(abs(float(omega_start)), abs(float(omega_end)))
+    if H is None:
+        ladder = [h * model.top_order for h in LADDER]
+        model.receptance.prepare(ladder[-1] * top)
+        res = converged_continuation(
+            model.reduced, omega_start, omega_end, rtol=rtol, ladder=ladder, **options
+        )
+    else:
+        model.receptance.prepare(int(H) * top)
+        res = continuation(model.reduced, omega_start, omega_end, int(H), **options)
+    usable = np.asarray(res.curve.converged, dtype=bool)
+    return LinkContinuationResult(res, _link_rows(model, res.curve, usable))
 
 
 def needs_links(system) -> bool:
