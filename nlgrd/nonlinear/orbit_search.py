@@ -9,18 +9,18 @@ for them at one frequency from many starts, for each period ν asked for: Newton
 period-ν harmonic balance (base ω/ν, :mod:`nlgrd.nonlinear.subharmonic`) from
 
 - perturbed starts (:data:`N_STARTS` per period by default): the linear response's mean
-  with an alternating part of amplitude A, every other start the linear response's own
-  alternating part scaled to A (the shape the forcing drives: a forward whirl under
-  unbalance), the others random components at each base harmonic 1..ν, and, for ν > 1,
-  random components of amplitude A at the subharmonics 1..ν-1. A runs log-uniformly over
+  with an alternating part whose amplitudes lie, on a log scale, between
   :data:`START_RANGE` times the model's length scales, from a tenth of the smallest to ten
   times the largest: each law's own length (``scale()``: a backlash, a gap, a radial
   clearance), the static deflection (the linear response's mean) and the linear response's
   amplitude at the frequency searched (or ``amplitude`` alone). An isolated branch lives
   where the nonlinearity acts, on the scale of its gap, however small the linear response
-  is (a rotor's rub orbit: tests/test_orbit_search_scales.py). The positions of A are a
-  golden-ratio sequence (every prefix covers the range evenly), the phases come from a
-  seeded generator: the same starts on every machine;
+  is (a rotor's rub orbit: tests/test_orbit_search_scales.py). Every
+  :data:`SHAPED_EVERY`-th start is the linear response's own alternating part scaled to an
+  amplitude of a golden-ratio sequence over the range (the shape the forcing drives: a
+  forward whirl under unbalance); the others have a component of random phase and
+  log-uniform amplitude at each base harmonic 1..ν and coordinate, drawn from a seeded
+  generator: the same starts on every machine;
 - user starts: harmonics of ω/ν, typically the last ν mesh periods of a time integration
   from an arbitrary initial state (:meth:`nlgrd.timedomain.sdof.TimeResponse.harmonics`
   of ``integrate(pair.subharmonic(nu), omega / nu, state0)``).
@@ -64,7 +64,7 @@ from nlgrd.nonlinear.subharmonic import (
 )
 
 #: Perturbed starts per period by default.
-N_STARTS = 24
+N_STARTS = 40
 #: Range of the perturbed starts' amplitudes: from this multiple of the model's smallest
 #: length scale to this multiple of its largest [-].
 START_RANGE = (0.1, 10.0)
@@ -72,6 +72,8 @@ START_RANGE = (0.1, 10.0)
 #: size) is solver error, not motion: the orbit has the shorter period [-]. The harmonics of
 #: a converged orbit are known to about the tolerance times the Jacobian's conditioning.
 PERIOD_TOL_FACTOR = 1e4
+#: Every SHAPED_EVERY-th perturbed start is the linear response's shape scaled [-].
+SHAPED_EVERY = 4
 #: The golden ratio's fractional part: the step of the starts' amplitude sequence.
 _GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
 
@@ -318,8 +320,15 @@ def perturbed_starts(
     z_lin: ArrayLike, nu: int, scales: Sequence[float], n: int, rng: np.random.Generator
 ) -> list[tuple[NDArray, str]]:
     """``n`` starts of the period-ν search (module notes): the linear response's mean and an
-    alternating part of amplitude A, A from ``START_RANGE[0] * min(scales)`` to
+    alternating part whose amplitudes lie from ``START_RANGE[0] * min(scales)`` to
     ``START_RANGE[1] * max(scales)`` on a log scale.
+
+    Every :data:`SHAPED_EVERY`-th start is the linear response's alternating part scaled to
+    an amplitude A of a golden-ratio sequence over that range (with random subharmonics
+    1..ν-1 of amplitude A for ν > 1; the first is the static state itself when the linear
+    response does not vibrate); the others have at each base harmonic 1..ν and each
+    coordinate a component of random phase and a log-uniform amplitude of their own (a
+    start mixing small and large harmonics, as an orbit near a subharmonic resonance does).
 
     Parameters
     ----------
@@ -332,7 +341,7 @@ def perturbed_starts(
     n : int
         Number of starts [-].
     rng : numpy.random.Generator
-        Source of the phases.
+        Source of the phases and of the random starts' amplitudes.
 
     Returns
     -------
@@ -349,17 +358,22 @@ def perturbed_starts(
     size = float(np.max(amplitudes(z_lin), initial=0.0))
     out = []
     for i in range(n):
-        a = float(np.exp(lo + ((0.5 + i * _GOLDEN) % 1.0) * (hi - lo)))
         z = np.zeros_like(z_lin)
         z[:, 0] = z_lin[:, 0]
-        shaped = i % 2 == 0 and size > 0
+        if i == 0 and size == 0:  # a state at rest: the static state itself first
+            out.append((z, "static state"))
+            continue
+        shaped = i % SHAPED_EVERY == 0 and size > 0
+        a = float(np.exp(lo + ((0.5 + (i // SHAPED_EVERY) * _GOLDEN) % 1.0) * (hi - lo)))
         if shaped:
             z += alt * (a / size)
         for j in range(1, min(nu - 1 if shaped else nu, H) + 1):
+            aj = np.full(z.shape[0], a) if shaped else np.exp(rng.uniform(lo, hi, z.shape[0]))
             ph = rng.uniform(0.0, 2 * np.pi, z.shape[0])
-            z[:, 2 * j - 1] += a * np.cos(ph)
-            z[:, 2 * j] += a * np.sin(ph)
-        out.append((z, f"{'scaled linear' if shaped else 'perturbed'} start {i} ({a:.3g} m)"))
+            z[:, 2 * j - 1] += aj * np.cos(ph)
+            z[:, 2 * j] += aj * np.sin(ph)
+        label = f"scaled linear start {i} ({a:.3g} m)" if shaped else f"perturbed start {i}"
+        out.append((z, label))
     return out
 
 
