@@ -309,3 +309,37 @@ def test_shipped_rub_rotor_rub_orbits_found_by_default():
     np.testing.assert_allclose(moved[0], ref, rtol=1e-5)
     small = search_orbits(model_of, speed, H, (1,), amplitude=found[0].amplitude)
     assert len(small) == 1 and np.allclose(small[0].harmonics, found[0].harmonics, rtol=0, atol=1e-9 * ref)
+
+
+GEARED = RUB.with_name("two_shaft_clearance.toml")
+
+
+@pytest.mark.slow  # a link model of 3 nonlinear coordinates, 40 starts: about 10 s
+def test_shipped_geared_clearance_model_three_coordinates():
+    """data/models/two_shaft_clearance.toml at 2500 rpm: links B1 (a Hertzian clearance,
+    two coordinates, 20 µm) and mesh0 (backlash, 50 µm); start scales 20 and 50 µm, the
+    static deflection 59 µm and the linear response 2.6 µm. The search finds one period-1
+    orbit, the one a sweep from the linear start reaches at that speed (the same motion
+    to 1e-7 of its size: both converged to 1e-10 of the residual), with B1 in contact all
+    period (as tests/test_shipped_clearance_models.py). The former starts, sized 0.05-5
+    times 59 µm with no law's length, found no orbit there at all."""
+    from nlgrd.io.model_file import load_model
+    from nlgrd.nonlinear.link_model import build_link_model, link_sweep, period_model
+
+    lm = build_link_model(load_model(GEARED))
+    plan = lm.receptance.plan
+    omega = 2500 * np.pi / 30 / plan.speed_per_base
+    model_of = lambda nu: period_model(lm, nu).reduced  # noqa: E731
+    problem = lm.reduced.at(omega, 9)
+    z_lin = problem.linear_solution().reshape(problem.n_coords, -1)
+    np.testing.assert_allclose(
+        sorted(start_scales(lm.reduced.nonlinearities, z_lin)), [2.63e-6, 20e-6, 50e-6, 58.9e-6], rtol=2e-3
+    )
+    found = search_orbits(model_of, omega, 9, (1,))
+    assert len(found) == 1 and found[0].harmonics.shape == (3, 19)
+    ref = link_sweep(lm, np.array([omega]), 9).result
+    assert ref.converged[0]
+    size = np.abs(ref.harmonics[0]).max()
+    np.testing.assert_allclose(found[0].harmonics, ref.harmonics[0], rtol=0, atol=1e-7 * size)
+    b1 = lm.links[[lk.name for lk in lm.links].index("B1")]
+    assert b1.metrics(lm.link_harmonics(found[0].harmonics, "B1"), omega)["contact_fraction [-]"] == 1
