@@ -144,13 +144,15 @@ def search_command(model, res, omegas, at, periods, unit) -> tuple[pd.DataFrame,
 
 def _search_and_follow(model_of, pinion_rpm, omegas, at, periods, H, unit, known, words, every=False):
     """Search at each speed, print each orbit, follow the stable ones (``every``: all) that
-    ``known(orbit, omega, branches)`` does not have; the orbits, branches and (label, result)."""
+    ``known(orbit, omega, branches)`` does not have; the orbits, branches and (label, result).
+    ``every``: the ``--period N`` search, of period-N orbits only (one of a shorter minimal
+    period is dropped: ``model_of`` gives the period-N model alone)."""
     from nlgrd.nonlinear.orbit_search import follow_orbit, search_orbits
 
     rows, frames, followed = [], [], []
     for value in at:
         w = float(unit.omega(value))
-        for o in search_orbits(model_of, w, H, periods):
+        for o in search_orbits(model_of, w, H, periods, shorter_periods=not every):
             seen = known(o, w, followed)
             m = o.metrics
             rows.append(

@@ -140,7 +140,7 @@ def test_period_three_by_default_search_against_time_integration(tmp_path, capsy
     out = tmp_path / "p3.csv"
     assert main(["sweep", str(model), "--hz", f"{lo!r}:{hi!r}:5", "--period", "3", "--out", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "period 3: searching at" in text and "(24 starts each, H = 9)" in text
+    assert "period 3: searching at" in text and "(40 starts each, H = 9)" in text
     df = pd.read_csv(out)
     assert len(df) == 10 and list(df["direction"]) == ["up"] * 5 + ["down"] * 5
     assert df["converged"].all() and df["stable"].all() and (df["period"] == 3).all()

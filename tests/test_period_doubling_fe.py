@@ -92,7 +92,7 @@ def test_period_two_orbit_against_converged_time_integration(kubo_down):
     assert abs(td[1][1] / hb[1] - 1) < 1e-4
 
 
-@pytest.mark.slow  # 24 perturbed starts for each period, about 2 s (one BLAS thread; 7-40 s with two)
+@pytest.mark.slow  # 40 perturbed starts for each period, about 14 s (one BLAS thread)
 def test_search_from_perturbed_starts_finds_the_orbits_of_the_down_sweep(kubo_down):
     """At 3055.6 Hz the orbit search (perturbed starts, no knowledge of the critical mode)
     finds the down sweep's flip-unstable period-1 orbit and the period-2 orbit that

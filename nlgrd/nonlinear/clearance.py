@@ -90,6 +90,15 @@ class RadialClearanceLaw:
         """
         return np.zeros((2, 2 * H + 1))
 
+    def scale(self) -> float:
+        """The radial clearance c [m]: where contact begins.
+
+        Returns
+        -------
+        float
+        """
+        return float(self.clearance)
+
     def guess_stiffness(self) -> float:
         """The tangent at a penetration of one clearance (at least 10 µm): the stiffness
         of the first linear guess [N/m].

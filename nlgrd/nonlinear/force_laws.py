@@ -68,6 +68,11 @@ class LocalNonlinearity(Protocol):
         """Force samples (m, N) for coordinate samples y (m, N) at angles θ (N,)."""
         ...
 
+    def scale(self) -> float:
+        """The law's own length [m]: the displacement at which its behaviour changes (a
+        gap, a clearance); 0 when it has none. Orbit searches size their starts by it."""
+        ...
+
 
 @dataclass(frozen=True)
 class BacklashMesh:
@@ -129,6 +134,15 @@ class BacklashMesh:
     def offset(self, H: int) -> NDArray:
         """LSTE harmonics truncated/padded to H, shape (1, 2H+1) [m]."""
         return resize_harmonics(self.lste, H)[None, :]
+
+    def scale(self) -> float:
+        """The half backlash b (a stop's gap g) [m]: where contact begins or ends.
+
+        Returns
+        -------
+        float
+        """
+        return float(self.half_backlash)
 
     def full_contact(self, H: int) -> tuple[float, NDArray]:
         """The linear law k_h (δ - e - b) of drive-side contact throughout: its stiffness
@@ -384,6 +398,9 @@ class AFTNonlinearity:
         Real harmonics of a known excitation subtracted inside the law [m].
     n_samples : int
         AFT samples per period.
+    length_scale : float
+        The law's own length (a clearance, the amplitude where a cubic term matters) [m];
+        0 when it has none (:meth:`scale`).
     """
 
     force: object
@@ -391,6 +408,19 @@ class AFTNonlinearity:
     coord: int = 0
     offset_harmonics: NDArray = field(default_factory=lambda: np.zeros(1))
     n_samples: int = 256
+    length_scale: float = 0.0
+
+    def __post_init__(self):
+        check_positive("length_scale", self.length_scale, allow_zero=True)
+
+    def scale(self) -> float:
+        """``length_scale`` [m] (the law is a black box: it says its own).
+
+        Returns
+        -------
+        float
+        """
+        return float(self.length_scale)
 
     @property
     def coords(self) -> tuple[int, ...]:

@@ -112,10 +112,10 @@ def amplitudes(z: ArrayLike) -> NDArray[np.float64]:
     return np.hypot(z[..., 1::2], z[..., 2::2])
 
 
-def period_of(z: ArrayLike, nu: int, rtol: float = SUBHARMONIC_RTOL) -> int:
+def period_of(z: ArrayLike, nu: int, rtol: float = SUBHARMONIC_RTOL, size: float = 0.0) -> int:
     """The period of an orbit of period ν (in mesh periods): the smallest divisor p of ν
     such that every base harmonic that is not a multiple of ν / p is below ``rtol`` times
-    the largest alternating amplitude.
+    the orbit's size: its largest alternating amplitude, or ``size`` if larger.
 
     Parameters
     ----------
@@ -125,6 +125,10 @@ def period_of(z: ArrayLike, nu: int, rtol: float = SUBHARMONIC_RTOL) -> int:
         Mesh periods of the base period.
     rtol : float
         Relative amplitude below which a component counts as absent [-].
+    size : float
+        A floor of the orbit's size, in the unit of ``z`` (e.g. its mean or the model's
+        own lengths): an orbit that hardly moves is then not judged against the noise of
+        its own alternating part.
 
     Returns
     -------
@@ -133,13 +137,48 @@ def period_of(z: ArrayLike, nu: int, rtol: float = SUBHARMONIC_RTOL) -> int:
     """
     nu = _check_period(nu)
     a = np.atleast_2d(amplitudes(z))
-    top = float(np.max(a)) if a.size else 0.0
+    top = max(float(np.max(a)) if a.size else 0.0, float(size))
     j = np.arange(1, a.shape[-1] + 1)
     for p in (d for d in range(1, nu + 1) if nu % d == 0):
         other = j % (nu // p) != 0
         if top == 0 or not np.any(a[:, other] > rtol * top):
             return p
     return nu
+
+
+def on_shorter_period(z: ArrayLike, nu: int, p: int) -> NDArray[np.float64]:
+    """Harmonics of ω/ν of an orbit of period p (p divides ν) written on the base ω/p: the
+    base harmonics that are multiples of ν/p, renumbered (the inverse of :func:`spread`
+    from p to ν).
+
+    Parameters
+    ----------
+    z : array_like (..., 2νH+1)
+        Real harmonics of the base ω/ν (any unit).
+    nu, p : int
+        Mesh periods of the two bases [-]; p divides ν.
+
+    Returns
+    -------
+    ndarray (..., 2pH+1)
+        The same signal on the base ω/p, without the components of other harmonics.
+
+    Raises
+    ------
+    ModelError
+        p not a divisor of ν.
+    """
+    nu, p = _check_period(nu), _check_period(p)
+    if nu % p:
+        raise ModelError("period", f"{p} does not divide {nu}")
+    z = np.asarray(z, dtype=float)
+    q = nu // p
+    k = np.arange(1, n_harmonics(z) // q + 1)
+    out = np.zeros((*z.shape[:-1], 2 * k.size + 1))
+    out[..., 0] = z[..., 0]
+    out[..., 1::2] = z[..., 2 * q * k - 1]
+    out[..., 2::2] = z[..., 2 * q * k]
+    return out
 
 
 def branch_off(
