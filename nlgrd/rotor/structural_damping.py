@@ -16,8 +16,8 @@ Both act on the linear model at rest, linearised about the loaded mesh: M and K 
 the bearings (tabulated ones at speed 0), the couplings and every gear mesh at its
 mean stiffness k_h, C with the bearings, couplings, mesh damping c_m and the internal
 viscous damping. The mesh stiffness is in because the modes a sweep excites are those
-of the gears in contact: Kahraman & Blankenship's weakly damped 741 Hz mode moves the
-mesh, and without k_h the two shafts' torsion would count as free. Rigid-body modes
+of the gears in contact: Kahraman & Blankenship's weakly damped 741 Hz mode exists only
+with k_h (without it each shaft turns freely). Rigid-body modes
 (:func:`nlgrd.rotor.rigid_body.rigid_body_modes`, the scaled null-space test) get no
 floor: C_F is built on their M-orthogonal complement, so C_F R = 0. The matrix is built
 per connected component of the sparsity graph of M, K and C, so DOF groups that are
