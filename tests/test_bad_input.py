@@ -306,6 +306,13 @@ MODEL_CASES = {
     ),
     "unbalance shaft missing": (_add(UNBALANCE.replace("shaft = 0", "shaft = 9")), "unbalance[0].shaft"),
     "unbalance phase nan": (_add(UNBALANCE.replace("phase = 0.0", "phase = nan")), "unbalance[0].phase"),
+    # the whole rotor's damping
+    "damping floor negative": (_add("\n[damping]\nmodal_floor = -0.01\n"), "damping.modal_floor"),
+    "damping floor critical": (_add("\n[damping]\nmodal_floor = 1.0\n"), "damping.modal_floor"),
+    "damping floor a string": (_add('\n[damping]\nmodal_floor = "1%"\n'), "damping.modal_floor"),
+    "Rayleigh alpha negative": (_add("\n[damping]\nrayleigh_alpha = -5.0\n"), "damping.rayleigh_alpha"),
+    "Rayleigh beta inf": (_add("\n[damping]\nrayleigh_beta = inf\n"), "damping.rayleigh_beta"),
+    "damping key misspelt": (_add("\n[damping]\nmodal_flor = 0.01\n"), "damping.modal_flor"),
     # the file as a whole
     "format version 2": (_edit("version = 1", "version = 2"), "version"),
     "unknown section": (_add("\n[[bearing]]\nshaft = 0\nnode = 2\n"), "bearing: unknown key"),
@@ -326,6 +333,9 @@ ACCEPTED = {
     "near-massless shaft (Kubo's idealisation)": _edit("density = 7850.0", "density = 7.85"),
     "Poisson ratio 0": _edit("poisson_ratio = 0.3", "poisson_ratio = 0.0"),
     "diamond's modulus": _edit("young_modulus = 2.1e11", "young_modulus = 1.2e12"),
+    "damping floor and Rayleigh": _add(
+        "\n[damping]\nmodal_floor = 0.02\nrayleigh_alpha = 1.0\nrayleigh_beta = 1e-7\n"
+    ),
 }
 
 

@@ -78,6 +78,9 @@ _WORDS = {
     "dte_p2p": "peak-to-peak DTE",
     "dte_mean": "mean DTE",
     "dslr": "DSLR",
+    "modal_floor": "modal damping floor ζ_min",
+    "rayleigh_alpha": "Rayleigh α",
+    "rayleigh_beta": "Rayleigh β",
 }
 #: Owners of a model key (``gear_pairs[0].x``): the word that names them on an axis.
 _OWNERS = {"gear_pairs": "mesh", "bearings": "bearing", "shafts": "shaft", "bearing_clearances": "clearance"}
@@ -119,7 +122,7 @@ def axis_label(column: str) -> str:
         if m and m.group(1) in _OWNERS:
             k = int(m.group(2))
             owner = _OWNERS[m.group(1)] + (f" {k + 1}" if k else "")
-        elif not m and part not in ("geometry", "material", "links") and len(parts) == 2:
+        elif not m and part not in ("geometry", "material", "links", "damping") and len(parts) == 2:
             owner = f"{part}:"  # a link's column: "LINK.quantity"
     text = f"{owner} {words}".strip()
     return f"{text} [{unit}]" if unit else text

@@ -18,6 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from nlgrd.rotor.structural_damping import structural_damping_matrix
 from nlgrd.rotor.system import DOFS_PER_NODE, RotorSystem
 
 
@@ -335,6 +336,10 @@ def assemble(system: RotorSystem, mesh_stiffness: bool = True, mesh_damping: boo
     mesh_damping : bool
         Add each gear mesh's damping c_m w wᵀ.
 
+    The system's :class:`~nlgrd.rotor.structural_damping.StructuralDamping` (``damping``)
+    is added to C whatever the flags: it is built from the model at rest with every mesh
+    at k_h and c_m.
+
     Returns
     -------
     LinearModel
@@ -386,6 +391,7 @@ def assemble(system: RotorSystem, mesh_stiffness: bool = True, mesh_damping: boo
             K.add(dofs, c.K())
             C.add(dofs, c.C())
     meshes = []
+    K_mesh, C_mesh = _Builder(n), _Builder(n)
     for g in system.gear_pairs:
         w = g.projection(system)
         link = MeshLink(w, g.stiffness(), g.damping_coefficient(system))
@@ -394,15 +400,29 @@ def assemble(system: RotorSystem, mesh_stiffness: bool = True, mesh_damping: boo
         ww = np.outer(w[idx], w[idx])
         if mesh_stiffness:
             K.add(idx, link.stiffness * ww)
+        else:
+            K_mesh.add(idx, link.stiffness * ww)
         if mesh_damping:
             C.add(idx, link.damping * ww)
+        else:
+            C_mesh.add(idx, link.damping * ww)
+    M_, K_, C_, Ci_ = M.build(), K.build(), C.build(), Ci.build()
+    if system.damping is not None and system.damping.active:
+        # the whole rotor's damping, from the model at rest with the meshes at k_h and
+        # c_m whatever the flags say, so every analysis adds the same matrix
+        K0, C0 = K_ + K_mesh.build(), C_ + C_mesh.build() + Ci_
+        for b, _, dofs in tabulated:
+            r, cc = np.meshgrid(dofs, dofs, indexing="ij")
+            K0 = K0 + sp.csc_matrix((b.K(0.0).ravel(), (r.ravel(), cc.ravel())), shape=(n, n))
+            C0 = C0 + sp.csc_matrix((b.C(0.0).ravel(), (r.ravel(), cc.ravel())), shape=(n, n))
+        C_ = C_ + structural_damping_matrix(system.damping, M_, K0, C0)
     return LinearModel(
         system=system,
-        M=M.build(),
-        K=K.build(),
-        C=C.build(),
+        M=M_,
+        K=sp.csc_matrix(K_),
+        C=sp.csc_matrix(C_),
         G=G.build(),
-        Ci=Ci.build(),
+        Ci=Ci_,
         Kc=Kc.build(),
         hysteretic_parts=tuple(hyst),
         tabulated_bearings=tuple(tabulated),

@@ -16,6 +16,7 @@ from nlgrd.rotor.coupling import Coupling
 from nlgrd.rotor.disk import Disk
 from nlgrd.rotor.loads import Unbalance
 from nlgrd.rotor.shaft import Shaft
+from nlgrd.rotor.structural_damping import StructuralDamping
 
 #: Names of the six DOFs of every node, in order. ASCII aliases: tx, ty, tz.
 DOF_NAMES = ("ux", "uy", "uz", "θx", "θy", "θz")
@@ -133,6 +134,10 @@ class RotorSystem:
     unbalance : tuple of Unbalance
         Mass unbalances (:class:`nlgrd.rotor.loads.Unbalance`), loads of the link analyses
         (:func:`nlgrd.nonlinear.link_model.build_link_model`).
+    damping : StructuralDamping or None
+        Damping of the whole FE rotor (a modal floor, Rayleigh α M + β K): a viscous
+        matrix [N s/m] added to the assembled C (:mod:`nlgrd.rotor.structural_damping`);
+        None: none.
     """
 
     shafts: tuple[Shaft, ...]
@@ -143,6 +148,7 @@ class RotorSystem:
     bearing_clearances: tuple[Any, ...] = field(default=())
     name: str = ""
     unbalance: tuple[Unbalance, ...] = ()
+    damping: StructuralDamping | None = None
 
     def __post_init__(self):
         for key in (

@@ -58,6 +58,9 @@ UNITS = {
     "unbalance": "kg m",
     "amount": "kg m",  # unbalance[i].amount
     "phase": "rad",  # unbalance[i].phase
+    "modal_floor": "-",  # damping.modal_floor
+    "rayleigh_alpha": "1/s",
+    "rayleigh_beta": "s",
 }
 
 _PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[(?:\d+|\*)\])*)")
