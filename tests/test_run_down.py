@@ -15,10 +15,12 @@ Model: Kubo's rig (data/case_studies/kubo.toml, 84 DOFs, gyroscopic terms presen
   or 4 rpm at 400 rpm/s, on a response that changes by 0.3 % per 4 rpm there). The range
   6700-6420 rpm keeps clear of a narrow resonance of a high LSTE harmonic near 6380 rpm,
   which no ramp at this rate resolves (the ramp rounds its 6 % peak off).
-- A jump: at mesh damping ratio 0.02 the down sweep's high branch folds near 8000 rpm
-  (harmonic balance, :func:`nlgrd.nonlinear.geared.geared_sweep`); the ramp must fall off
-  it within a few grid steps below the HB fold (a slow passage through a fold is delayed,
-  never early) and halving the rate must move the jump by less than 0.5 % of its speed.
+- A jump: at mesh damping ratio 0.02 the down sweep's high branch ends near 7900 rpm
+  (harmonic balance on a 25 rpm grid, :func:`nlgrd.nonlinear.geared.geared_sweep`, from
+  8400 rpm, below a short quasi-periodic band); the ramp, started on the HB orbit at 8400
+  rpm, must fall off it no earlier than the HB's last high-branch point and at most four
+  grid steps later (a slow passage through a fold is delayed, never early), and halving
+  the rate must move the jump by less than 0.5 % of its speed.
 """
 
 from __future__ import annotations
@@ -88,25 +90,31 @@ def test_slow_linear_ramp_follows_the_frequency_response(model):
     pick = slice(0, None, 40)
     ref = np.array([linear_rms(model, w) for w in res.omega[pick]])
     err = np.abs(res.dte_rms[pick] / ref - 1)
-    print(f"DTE RMS {1e6 * ref.min():.3f} .. {1e6 * ref.max():.3f} um; largest error against the FRF {err.max():.2e}")
+    print(
+        f"DTE RMS {1e6 * ref.min():.3f} .. {1e6 * ref.max():.3f} um; "
+        f"largest error against the FRF {err.max():.2e}"
+    )
     assert ref.max() > 1.05 * ref.min()  # the response changes along the ramp
     assert err.max() < 5e-3
 
 
 def test_ramp_jump_matches_the_fold_and_is_rate_converged():
     system, m = kubo(damping_ratio=0.02)
-    rpm = np.arange(9000.0, 7000.0 - 1, -25.0)
+    rpm = np.arange(11000.0, 7600.0 - 1, -25.0)  # from above the resonance: on the high branch
     hb = geared_sweep(system, rpm=rpm, H=9, directions="down", model=m)
-    rms = hb.mesh.metrics["dte_rms"]
     order = np.argsort(-hb.mesh.omega)
-    x, y = m.pinion_rpm(hb.mesh.omega[order]), np.asarray(rms)[order]
-    k = int(np.nonzero(y[1:] < 0.5 * y[:-1])[0][0])
+    x, y = m.pinion_rpm(hb.mesh.omega[order]), np.asarray(hb.mesh.metrics["dte_rms"])[order]
+    below = np.nonzero(x <= 8400.0 + 1e-6)[0]
+    k = below[0] + int(np.nonzero(y[below][1:] < 0.5 * y[below][:-1])[0][0])
     fold = x[k]  # the last high-branch point of the HB down sweep
-    s0 = start_from_harmonics(m, hb.mesh.omega[order][0], hb.mesh.harmonics[order][0])
+    i0 = below[0]
+    s0 = start_from_harmonics(m, hb.mesh.omega[order][i0], hb.mesh.harmonics[order][i0])
     per_rpm = float(m.mesh_frequency(1.0))
     jumps = []
     for rate_rpm in (400.0, 200.0):
-        res = run_down(m, float(m.mesh_frequency(9000.0)), float(m.mesh_frequency(7000.0)), rate_rpm * per_rpm, state0=s0)
+        res = run_down(
+            m, float(m.mesh_frequency(8400.0)), float(m.mesh_frequency(7600.0)), rate_rpm * per_rpm, state0=s0
+        )
         jumps.append(res.jump() / per_rpm)
     print(f"HB fold between {x[k + 1]:.0f} and {fold:.0f} rpm; ramp jumps at 400 and 200 rpm/s: {jumps}")
     assert abs(jumps[0] - jumps[1]) < 0.005 * fold

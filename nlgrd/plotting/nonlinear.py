@@ -463,7 +463,9 @@ def plot_ramp(rpm, dte_rms, rpm_jump=None, ax=None, label: str | None = None):
     text = label or "run-down (time integration)"
     (line,) = ax.plot(rpm, dte_rms, "-", lw=0.6, color="0.25", label=text, rasterized=True)
     if rpm_jump is not None:
-        ax.axvline(rpm_jump, color=line.get_color(), ls="--", lw=1, label=f"{text}: jump at {rpm_jump:.0f} rpm")
+        ax.axvline(
+            rpm_jump, color=line.get_color(), ls="--", lw=1, label=f"{text}: jump at {rpm_jump:.0f} rpm"
+        )
     ax.set_xlabel("pinion speed [rpm]")
     ax.set_ylabel("RMS of alternating DTE [µm]")
     return ax

@@ -235,7 +235,9 @@ def run_down(
         raise ModelError("omega_stop", f"must lie in (0, omega_start = {omega_start}), got {omega_stop}")
     settled = time_response(model, omega_start, steps_per_period=steps_per_period, tol=tol, state0=state0)
     duration = (omega_start - omega_stop) / rate
-    return ramp_from(model, settled.state, omega_start, rate, duration, steps_per_period, alpha, block, speed_rtol)
+    return ramp_from(
+        model, settled.state, omega_start, rate, duration, steps_per_period, alpha, block, speed_rtol
+    )
 
 
 def ramp_from(
@@ -273,7 +275,9 @@ def ramp_from(
     """
     lm = model.receptance.model
     if lm.hysteretic_parts:
-        raise ModelError("loss_factor", "hysteretic shaft damping has no time-domain form; use viscous damping")
+        raise ModelError(
+            "loss_factor", "hysteretic shaft damping has no time-domain form; use viscous damping"
+        )
     mesh, rec = model.mesh, model.receptance
     w = np.asarray(rec.W[:, 0], dtype=float)
     F0 = np.asarray(rec.static_force, dtype=float).reshape(-1)
@@ -281,7 +285,9 @@ def ramp_from(
     w0 = float(omega_start)
     dt = 2 * np.pi / (w0 * steps_per_period)
     if rate < 0 or rate * duration >= w0:
-        raise ModelError("rate", f"the ramp must stay at positive speeds and fall: rate {rate}, duration {duration}")
+        raise ModelError(
+            "rate", f"the ramp must stay at positive speeds and fall: rate {rate}, duration {duration}"
+        )
     n_steps = int(np.ceil(duration / dt))
     n_blocks = -(-n_steps // block)
     z = np.asarray(mesh.lste, dtype=float)
@@ -318,11 +324,15 @@ def ramp_from(
         _, _, e_n, k_n, f_n = forcing(t_next)
         e_l, k_l, f_l = e_n.tolist(), k_n.tolist(), f_n.tolist()
 
-        def solve_link(y_lin: float, j: int) -> tuple[float, float]:
+        def solve_link(y_lin: float, j: int, apcw=apcw, e_l=e_l, k_l=k_l, f_l=f_l) -> tuple[float, float]:
             pv = y_lin + apcw * f_l[j] - e_l[j]  # δ - e with no mesh force
             k = k_l[j]
             cc = apcw * k
-            g = k * ((pv + cc * b) / (1 + cc) - b) if pv > b else (k * ((pv - cc * b) / (1 + cc) + b) if pv < -b else 0.0)
+            g = (
+                k * ((pv + cc * b) / (1 + cc) - b)
+                if pv > b
+                else (k * ((pv - cc * b) / (1 + cc) + b) if pv < -b else 0.0)
+            )
             g_buf[j] = g
             return pv + e_l[j] - apcw * g, g - f_l[j]
 
