@@ -81,6 +81,13 @@ def test_constant_speed_is_the_steady_state_integrator(model):
     np.testing.assert_allclose(res.dte_rms, np.std(d), rtol=1e-9)
     np.testing.assert_allclose(res.dte_mean, np.mean(d), rtol=1e-9)
     assert np.all(res.contact_loss_fraction == 0.0)  # this low-branch orbit keeps contact
+    frame = res.to_frame()
+    assert len(frame) == res.dte_rms.size
+    np.testing.assert_allclose(frame["dte_rms [um]"], 1e6 * np.std(d), rtol=1e-9)
+    np.testing.assert_allclose(frame["pinion_speed [rpm]"], 8000.0, rtol=1e-12)
+    assert res.jump() is None  # nothing falls at constant speed
+    ax = res.plot()
+    assert ax.get_xlabel() == "pinion speed [rpm]" and len(ax.lines) == 1
 
 
 def test_slow_linear_ramp_follows_the_frequency_response(model):

@@ -240,6 +240,7 @@ def run_down(
     )
 
 
+@single_blas_thread
 def ramp_from(
     model: GearedModel,
     state: tuple,
