@@ -67,7 +67,8 @@ def main() -> None:
             and j.value_to < 0.5 * j.value_from
         ]
         step = grid[1] - grid[0]
-        print(f"{name} grid (step {step:.1f} rpm), H = {fe.mesh.H}, {time.time() - t:.0f} s")
+        h_text = f"H = {fe.mesh.H} (harmonics of ω/2 where period 2)"
+        print(f"{name} grid (step {step:.1f} rpm), {h_text}, {time.time() - t:.0f} s")
         print(f"  down jumps listed by the CLI between 5500 and 10000 rpm: {listed}")
         if falls:
             print(f"  the first where the DTE RMS falls by half: {falls[0][0]:.0f} -> {falls[0][1]:.0f} rpm")
@@ -119,8 +120,8 @@ def main() -> None:
     rate, r, jump = ramps[-1]
     r.plot(ax=ax, label=f"run-down, {rate:g} rpm/s")
     ax.text(
-        0.01,
-        0.98,
+        0.42,
+        0.42,
         "\n".join(
             notes + ["run-down jump: " + ", ".join(f"{j:.0f} rpm at {a:g} rpm/s" for a, _, j in ramps)]
         ),
