@@ -7,7 +7,7 @@ sweep's orbit at 10 000 rpm) over the harmonic-balance up and down sweeps of the
 (``nlgrd sweep --rpm 4000:16000:241``) and of notebook 01's grid (300 speeds over
 2000-16 000 rpm), H chosen by the error estimate, ``jump="auto"``. Prints the down jumps
 (CLI: :meth:`SweepResult.jumps`; notebook: :func:`nlgrd.studies.experimental.resonance_jumps`;
-run-down: :meth:`RampResult.jump`) and the run times. About 12 minutes on one core.
+run-down: :meth:`RampResult.jump`) and the run times. 7-13 minutes on one core.
 
 Run from the repository root: ``python docs/figures/kubo_run_down.py``.
 """
@@ -121,7 +121,7 @@ def main() -> None:
     r.plot(ax=ax, label=f"run-down, {rate:g} rpm/s")
     ax.text(
         0.42,
-        0.42,
+        0.98,
         "\n".join(
             notes + ["run-down jump: " + ", ".join(f"{j:.0f} rpm at {a:g} rpm/s" for a, _, j in ramps)]
         ),
