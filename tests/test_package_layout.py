@@ -37,7 +37,7 @@ ALLOWED = {
     "gear": {"plotting"},
     "plotting": set(),
     "nonlinear": {"rotor", "gear", "plotting"},
-    "timedomain": {"rotor", "gear", "nonlinear"},
+    "timedomain": {"rotor", "gear", "nonlinear", "plotting"},  # plotting: RampResult.plot
     "io": {"rotor", "gear", "nonlinear"},
     "studies": {"rotor", "gear", "nonlinear", "timedomain", "io", "plotting", "cli", "nlgrd"},
 }

@@ -436,3 +436,36 @@ def plot_spectrum(
     ax.set_ylim(bottom=0)
     ax.legend(fontsize=8)
     return ax
+
+
+def plot_ramp(rpm, dte_rms, rpm_jump=None, ax=None, label: str | None = None):
+    """DTE RMS per mesh cycle of a speed ramp against pinion speed, its jump marked.
+
+    Parameters
+    ----------
+    rpm : array_like
+        Pinion speed of each mesh cycle [rpm].
+    dte_rms : array_like
+        RMS of the alternating DTE of each cycle [µm].
+    rpm_jump : float, optional
+        Pinion speed of the jump [rpm], drawn as a vertical line.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+    label : str, optional
+        Legend label of the curve (default "run-down (time integration)").
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
+    ax = get_ax(ax)
+    text = label or "run-down (time integration)"
+    (line,) = ax.plot(rpm, dte_rms, "-", lw=0.6, color="0.25", label=text, rasterized=True)
+    if rpm_jump is not None:
+        ax.axvline(
+            rpm_jump, color=line.get_color(), ls="--", lw=1, label=f"{text}: jump at {rpm_jump:.0f} rpm"
+        )
+    ax.set_xlabel("pinion speed [rpm]")
+    ax.set_ylabel("RMS of alternating DTE [µm]")
+    return ax
