@@ -375,8 +375,17 @@ def _summary(args, res, unit, out, png, transitions) -> int:
     two = np.atleast_1d(res.mesh.omega[(res.mesh.period == 2) & res.mesh.converged & ~res.mesh.no_stable])
     if len(two):
         print(f"period 2 (period doubled) at {unit.name}: " + ", ".join(unit(w) for w in two))
-    for j in res.jumps():
+    jumps = res.jumps()
+    for j in jumps:
         print(f"jump ({j.direction}): {unit(j.omega_from)} -> {unit(j.omega_to)} {unit.name}")
+    torus_dirs = set(np.asarray(res.mesh.direction)[np.isfinite(res.mesh.secondary_frequency)].astype(str))
+    if any(j.direction in torus_dirs for j in jumps):
+        print(
+            "note: this sweep has quasi-periodic points, so where it leaves a branch depends on the "
+            "grid: harmonic balance cannot tell whether the motion stays near an unstable branch "
+            "there. A slow run-down in the time domain decides (nlgrd.timedomain.run_down; Kubo's "
+            "case in docs/verification.md, 'Kubo's main down jump')"
+        )
     for t in transitions(res.mesh):
         print(
             f"{t.kind} ({t.direction}): {unit(t.omega_from)} -> {unit(t.omega_to)} {unit.name}, "
