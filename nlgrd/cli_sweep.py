@@ -110,16 +110,17 @@ def cmd_sweep(args) -> int:
     system = load_model(args.model)
     from nlgrd.cli_link_sweep import link_sweep_command, needs_links
 
-    if needs_links(system) and period != "auto" and period >= 3:
-        raise ModelError(
-            "--period", f"--period {period} is not implemented yet for models with links (use --search-at)"
-        )
     if search is not None and not needs_links(system) and system.gear_pairs[0].error_period > 1:
         key = "--search-at" if args.search_at is not None else "--period"
         raise ModelError(key, "searches the orbits of one gear pair excited at its mesh period", args.model)
     if needs_links(system):
         if not system.gear_pairs and not system.bearing_clearances:
             raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
+        if period != "auto" and period >= 3:
+            raise ModelError(
+                "--period",
+                f"--period {period} is not implemented yet for models with links (use --search-at)",
+            )
         _check_link_speeds(system, values, args.rpm is not None, option, repr(text))
         if args.continuation:
             return _link_continuation(args, system, values, count, out, png)
