@@ -80,7 +80,7 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
     int
         0, or 1 when no point converged.
     """
-    from nlgrd.cli_orbits import parse_period
+    from nlgrd.cli_orbits import none_of, parse_period
     from nlgrd.io.command_line import ProgressBar, pyplot
     from nlgrd.nonlinear.link_model import build_link_model, link_sweep
 
@@ -141,7 +141,7 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
     _periods(r, unit=(60 * plan.speed_per_base, "rpm") if args.rpm is not None else (1.0, "Hz"))
     print(f"wrote {out} and {png}" + "".join(f", {path}" for path, _ in beside))
     if bad == len(r):
-        print("nlgrd: error: no point of the sweep converged", file=sys.stderr)
+        print(f"nlgrd: error: no point of the sweep converged{none_of(args.period)}", file=sys.stderr)
         return 1
     return 0
 

@@ -263,6 +263,13 @@ def parse_period(text: str) -> str | int:
     return nu
 
 
+def none_of(period: str) -> str:
+    """What a sweep where no point converged means for ``--period`` (appended to its line)."""
+    if str(period).strip() == "2":
+        return ": no period-2 orbit in the range (period-2 branches exist only beyond a period doubling)"
+    return ""
+
+
 def default_search(values: np.ndarray, count: int = DEFAULT_SEARCH_POINTS) -> np.ndarray:
     """Speeds of the grid at which ``--period N`` searches without ``--search-at``.
 

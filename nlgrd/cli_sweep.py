@@ -357,6 +357,8 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
 def _summary(args, res, unit, out, png, transitions) -> int:
     import numpy as np
 
+    from nlgrd.cli_orbits import none_of
+
     bad = np.atleast_1d(res.mesh.omega[~res.mesh.converged])
     print(
         f"sweep: {len(res.mesh)} points ({args.direction}), {harmonics_line(res.mesh)}, "
@@ -369,7 +371,7 @@ def _summary(args, res, unit, out, png, transitions) -> int:
         )
     if len(bad) == len(res.mesh):
         print(f"wrote {out} and {png}")
-        print("nlgrd: error: no point of the sweep converged", file=sys.stderr)
+        print(f"nlgrd: error: no point of the sweep converged{none_of(args.period)}", file=sys.stderr)
         return 1
     torus = np.isfinite(res.mesh.secondary_frequency)
     lost = np.atleast_1d(res.mesh.omega[res.mesh.no_stable & ~torus])

@@ -80,7 +80,7 @@ PATH_ONLY = {
 #: option -> the one line of exit 1 when the range holds no orbit of that period (a
 #: result: the period-2 branches exist only beyond a period doubling; period 3 is searched)
 NONE_THERE = {
-    "period 2": "no point of the sweep converged",
+    "period 2": "no period-2 orbit in the range",
     "period 3": "no period-3 orbit found",
 }
 
