@@ -8,11 +8,14 @@ from __future__ import annotations
 import math
 import sys
 
+import numpy as np
+import pandas as pd
+
 from nlgrd.errors import ModelError
 from nlgrd.io.command_line import Outputs, harmonics_line
 from nlgrd.nonlinear.link_model import needs_links
 
-__all__ = ["link_quantity", "link_sweep_command", "needs_links"]
+__all__ = ["LinkOrbits", "link_quantity", "link_search", "link_sweep_command", "needs_links"]
 
 
 def link_quantity(text: str | None, model) -> tuple[str, str]:
@@ -52,7 +55,7 @@ def link_quantity(text: str | None, model) -> tuple[str, str]:
     return f"{name}.{match[0]}", f"{name}: {match[0]}"
 
 
-def link_sweep_command(args, system, values, out, png) -> int:
+def link_sweep_command(args, system, values, out, png, search=None, unit_of=None) -> int:
     """Run ``nlgrd sweep`` on a link model; write the CSV and PNG; print a summary.
 
     Parameters
@@ -66,15 +69,18 @@ def link_sweep_command(args, system, values, out, png) -> int:
         The range: shaft speeds [rpm] (``--rpm``) or base frequencies [Hz] (``--hz``).
     out, png : Path
         The output files.
+    search : (ndarray, tuple of int), optional
+        ``--search-at`` speeds (the range's unit) and periods: :func:`link_search`.
+    unit_of : callable, optional
+        The frequency plan -> the range's unit (``omega``, ``name``, called for text); needed
+        with ``search``.
 
     Returns
     -------
     int
-        0.
+        0, or 1 when no point converged.
     """
-    import numpy as np
-
-    from nlgrd.cli_orbits import parse_period
+    from nlgrd.cli_orbits import none_of, parse_period
     from nlgrd.io.command_line import ProgressBar, pyplot
     from nlgrd.nonlinear.link_model import build_link_model, link_sweep
 
@@ -107,10 +113,20 @@ def link_sweep_command(args, system, values, out, png) -> int:
     ax.set_xlabel(axis_label(x_col))
     ax.set_ylabel(axis_label(column))
     ax.set_title(f"{(system.name or 'model')[:60]}\nbase frequency: {plan.name}, H = {H}", fontsize=9)
-    place_legend(ax)
+    found = None
+    if search is not None:
+        from nlgrd.cli_orbits import draw_branches
+
+        found = link_search(model, res, omegas, *search, unit_of(plan), column)
+        draw_branches(ax, found[1], x_col, column.split(" [")[0])
+    place_legend(ax, fontsize=7)
     fig.tight_layout()
+    names = ("orbits", "branches") if found is not None else ()
+    beside = [(out.with_name(f"{out.stem}_{n}.csv"), f) for n, f in zip(names, found or (), strict=True)]
     with Outputs() as files:
         files.csv(frame, out)
+        for path, table in beside:
+            files.csv(table, path)
         files.figure(fig, png)
         files.commit()
     r = res.result
@@ -123,9 +139,9 @@ def link_sweep_command(args, system, values, out, png) -> int:
         f"{bad} not converged, {lost} without a stable periodic response"
     )
     _periods(r, unit=(60 * plan.speed_per_base, "rpm") if args.rpm is not None else (1.0, "Hz"))
-    print(f"wrote {out} and {png}")
+    print(f"wrote {out} and {png}" + "".join(f", {path}" for path, _ in beside))
     if bad == len(r):
-        print("nlgrd: error: no point of the sweep converged", file=sys.stderr)
+        print(f"nlgrd: error: no point of the sweep converged{none_of(args.period)}", file=sys.stderr)
         return 1
     return 0
 
@@ -160,3 +176,124 @@ def _periods(r, unit: tuple[float, str]) -> None:
             f"{t.kind} ({t.direction}): {show(t.omega_from)} -> {show(t.omega_to)} {name}, "
             f"{t.response_from} -> {t.response_to}"
         )
+
+
+class LinkOrbits:
+    """What :func:`nlgrd.cli_orbits.search_and_follow` writes of a link model's orbits: the
+    base frequency, the reference shaft speed and every link's outputs over the orbit's
+    whole period (as :func:`~nlgrd.nonlinear.link_model.link_sweep`'s columns)."""
+
+    def __init__(self, model, column: str):
+        from nlgrd.nonlinear.link_model import metric_names
+
+        self.model, self.column = model, column
+        self.per_base = model.receptance.plan.speed_per_base * 60  # [rpm per Hz of the base]
+        self.outputs = [f"{lk.name}.{k}" for lk in model.links for k in metric_names(lk)]
+        self.columns = (
+            "search at",
+            "base_frequency [Hz]",
+            "shaft_speed [rpm]",
+            "period",
+            "stable",
+            "floquet_max [-]",
+            "on the sweep",
+            *self.outputs,
+            "amplitude [um]",
+            "start",
+        )
+
+    def period(self, nu: int):
+        """The period-ν model (:func:`~nlgrd.nonlinear.link_model.period_model`)."""
+        from nlgrd.nonlinear.link_model import period_model
+
+        return period_model(self.model, nu)
+
+    def values(self, harmonics, omega: float, nu: int) -> dict:
+        """Every link's outputs of an orbit of ν base periods at the base frequency ω [rad/s]."""
+        links = self.period(nu).links
+        out = {}
+        for link, sl in zip(links, self.model.receptance.slices, strict=True):
+            out.update({f"{link.name}.{k}": v for k, v in link.metrics(harmonics[sl], omega / nu).items()})
+        return out
+
+    def row(self, o) -> dict:
+        hz = o.omega / (2 * np.pi)
+        return {
+            "base_frequency [Hz]": hz,
+            "shaft_speed [rpm]": hz * self.per_base,
+            **self.values(o.harmonics, o.omega, o.period),
+        }
+
+    def text(self, row: dict) -> str:
+        return f"{self.column} {row[self.column]:.4g}"
+
+    def frame(self, branch) -> pd.DataFrame:
+        from nlgrd.nonlinear.link_model import LinkSweepResult
+
+        nu = int(branch.period[0]) if len(branch) else 1
+        usable = branch.converged & ~np.asarray(branch.no_stable, dtype=bool)
+        blank = dict.fromkeys(self.outputs, np.nan)
+        rows = [
+            self.values(branch.harmonics[i], float(branch.omega[i]), nu) if usable[i] else blank
+            for i in range(len(branch))
+        ]
+        f = LinkSweepResult(branch, pd.DataFrame(rows)).to_frame()
+        f.insert(0, "shaft_speed [rpm]", f["base_frequency [Hz]"] * self.per_base)
+        return f
+
+
+def link_search(model, res, omegas, at, periods, unit, column: str):
+    """``--search-at`` on a link model: search at each speed, print what was found, follow
+    the stable orbits the sweep does not have over its grid
+    (:func:`nlgrd.cli_orbits.search_and_follow` with :class:`LinkOrbits`).
+
+    Parameters
+    ----------
+    model : LinkModel
+        The sweep's model.
+    res : LinkSweepResult
+        The sweep.
+    omegas : ndarray
+        The sweep's base frequencies [rad/s].
+    at : ndarray
+        Search speeds, in the unit of ``unit``.
+    periods : tuple of int
+        Periods sought [base periods].
+    unit : callable
+        Base frequency [rad/s] to text in the range's unit; ``unit.omega`` the inverse.
+    column : str
+        The ``--quantity`` column, printed for each orbit.
+
+    Returns
+    -------
+    (DataFrame, DataFrame)
+        The orbits found and the followed branches.
+    """
+    from nlgrd.cli_orbits import search_and_follow
+
+    r, view = res.result, LinkOrbits(model, column)
+    H = r.H
+    top = float(np.max(omegas))
+
+    def model_of(nu: int):
+        m = view.period(nu)
+        m.receptance.prepare(H * top)  # a modal basis (large models) serving νH harmonics of ω/ν
+        return m.reduced
+
+    def on_sweep(o, w: float, branches) -> bool:
+        here = np.nonzero(
+            np.isclose(r.omega, w, rtol=1e-12) & r.converged & ~np.asarray(r.no_stable, dtype=bool)
+        )[0]
+        mine = view.values(o.harmonics, o.omega, o.period)
+        return any(
+            int(r.period[i]) == o.period
+            and all(np.isclose(res.links[k].iloc[i], v, rtol=1e-6, atol=0) for k, v in mine.items())
+            for i in here
+        )
+
+    orbits, branches, _ = search_and_follow(
+        model_of, omegas, at, periods, H, unit, on_sweep, "the sweep's", view
+    )
+    if orbits.empty:
+        print("orbit search: nothing converged at the speeds given")
+    return orbits, branches

@@ -134,19 +134,57 @@ def search_command(model, res, omegas, at, periods, unit) -> tuple[pd.DataFrame,
             for i in here
         )
 
-    orbits, branches, _ = _search_and_follow(
-        geared_model_of(model), model.pinion_rpm, omegas, at, periods, H, unit, on_sweep, "the sweep's"
+    orbits, branches, _ = search_and_follow(
+        geared_model_of(model),
+        omegas,
+        at,
+        periods,
+        H,
+        unit,
+        on_sweep,
+        "the sweep's",
+        GearOrbits(model.pinion_rpm),
     )
     if orbits.empty:
         print("orbit search: nothing converged at the speeds given")
     return orbits, branches
 
 
-def _search_and_follow(model_of, pinion_rpm, omegas, at, periods, H, unit, known, words, every=False):
+class GearOrbits:
+    """What :func:`search_and_follow` writes of a geared model's orbits: the mesh frequency,
+    the pinion speed and the first mesh's outputs (:data:`ORBIT_COLUMNS`)."""
+
+    columns = ORBIT_COLUMNS
+
+    def __init__(self, pinion_rpm):
+        self.pinion_rpm = pinion_rpm
+
+    def row(self, o) -> dict:
+        m = o.metrics
+        return {
+            "mesh_frequency [Hz]": o.omega / (2 * np.pi),
+            "pinion_speed [rpm]": float(self.pinion_rpm(o.omega)),
+            "dte_rms [um]": np.nan if m is None else m.dte_rms * 1e6,
+            "force_max [N]": np.nan if m is None else m.force_max,
+            "dslr [-]": np.nan if m is None else m.dslr,
+        }
+
+    def text(self, row: dict) -> str:
+        return f"RMS DTE {row['dte_rms [um]']:.4g} um"
+
+    def frame(self, branch) -> pd.DataFrame:
+        f = branch.to_frame()
+        f.insert(0, "pinion_speed [rpm]", self.pinion_rpm(branch.omega))
+        return f
+
+
+def search_and_follow(model_of, omegas, at, periods, H, unit, known, words, view, every=False):
     """Search at each speed, print each orbit, follow the stable ones (``every``: all) that
     ``known(orbit, omega, branches)`` does not have; the orbits, branches and (label, result).
-    ``every``: the ``--period N`` search, of period-N orbits only (one of a shorter minimal
-    period is dropped: ``model_of`` gives the period-N model alone)."""
+    ``view`` (:class:`GearOrbits`, :class:`nlgrd.cli_link_sweep.LinkOrbits`) gives each
+    orbit's and branch's columns. ``every``: the ``--period N`` search, of period-N orbits
+    only (one of a shorter minimal period is dropped: ``model_of`` gives the period-N model
+    alone)."""
     from nlgrd.nonlinear.orbit_search import follow_orbit, search_orbits
 
     rows, frames, followed = [], [], []
@@ -154,27 +192,24 @@ def _search_and_follow(model_of, pinion_rpm, omegas, at, periods, H, unit, known
         w = float(unit.omega(value))
         for o in search_orbits(model_of, w, H, periods, shorter_periods=not every):
             seen = known(o, w, followed)
-            m = o.metrics
+            out = view.row(o)
             rows.append(
                 {
                     "search at": value,
-                    "mesh_frequency [Hz]": w / (2 * np.pi),
-                    "pinion_speed [rpm]": float(pinion_rpm(w)),
                     "period": o.period,
                     "stable": o.stable,
                     "floquet_max [-]": o.floquet_max,
                     "on the sweep": seen,
-                    "dte_rms [um]": np.nan if m is None else m.dte_rms * 1e6,
-                    "force_max [N]": np.nan if m is None else m.force_max,
-                    "dslr [-]": np.nan if m is None else m.dslr,
                     "amplitude [um]": o.amplitude * 1e6,
                     "start": o.start,
+                    **out,
                 }
             )
             state = "stable" if o.stable else f"unstable, max |mu| {o.floquet_max:.3g}"
             print(
                 f"orbit at {unit(w)} {unit.name}: period {o.period}, {state}, "
-                f"RMS DTE {rows[-1]['dte_rms [um]']:.4g} um" + ("" if not seen else f" ({words})")
+                + view.text(out)
+                + ("" if not seen else f" ({words})")
             )
             if (o.stable or every) and not seen:
                 branch = follow_orbit(model_of, o, omegas, H)
@@ -183,9 +218,8 @@ def _search_and_follow(model_of, pinion_rpm, omegas, at, periods, H, unit, known
                     label += ", stable there" if o.stable else ", unstable there"
                 same = sum(lb.split(" (")[0] == label for lb, _ in followed)
                 label += f" ({same + 1})" if same else ""
-                f = branch.to_frame()
+                f = view.frame(branch)
                 f.insert(0, "branch", label)
-                f.insert(1, "pinion_speed [rpm]", pinion_rpm(branch.omega))
                 frames.append(f)
                 followed.append((label, branch))
                 span = branch.omega[branch.converged]
@@ -193,7 +227,7 @@ def _search_and_follow(model_of, pinion_rpm, omegas, at, periods, H, unit, known
                     f"from {unit(span.min())} to {unit(span.max())} {unit.name}" if span.size else "nowhere"
                 )
                 print(f"  followed: period {o.period} {reach}, {int(branch.stable.sum())} stable points")
-    orbits = pd.DataFrame(rows, columns=list(ORBIT_COLUMNS))
+    orbits = pd.DataFrame(rows, columns=list(view.columns))
     branches = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=["branch"])
     return orbits, branches, followed
 
@@ -227,6 +261,13 @@ def parse_period(text: str) -> str | int:
             "--period", f"auto or a whole number of mesh periods 1 to {MAX_PERIOD}, got {text!r}"
         )
     return nu
+
+
+def none_of(period: str) -> str:
+    """What a sweep where no point converged means for ``--period`` (appended to its line)."""
+    if str(period).strip() == "2":
+        return ": no period-2 orbit in the range (period-2 branches exist only beyond a period doubling)"
+    return ""
 
 
 def default_search(values: np.ndarray, count: int = DEFAULT_SEARCH_POINTS) -> np.ndarray:
@@ -287,9 +328,8 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
             for i in np.nonzero(np.isclose(b.omega, w, rtol=1e-12) & b.converged)[0]
         )
 
-    orbits, frames, followed = _search_and_follow(
+    orbits, frames, followed = search_and_follow(
         lambda _: model.reduced,
-        model.pinion_rpm,
         omegas,
         at,
         (nu,),
@@ -297,6 +337,7 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
         unit,
         on_branch,
         "on a branch already followed",
+        GearOrbits(model.pinion_rpm),
         every=True,
     )
     if not followed:

@@ -110,16 +110,31 @@ def cmd_sweep(args) -> int:
     system = load_model(args.model)
     from nlgrd.cli_link_sweep import link_sweep_command, needs_links
 
-    if search is not None and (needs_links(system) or system.gear_pairs[0].error_period > 1):
+    if search is not None and not needs_links(system) and system.gear_pairs[0].error_period > 1:
         key = "--search-at" if args.search_at is not None else "--period"
         raise ModelError(key, "searches the orbits of one gear pair excited at its mesh period", args.model)
     if needs_links(system):
         if not system.gear_pairs and not system.bearing_clearances:
             raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
+        if period != "auto" and period >= 3:
+            raise ModelError(
+                "--period",
+                f"--period {period} is not implemented yet for models with links (use --search-at)",
+            )
         _check_link_speeds(system, values, args.rpm is not None, option, repr(text))
         if args.continuation:
             return _link_continuation(args, system, values, count, out, png)
-        return link_sweep_command(args, system, values, out, png)
+        return link_sweep_command(
+            args,
+            system,
+            values,
+            out,
+            png,
+            search,
+            lambda plan: _Unit(
+                args.rpm is not None, 1 / plan.speed_per_base, speed="shaft speed", base="base frequency"
+            ),
+        )
     quantity = check_quantity(args.quantity or "dslr")
     gp = system.gear_pairs[0]
     unit = _Unit(
@@ -342,6 +357,8 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
 def _summary(args, res, unit, out, png, transitions) -> int:
     import numpy as np
 
+    from nlgrd.cli_orbits import none_of
+
     bad = np.atleast_1d(res.mesh.omega[~res.mesh.converged])
     print(
         f"sweep: {len(res.mesh)} points ({args.direction}), {harmonics_line(res.mesh)}, "
@@ -354,7 +371,7 @@ def _summary(args, res, unit, out, png, transitions) -> int:
         )
     if len(bad) == len(res.mesh):
         print(f"wrote {out} and {png}")
-        print("nlgrd: error: no point of the sweep converged", file=sys.stderr)
+        print(f"nlgrd: error: no point of the sweep converged{none_of(args.period)}", file=sys.stderr)
         return 1
     torus = np.isfinite(res.mesh.secondary_frequency)
     lost = np.atleast_1d(res.mesh.omega[res.mesh.no_stable & ~torus])
