@@ -274,8 +274,10 @@ def _sweep_pass(
                     try_jump = False
             searched = False  # the landing search has already looked for a stable orbit here
             if not sol.converged and try_jump:
+                restarts: list[HarmonicSolution] = []  # the restarts' unstable orbits
+                exhausted: list[bool] = []
                 zj, steps, folds, unstable = jump_to_branch(
-                    model, H, z, last_w, float(w), tol=tol, require_stable=stability
+                    model, H, z, last_w, float(w), tol=tol, require_stable=stability, exhausted=exhausted
                 )
                 if zj is not None:
                     switched = folds > 0
@@ -292,7 +294,9 @@ def _sweep_pass(
                     )
                     if switched and auto:
                         sol = landing.nearest_landing(sol, z, others())
-                elif auto and (cand := landing.restart(model, problem, z, w, H, method, tol, max_iter)):
+                elif auto and (
+                    cand := landing.restart(model, problem, z, w, H, method, tol, max_iter, unstable=restarts)
+                ):
                     sol, switched = cand, True
                     sol = landing.nearest_landing(sol, z, others())
                 elif unstable is not None:  # no stable orbit found: report the unstable crossing
@@ -300,6 +304,9 @@ def _sweep_pass(
                         problem, unstable, method="newton", tol=tol, max_iter=max_iter, fallback=False
                     )
                     switched, searched = folds > 0, auto
+                elif exhausted and restarts:  # the search's ceiling came before a crossing
+                    sol = min(restarts, key=lambda c: landing.distance(c, z))
+                    switched, searched = True, True
                 else:  # Newton from the previous point without giving up early, then hybr
                     sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback)
             if not sol.converged and auto and pool:  # the branch ended: another direction's orbit
