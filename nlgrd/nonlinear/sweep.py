@@ -174,6 +174,7 @@ def sweep(
         leave_unstable=leave_unstable,
         progress=progress,
     )
+    kw["searches"] = FailedSearches()  # shared by both passes of "auto"
     result, landings = _sweep_pass(model, omegas, H, directions, **kw)
     if jump != "auto" or len({d for d, _ in sweep_orders(omegas, directions)}) < 2:
         return result
@@ -204,6 +205,36 @@ def sweep(
     return result
 
 
+class FailedSearches:
+    """The landing searches of a sweep (:func:`~nlgrd.nonlinear.arclength.jump_to_branch`)
+    that found no stable crossing, so that the same search is not walked again.
+
+    A search is a deterministic function of its start (harmonics, frequency), target and
+    options: one with the same start, bit for bit, and the same target returns the stored
+    result. That is the case in the second pass of ``jump="auto"``, which reaches the
+    same failed search from the same orbit. A search from another start or to another
+    frequency is walked afresh (a stable branch may appear at the next frequency), within
+    :data:`~nlgrd.nonlinear.arclength.LANDING_EVALUATIONS`.
+    """
+
+    def __init__(self):
+        self._done: dict[tuple, list] = {}
+
+    def jump(self, model, H, z_prev, omega_prev, omega_target, *, exhausted, **options):
+        """:func:`~nlgrd.nonlinear.arclength.jump_to_branch`, or the stored result of the
+        same failed search (``exhausted`` as it was then)."""
+        key = (id(model), H, float(omega_prev), float(omega_target), tuple(sorted(options.items())))
+        z_prev = np.asarray(z_prev, dtype=float)
+        for z0, out, ex in self._done.get(key, ()):
+            if z0.shape == z_prev.shape and np.array_equal(z0, z_prev):
+                exhausted.extend(ex)
+                return out
+        out = jump_to_branch(model, H, z_prev, omega_prev, omega_target, exhausted=exhausted, **options)
+        if out[0] is None:
+            self._done.setdefault(key, []).append((z_prev.copy(), out, list(exhausted)))
+        return out
+
+
 def _pool(result: SweepResult, stability: bool) -> dict[float, list]:
     """{frequency: [(direction, harmonics)]} of a sweep's stable response points."""
     ok = result.converged & ~result.no_stable
@@ -232,6 +263,7 @@ def _sweep_pass(
     chain,
     leave_unstable,
     progress,
+    searches,
     pool=None,
 ):
     """One pass of :func:`sweep`; returns (result, landings after folds: (direction, w,
@@ -276,7 +308,7 @@ def _sweep_pass(
             if not sol.converged and try_jump:
                 restarts: list[HarmonicSolution] = []  # the restarts' unstable orbits
                 exhausted: list[bool] = []
-                zj, steps, folds, unstable = jump_to_branch(
+                zj, steps, folds, unstable = searches.jump(
                     model, H, z, last_w, float(w), tol=tol, require_stable=stability, exhausted=exhausted
                 )
                 if zj is not None:
