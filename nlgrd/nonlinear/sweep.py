@@ -142,7 +142,12 @@ def sweep(
         tests/test_geared_time_domain.py; see docs/verification.md, "Leaving an unstable
         orbit", for stronger instabilities), or no stable solution found: flag the point
         ``no_stable`` with NaN metrics and its dominant multiplier, and go on from the
-        unstable orbit. False: stay on the branch and flag its points unstable.
+        unstable orbit. False: stay on the branch and flag its points unstable. The
+        arc-length search has a ceiling of corrector evaluations
+        (:data:`nlgrd.nonlinear.arclength.LANDING_EVALUATIONS`); a search cut by it before
+        any crossing reports the nearest unstable orbit of the restarts (``jump="auto"``),
+        and a failed search is not walked again from the same start
+        (:class:`FailedSearches`).
     progress : callable, optional
         ``progress(i, n)`` once after each of the n points of all directions (a second
         pass of ``jump="auto"`` counts its points again from 1).
