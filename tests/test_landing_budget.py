@@ -8,7 +8,8 @@ Checked: the search stops at :data:`LANDING_EVALUATIONS` corrector evaluations (
 on the tracer, so the check cannot depend on the machine's speed); the sweep still
 reports the orbit the uncapped search reported there (same orbit to SAME_ORBIT_RTOL,
 with max |μ| > 1 from the reference monodromy ``method="expm"``, and a converged
-harmonic-balance residual); a failed search is not walked again from the same start.
+harmonic-balance residual); a failed search is not walked again from the same start, and
+a walk from the same start to another target is replayed with a fresh walk's result.
 """
 
 from __future__ import annotations
@@ -100,7 +101,18 @@ def test_failed_search_is_not_walked_again(idler, counted):
     assert (
         out1[0] is None and first == [True] and out2 is out1 and again == first and counted["evals"] == walked
     )
-    # another target is another search: walked afresh
-    other: list = []
-    searches.jump(model.reduced, H, res.harmonics[0], W[0], 2 * np.pi * 1590.0, exhausted=other, **kw)
+    # the same start to another target: the stored walk is replayed (no evaluation), with
+    # the result of a fresh walk (its crossings of the new target checked the same way)
+    w2 = 2 * np.pi * 1590.0
+    replayed = searches.jump(model.reduced, H, res.harmonics[0], W[0], w2, exhausted=[], **kw)
+    assert counted["evals"] == walked
+    fresh = jump_to_branch(model.reduced, H, res.harmonics[0], W[0], w2, **kw)
     assert counted["evals"] > walked
+    assert replayed[1:3] == fresh[1:3] and (replayed[0] is None) == (fresh[0] is None)
+    assert (replayed[3] is None) == (fresh[3] is None)
+    if fresh[3] is not None:
+        assert np.array_equal(replayed[3], fresh[3])
+    # another start is walked afresh
+    before = counted["evals"]
+    searches.jump(model.reduced, H, res.harmonics[0] * (1 + 1e-9), W[0], w2, exhausted=[], **kw)
+    assert counted["evals"] > before

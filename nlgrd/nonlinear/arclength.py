@@ -214,6 +214,7 @@ def jump_to_branch(
     max_overshoot: float = 20.0,
     max_evaluations: int | None = LANDING_EVALUATIONS,
     exhausted: list | None = None,
+    walks: dict | None = None,
 ) -> tuple[NDArray | None, int, int, NDArray | None]:
     """Find the solution at ``omega_target`` reached after the branch through ``omega_prev`` folded.
 
@@ -263,6 +264,11 @@ def jump_to_branch(
     exhausted : list, optional
         Receives True when the ceiling ended the search (a caller may then look for an
         orbit otherwise).
+    walks : dict, optional
+        Walks that ended on their own (ceiling, ``max_steps`` or step collapse), by start
+        and direction, of the same ``model`` (a sweep's): the walk does not depend on
+        ``omega_target`` until it stops, so one from the same start, bit for bit, is
+        replayed from here, its crossings of the new target checked as on a fresh walk.
 
     Returns
     -------
@@ -284,7 +290,17 @@ def jump_to_branch(
     steps = 0
     folds = 0
     unstable = None
-    for p in tracer.trace(z_prev, omega_prev, direction, 0.01, 1e-8, 0.2, max_steps, 4, max_evaluations):
+    z_flat = np.asarray(z_prev, dtype=float).reshape(-1)
+    key = (H, float(omega_prev), direction, z_flat.tobytes(), max_steps, max_evaluations)
+    stored = None if walks is None else walks.get(key)
+    if stored is None:
+        points = tracer.trace(z_prev, omega_prev, direction, 0.01, 1e-8, 0.2, max_steps, 4, max_evaluations)
+    else:
+        points = iter(stored[0])
+    record: list | None = [] if walks is not None and stored is None else None
+    for p in points:
+        if record is not None:
+            record.append(p)
         steps += 1
         if prev is not None and np.sign(p.tangent[-1]) != np.sign(prev.tangent[-1]):
             folds += 1
@@ -313,6 +329,10 @@ def jump_to_branch(
         if direction * (p.omega - omega_target) > max_overshoot * span + 0.02 * abs(omega_target):
             break
         prev = p
-    if exhausted is not None and max_evaluations is not None and tracer.evaluations >= max_evaluations:
+    else:  # the walk ended on its own, not on this target's limits
+        if record is not None:
+            walks[key] = (record, tracer.evaluations)
+    evaluations = tracer.evaluations if stored is None else stored[1]
+    if exhausted is not None and max_evaluations is not None and evaluations >= max_evaluations:
         exhausted.append(True)
     return None, steps, folds, unstable

@@ -217,13 +217,18 @@ class FailedSearches:
     A search is a deterministic function of its start (harmonics, frequency), target and
     options: one with the same start, bit for bit, and the same target returns the stored
     result. That is the case in the second pass of ``jump="auto"``, which reaches the
-    same failed search from the same orbit. A search from another start or to another
-    frequency is walked afresh (a stable branch may appear at the next frequency), within
-    :data:`~nlgrd.nonlinear.arclength.LANDING_EVALUATIONS`.
+    same failed search from the same orbit. A search from the same start to another
+    frequency (a run of points without an orbit, each searched from the last converged
+    one) replays the stored walk when that ended on its own (``walks`` of
+    :func:`~nlgrd.nonlinear.arclength.jump_to_branch`): the walk does not depend on the
+    target, and its crossings of the new one are checked as on a fresh walk, so a stable
+    branch at the next frequency is found as before. A search from another start is
+    walked afresh, within :data:`~nlgrd.nonlinear.arclength.LANDING_EVALUATIONS`.
     """
 
     def __init__(self):
         self._done: dict[tuple, list] = {}
+        self._walks: dict[tuple, tuple] = {}
 
     def jump(self, model, H, z_prev, omega_prev, omega_target, *, exhausted, **options):
         """:func:`~nlgrd.nonlinear.arclength.jump_to_branch`, or the stored result of the
@@ -234,7 +239,9 @@ class FailedSearches:
             if z0.shape == z_prev.shape and np.array_equal(z0, z_prev):
                 exhausted.extend(ex)
                 return out
-        out = jump_to_branch(model, H, z_prev, omega_prev, omega_target, exhausted=exhausted, **options)
+        out = jump_to_branch(
+            model, H, z_prev, omega_prev, omega_target, exhausted=exhausted, walks=self._walks, **options
+        )
         if out[0] is None:
             self._done.setdefault(key, []).append((z_prev.copy(), out, list(exhausted)))
         return out
