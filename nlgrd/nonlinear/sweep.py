@@ -144,8 +144,9 @@ def sweep(
         ``no_stable`` with NaN metrics and its dominant multiplier, and go on from the
         unstable orbit. False: stay on the branch and flag its points unstable. The
         arc-length search has a ceiling of corrector evaluations
-        (:data:`nlgrd.nonlinear.arclength.LANDING_EVALUATIONS`); a search cut by it before
-        any crossing reports the nearest unstable orbit of the restarts (``jump="auto"``),
+        (:data:`nlgrd.nonlinear.arclength.LANDING_EVALUATIONS`); where one cut by it met no
+        crossing and Newton from the previous point fails too, the point reports the
+        nearest unstable orbit of the restarts (``jump="auto"``),
         and a failed search is not walked again from the same start
         (:class:`FailedSearches`).
     progress : callable, optional
@@ -348,11 +349,11 @@ def _sweep_pass(
                         problem, unstable, method="newton", tol=tol, max_iter=max_iter, fallback=False
                     )
                     switched, searched = folds > 0, auto
-                elif exhausted and restarts:  # the search's ceiling came before a crossing
-                    sol = min(restarts, key=lambda c: landing.distance(c, z))
-                    switched, searched = True, True
                 else:  # Newton from the previous point without giving up early, then hybr
                     sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback)
+                    if not sol.converged and exhausted and restarts:  # the ceiling came before a crossing
+                        sol = min(restarts, key=lambda c: landing.distance(c, z))
+                        switched, searched = True, True
             if not sol.converged and auto and pool:  # the branch ended: another direction's orbit
                 cands = others()
                 if cands:
