@@ -71,12 +71,14 @@ def main() -> None:
         za, zb = np.ravel(a.harmonics[i]), np.ravel(b.harmonics[i])
         rel = float(np.linalg.norm(za - zb) / max(np.linalg.norm(za), 1e-300))
         flags = ("converged", "stable", "no_stable", "branch_switch")
-        same = all(bool(getattr(a, f)[i]) == bool(getattr(b, f)[i]) for f in flags) and rel <= 1e-8
+        differ = [f for f in flags if bool(getattr(a, f)[i]) != bool(getattr(b, f)[i])]
+        same = not differ and rel <= 1e-8
         same_all &= same
         kind = "no stable" if a.no_stable[i] else ("stable" if a.stable[i] else "unstable")
         print(
             f"{w / 2 / np.pi:7.1f} Hz {kind:9s}: {1e3 * ta[i]:8.0f} ms ({ea[i]:4d} evals) -> "
-            f"{1e3 * tb[i]:6.0f} ms ({eb[i]:3d} evals), same answer {same} (harmonics {rel:.0e})",
+            f"{1e3 * tb[i]:6.0f} ms ({eb[i]:4d} evals), same answer {same} (harmonics {rel:.0e})"
+            + (f", differ: {', '.join(differ)}" if differ else ""),
             flush=True,
         )
     print(f"every point the same: {same_all}; total {ta.sum():.2f} s -> {tb.sum():.2f} s", flush=True)
