@@ -31,7 +31,7 @@ from nlgrd.nonlinear.solvers import solve
 #: of :attr:`Tracer.evaluations`) of one :func:`jump_to_branch` search, after which it ends
 #: as one that found no stable crossing. Set above the longest landing the tests and
 #: references find (1579, the Kahraman-Blankenship down sweep checked against time
-#: integration; 588 the parametric-mesh load sharing; the rest at most 523) and below the
+#: integration; 588 the FE parametric-mesh load sharing; the rest at most 523) and below the
 #: failed searches of the idler train (4237-4422 at H = 9). A count, not a time: the
 #: result does not depend on the machine. Issue 34 item 2 and benchmarks/README.md.
 LANDING_EVALUATIONS = 2000
