@@ -27,6 +27,15 @@ from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.results import STABLE_RTOL
 from nlgrd.nonlinear.solvers import solve
 
+#: Ceiling of corrector evaluations (residual, Jacobian and dR/dω at one point: the unit
+#: of :attr:`Tracer.evaluations`) of one :func:`jump_to_branch` search, after which it ends
+#: as one that found no stable crossing. Set above the longest landing the tests and
+#: references find (1579, the Kahraman-Blankenship down sweep checked against time
+#: integration; 588 the FE parametric-mesh load sharing; the rest at most 523) and below the
+#: failed searches of the idler train (4237-4422 at H = 9). A count, not a time: the
+#: result does not depend on the machine. Issue 34 item 2 and benchmarks/README.md.
+LANDING_EVALUATIONS = 2000
+
 
 @dataclass(frozen=True)
 class CurvePoint:
@@ -82,6 +91,8 @@ class Tracer:
         Frequency scale |omega0| (1 if zero) [rad/s].
     Fs : float
         Force scale of the residual, max(|L z0|, |B G|, |F|) at the start [N].
+    evaluations : int
+        Corrector evaluations (calls of :meth:`system`) so far [-].
     """
 
     def __init__(self, model: ReducedModel, H: int, z0: NDArray, omega0: float, tol: float = 1e-9):
@@ -90,6 +101,7 @@ class Tracer:
         self.Lz = float(np.max(np.abs(z0))) or 1.0
         self.Lw = float(abs(omega0)) or 1.0
         self.Fs = model.at(omega0, H).force_scale(z0)
+        self.evaluations = 0
 
     def system(self, u: NDArray) -> tuple[NDArray, NDArray, float]:
         """Scaled residual, Jacobian [dR/dz̃, dR/dω̃] and the relative residual at u.
@@ -97,6 +109,7 @@ class Tracer:
         The relative residual max|R| / max(|L z|, |B G|, |F|) at the point itself is the
         measure :func:`nlgrd.nonlinear.solvers.solve` converges on, so curve points and
         sweep points carry residuals on one scale."""
+        self.evaluations += 1
         z, w = u[:-1] * self.Lz, u[-1] * self.Lw
         Rw = self.model.omega_derivative(w, self.H, z)  # first: receptances and derivatives in one pass
         problem = self.model.at(w, self.H)
@@ -152,8 +165,10 @@ class Tracer:
         ds_max: float,
         max_steps: int,
         grow_below: int = 3,
+        max_evaluations: int | None = None,
     ) -> Iterator[CurvePoint]:
-        """Yield successive curve points (the start first), until the step size collapses.
+        """Yield successive curve points (the start first), until the step size collapses
+        or :attr:`evaluations` reaches ``max_evaluations`` (None: no limit).
 
         The step grows by 1.5 after a corrector that needed at most ``grow_below``
         iterations and halves after one that needed 8 or more."""
@@ -165,6 +180,8 @@ class Tracer:
         yield CurvePoint(u[:-1] * self.Lz, u[-1] * self.Lw, t, 0, res0)
         for _ in range(max_steps):
             while True:
+                if max_evaluations is not None and self.evaluations >= max_evaluations:
+                    return
                 u_pred = u + ds * t
                 un, its, res, A = self.correct(u_pred, t)
                 if un is not None:
@@ -195,6 +212,9 @@ def jump_to_branch(
     require_stable: bool = True,
     max_excursion: float = 50.0,
     max_overshoot: float = 20.0,
+    max_evaluations: int | None = LANDING_EVALUATIONS,
+    exhausted: list | None = None,
+    walks: dict | None = None,
 ) -> tuple[NDArray | None, int, int, NDArray | None]:
     """Find the solution at ``omega_target`` reached after the branch through ``omega_prev`` folded.
 
@@ -237,6 +257,18 @@ def jump_to_branch(
         times |omega_target - omega_prev| plus 2 % of |omega_target| [-]: it crossed the
         target without a stable landing and runs on along a branch away from it (a
         slow sweep does not reach an orbit that only a far fold brings back).
+    max_evaluations : int or None
+        Ceiling of corrector evaluations (:attr:`Tracer.evaluations`, the start's
+        included); the search then ends as one that found no stable crossing
+        (:data:`LANDING_EVALUATIONS`; None: only ``max_steps`` limits it).
+    exhausted : list, optional
+        Receives True when the ceiling ended the search (a caller may then look for an
+        orbit otherwise).
+    walks : dict, optional
+        Walks that ended on their own (ceiling, ``max_steps`` or step collapse), by start
+        and direction, of the same ``model`` (a sweep's): the walk does not depend on
+        ``omega_target`` until it stops, so one from the same start, bit for bit, is
+        replayed from here, its crossings of the new target checked as on a fresh walk.
 
     Returns
     -------
@@ -258,7 +290,17 @@ def jump_to_branch(
     steps = 0
     folds = 0
     unstable = None
-    for p in tracer.trace(z_prev, omega_prev, direction, 0.01, 1e-8, 0.2, max_steps, grow_below=4):
+    z_flat = np.asarray(z_prev, dtype=float).reshape(-1)
+    key = (H, float(omega_prev), direction, z_flat.tobytes(), max_steps, max_evaluations)
+    stored = None if walks is None else walks.get(key)
+    if stored is None:
+        points = tracer.trace(z_prev, omega_prev, direction, 0.01, 1e-8, 0.2, max_steps, 4, max_evaluations)
+    else:
+        points = iter(stored[0])
+    record: list | None = [] if walks is not None and stored is None else None
+    for p in points:
+        if record is not None:
+            record.append(p)
         steps += 1
         if prev is not None and np.sign(p.tangent[-1]) != np.sign(prev.tangent[-1]):
             folds += 1
@@ -287,4 +329,10 @@ def jump_to_branch(
         if direction * (p.omega - omega_target) > max_overshoot * span + 0.02 * abs(omega_target):
             break
         prev = p
+    else:  # the walk ended on its own, not on this target's limits
+        if record is not None:
+            walks[key] = (record, tracer.evaluations)
+    evaluations = tracer.evaluations if stored is None else stored[1]
+    if exhausted is not None and max_evaluations is not None and evaluations >= max_evaluations:
+        exhausted.append(True)
     return None, steps, folds, unstable

@@ -69,7 +69,7 @@ def is_stable(model, sol: HarmonicSolution, omega: float) -> bool:
     return bool(np.max(np.abs(mu)) < 1 + STABLE_RTOL)
 
 
-def restart(model, problem, z_prev, omega, H, method, tol, max_iter):
+def restart(model, problem, z_prev, omega, H, method, tol, max_iter, unstable=None):
     """Land on another branch after a fold without arc-length continuation.
 
     Newton is started from the full-contact linear response and from the previous
@@ -99,6 +99,9 @@ def restart(model, problem, z_prev, omega, H, method, tol, max_iter):
         Convergence tolerance of the solver (relative residual).
     max_iter : int
         Iteration limit of the solver per start.
+    unstable : list, optional
+        Receives the converged solutions that are unstable (HarmonicSolution), for a
+        sweep that reports an unstable orbit where no stable one is found.
 
     Returns
     -------
@@ -115,7 +118,11 @@ def restart(model, problem, z_prev, omega, H, method, tol, max_iter):
     best, best_d = None, np.inf
     for guess in guesses:
         cand = solve(problem, guess, method=method, tol=tol, max_iter=max_iter, fallback=False, stall=True)
-        if not cand.converged or not is_stable(model, cand, omega):
+        if not cand.converged:
+            continue
+        if not is_stable(model, cand, omega):
+            if unstable is not None:
+                unstable.append(cand)
             continue
         d = distance(cand, z_prev)
         if d < best_d:

@@ -142,7 +142,13 @@ def sweep(
         tests/test_geared_time_domain.py; see docs/verification.md, "Leaving an unstable
         orbit", for stronger instabilities), or no stable solution found: flag the point
         ``no_stable`` with NaN metrics and its dominant multiplier, and go on from the
-        unstable orbit. False: stay on the branch and flag its points unstable.
+        unstable orbit. False: stay on the branch and flag its points unstable. The
+        arc-length search has a ceiling of corrector evaluations
+        (:data:`nlgrd.nonlinear.arclength.LANDING_EVALUATIONS`); where one cut by it met no
+        crossing and Newton from the previous point fails too, the point reports the
+        nearest unstable orbit of the restarts (``jump="auto"``),
+        and a failed search is not walked again from the same start
+        (:class:`FailedSearches`).
     progress : callable, optional
         ``progress(i, n)`` once after each of the n points of all directions (a second
         pass of ``jump="auto"`` counts its points again from 1).
@@ -174,6 +180,7 @@ def sweep(
         leave_unstable=leave_unstable,
         progress=progress,
     )
+    kw["searches"] = FailedSearches()  # shared by both passes of "auto"
     result, landings = _sweep_pass(model, omegas, H, directions, **kw)
     if jump != "auto" or len({d for d, _ in sweep_orders(omegas, directions)}) < 2:
         return result
@@ -204,6 +211,43 @@ def sweep(
     return result
 
 
+class FailedSearches:
+    """The landing searches of a sweep (:func:`~nlgrd.nonlinear.arclength.jump_to_branch`)
+    that found no stable crossing, so that the same search is not walked again.
+
+    A search is a deterministic function of its start (harmonics, frequency), target and
+    options: one with the same start, bit for bit, and the same target returns the stored
+    result. That is the case in the second pass of ``jump="auto"``, which reaches the
+    same failed search from the same orbit. A search from the same start to another
+    frequency (a run of points without an orbit, each searched from the last converged
+    one) replays the stored walk when that ended on its own (``walks`` of
+    :func:`~nlgrd.nonlinear.arclength.jump_to_branch`): the walk does not depend on the
+    target, and its crossings of the new one are checked as on a fresh walk, so a stable
+    branch at the next frequency is found as before. A search from another start is
+    walked afresh, within :data:`~nlgrd.nonlinear.arclength.LANDING_EVALUATIONS`.
+    """
+
+    def __init__(self):
+        self._done: dict[tuple, list] = {}
+        self._walks: dict[tuple, tuple] = {}
+
+    def jump(self, model, H, z_prev, omega_prev, omega_target, *, exhausted, **options):
+        """:func:`~nlgrd.nonlinear.arclength.jump_to_branch`, or the stored result of the
+        same failed search (``exhausted`` as it was then)."""
+        key = (id(model), H, float(omega_prev), float(omega_target), tuple(sorted(options.items())))
+        z_prev = np.asarray(z_prev, dtype=float)
+        for z0, out, ex in self._done.get(key, ()):
+            if z0.shape == z_prev.shape and np.array_equal(z0, z_prev):
+                exhausted.extend(ex)
+                return out
+        out = jump_to_branch(
+            model, H, z_prev, omega_prev, omega_target, exhausted=exhausted, walks=self._walks, **options
+        )
+        if out[0] is None:
+            self._done.setdefault(key, []).append((z_prev.copy(), out, list(exhausted)))
+        return out
+
+
 def _pool(result: SweepResult, stability: bool) -> dict[float, list]:
     """{frequency: [(direction, harmonics)]} of a sweep's stable response points."""
     ok = result.converged & ~result.no_stable
@@ -232,6 +276,7 @@ def _sweep_pass(
     chain,
     leave_unstable,
     progress,
+    searches,
     pool=None,
 ):
     """One pass of :func:`sweep`; returns (result, landings after folds: (direction, w,
@@ -274,8 +319,10 @@ def _sweep_pass(
                     try_jump = False
             searched = False  # the landing search has already looked for a stable orbit here
             if not sol.converged and try_jump:
-                zj, steps, folds, unstable = jump_to_branch(
-                    model, H, z, last_w, float(w), tol=tol, require_stable=stability
+                restarts: list[HarmonicSolution] = []  # the restarts' unstable orbits
+                exhausted: list[bool] = []
+                zj, steps, folds, unstable = searches.jump(
+                    model, H, z, last_w, float(w), tol=tol, require_stable=stability, exhausted=exhausted
                 )
                 if zj is not None:
                     switched = folds > 0
@@ -292,7 +339,9 @@ def _sweep_pass(
                     )
                     if switched and auto:
                         sol = landing.nearest_landing(sol, z, others())
-                elif auto and (cand := landing.restart(model, problem, z, w, H, method, tol, max_iter)):
+                elif auto and (
+                    cand := landing.restart(model, problem, z, w, H, method, tol, max_iter, unstable=restarts)
+                ):
                     sol, switched = cand, True
                     sol = landing.nearest_landing(sol, z, others())
                 elif unstable is not None:  # no stable orbit found: report the unstable crossing
@@ -302,6 +351,9 @@ def _sweep_pass(
                     switched, searched = folds > 0, auto
                 else:  # Newton from the previous point without giving up early, then hybr
                     sol = solve(problem, z, method=method, tol=tol, max_iter=max_iter, fallback=fallback)
+                    if not sol.converged and exhausted and restarts:  # the ceiling came before a crossing
+                        sol = min(restarts, key=lambda c: landing.distance(c, z))
+                        switched, searched = True, True
             if not sol.converged and auto and pool:  # the branch ended: another direction's orbit
                 cands = others()
                 if cands:
