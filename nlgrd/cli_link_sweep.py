@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 from nlgrd.errors import ModelError
-from nlgrd.io.command_line import Outputs, harmonics_line
+from nlgrd.io.command_line import Outputs, harmonics_line, snap_to_grid
 from nlgrd.nonlinear.link_model import needs_links
 
 __all__ = ["LinkOrbits", "link_quantity", "link_search", "link_sweep_command", "needs_links"]
@@ -104,6 +104,7 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
     frame = res.to_frame()
     frame.insert(1, "shaft_speed [rpm]", frame["base_frequency [Hz]"] * plan.speed_per_base * 60)
     x_col = "shaft_speed [rpm]" if args.rpm is not None else "base_frequency [Hz]"
+    snap_to_grid(frame, x_col, values)  # the speeds as typed, not their round trip through rad/s
     plt = pyplot()
     from nlgrd.plotting.common import axis_label, place_legend
 
@@ -126,6 +127,7 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
     with Outputs() as files:
         files.csv(frame, out)
         for path, table in beside:
+            snap_to_grid(table, x_col, values)
             files.csv(table, path)
         files.figure(fig, png)
         files.commit()

@@ -289,6 +289,8 @@ def _write_sweep(res, quantity, out, png, extra=None, found=None, unit=None, tit
         if found is not None:
             from nlgrd.cli_orbits import draw_branches
 
+            for table in found if unit is not None and unit.grid is not None else ():
+                snap_to_grid(table, unit.column, unit.grid)
             files.csv(found[0], _beside(out, "orbits"))
             files.csv(found[1], _beside(out, "branches"))
             x = "pinion_speed [rpm]" if unit is not None and unit.name == "rpm" else "mesh_frequency [Hz]"

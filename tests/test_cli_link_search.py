@@ -38,7 +38,10 @@ def test_link_search_finds_and_follows_the_rubbing_orbit(tmp_path, capsys):
     touching = force > 0
     np.testing.assert_allclose(force[touching], STIFFNESS * (radius[touching] - CLEARANCE), rtol=1e-9)
     ok = branches["stable"].astype(bool)
-    assert ok.any() and set(branches.loc[ok, "shaft_speed [rpm]"].round(6)) == {5000, 5500, 6000, 6500, 7000}
+    # the speeds as typed (issue 36 item 3), not their round trip through rad/s
+    assert ok.any() and set(branches.loc[ok, "shaft_speed [rpm]"]) == {5000, 5500, 6000, 6500, 7000}
+    sweep = pd.read_csv(out)
+    assert list(sweep["shaft_speed [rpm]"]) == [5000, 5500, 6000, 6500, 7000]
     b_force, b_radius = branches.loc[ok, "rub.force_max [N]"], branches.loc[ok, "rub.displacement_max [m]"]
     assert (b_force > 0).all()
     np.testing.assert_allclose(b_force, STIFFNESS * (b_radius - CLEARANCE), rtol=1e-9)
