@@ -183,7 +183,15 @@ def _periods(r, unit: tuple[float, str]) -> None:
 class LinkOrbits:
     """What :func:`nlgrd.cli_orbits.search_and_follow` writes of a link model's orbits: the
     base frequency, the reference shaft speed and every link's outputs over the orbit's
-    whole period (as :func:`~nlgrd.nonlinear.link_model.link_sweep`'s columns)."""
+    whole period (as :func:`~nlgrd.nonlinear.link_model.link_sweep`'s columns).
+
+    Parameters
+    ----------
+    model : LinkModel
+        The sweep's model.
+    column : str
+        The ``--quantity`` column drawn.
+    """
 
     def __init__(self, model, column: str):
         from nlgrd.nonlinear.link_model import metric_names

@@ -152,7 +152,13 @@ def search_command(model, res, omegas, at, periods, unit) -> tuple[pd.DataFrame,
 
 class GearOrbits:
     """What :func:`search_and_follow` writes of a geared model's orbits: the mesh frequency,
-    the pinion speed and the first mesh's outputs (:data:`ORBIT_COLUMNS`)."""
+    the pinion speed and the first mesh's outputs (:data:`ORBIT_COLUMNS`).
+
+    Parameters
+    ----------
+    pinion_rpm : callable
+        Mesh frequency [rad/s] to pinion speed [rpm] (``GearedModel.pinion_rpm``).
+    """
 
     columns = ORBIT_COLUMNS
 
@@ -180,11 +186,37 @@ class GearOrbits:
 
 def search_and_follow(model_of, omegas, at, periods, H, unit, known, words, view, every=False):
     """Search at each speed, print each orbit, follow the stable ones (``every``: all) that
-    ``known(orbit, omega, branches)`` does not have; the orbits, branches and (label, result).
-    ``view`` (:class:`GearOrbits`, :class:`nlgrd.cli_link_sweep.LinkOrbits`) gives each
-    orbit's and branch's columns. ``every``: the ``--period N`` search, of period-N orbits
-    only (one of a shorter minimal period is dropped: ``model_of`` gives the period-N model
-    alone)."""
+    ``known`` does not have.
+
+    Parameters
+    ----------
+    model_of : callable
+        ``model_of(nu)``: the period-ν reduced model (:func:`~nlgrd.nonlinear.orbit_search.search_orbits`).
+    omegas : ndarray
+        The grid over which orbits are followed [rad/s].
+    at : ndarray
+        Search speeds, in the unit of ``unit``.
+    periods : tuple of int
+        Periods sought [base periods].
+    H : int
+        Harmonics of the base [-].
+    unit : callable
+        Frequency [rad/s] to text in the range's unit; ``unit.omega`` the inverse.
+    known : callable
+        ``known(orbit, omega, followed)``: whether the sweep (or a branch already followed) has it.
+    words : str
+        How a known orbit is described in the printed line.
+    view : GearOrbits or nlgrd.cli_link_sweep.LinkOrbits
+        Each orbit's and branch's columns.
+    every : bool
+        The ``--period N`` search: follow unstable orbits too, period-N orbits only (one of a
+        shorter minimal period is dropped: ``model_of`` gives the period-N model alone).
+
+    Returns
+    -------
+    (DataFrame, DataFrame, list)
+        The orbits found, the followed branches, and (label, result) per branch.
+    """
     from nlgrd.nonlinear.orbit_search import follow_orbit, search_orbits
 
     rows, frames, followed = [], [], []
@@ -264,7 +296,18 @@ def parse_period(text: str) -> str | int:
 
 
 def none_of(period: str) -> str:
-    """What a sweep where no point converged means for ``--period`` (appended to its line)."""
+    """What a sweep where no point converged means for ``--period`` (appended to its line).
+
+    Parameters
+    ----------
+    period : str
+        The ``--period`` option as given.
+
+    Returns
+    -------
+    str
+        The explanation, or "".
+    """
     if str(period).strip() == "2":
         return ": no period-2 orbit in the range (period-2 branches exist only beyond a period doubling)"
     return ""

@@ -225,6 +225,14 @@ class FailedSearches:
     target, and its crossings of the new one are checked as on a fresh walk, so a stable
     branch at the next frequency is found as before. A search from another start is
     walked afresh, within :data:`~nlgrd.nonlinear.arclength.LANDING_EVALUATIONS`.
+
+    Attributes
+    ----------
+    _done : dict
+        Per (model, H, start and target frequency, options): the starts' harmonics and the
+        stored results of failed searches.
+    _walks : dict
+        Per start: the walk that ended on its own, replayed for another target.
     """
 
     def __init__(self):
