@@ -305,6 +305,26 @@ def _reduce(system: RotorSystem, links: tuple, plan: FrequencyPlan, loads: dict,
     return LinkModel(system, links, rec, reduced, max(orders, default=1), period, dict(loads))
 
 
+def with_links(frame: pd.DataFrame, links: pd.DataFrame) -> pd.DataFrame:
+    """A sweep's or curve's table with the link columns in place of the first mesh's
+    metrics, its frequency column named ``base_frequency [Hz]``.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        :meth:`SweepResult.to_frame` of the points.
+    links : pandas.DataFrame
+        One row per point: ``<link>.<quantity>`` columns.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    drop = [c for c in frame.columns if c.startswith(("dte_", "force_", "dslr", "contact_loss", "back_"))]
+    frame = frame.drop(columns=drop).rename(columns={"mesh_frequency [Hz]": "base_frequency [Hz]"})
+    return pd.concat([frame, links], axis=1)
+
+
 @dataclass(frozen=True)
 class LinkSweepResult:
     """A sweep of a link model: the harmonic-balance points and every link's outputs.
@@ -329,10 +349,7 @@ class LinkSweepResult:
         -------
         pandas.DataFrame
         """
-        frame = self.result.to_frame()
-        drop = [c for c in frame.columns if c.startswith(("dte_", "force_", "dslr", "contact_loss", "back_"))]
-        frame = frame.drop(columns=drop).rename(columns={"mesh_frequency [Hz]": "base_frequency [Hz]"})
-        return pd.concat([frame, self.links], axis=1)
+        return with_links(self.result.to_frame(), self.links)
 
     def jumps(self, quantities: str | Sequence[str] | None = None, rtol: float = 0.1, ratio: float = 3.0):
         """Jumps of each sweep direction in the links' outputs (:meth:`SweepResult.jumps`
@@ -530,10 +547,7 @@ class LinkContinuationResult:
         -------
         pandas.DataFrame
         """
-        frame = self.curve.to_frame()
-        drop = [c for c in frame.columns if c.startswith(("dte_", "force_", "dslr", "contact_loss", "back_"))]
-        frame = frame.drop(columns=drop).rename(columns={"mesh_frequency [Hz]": "base_frequency [Hz]"})
-        return pd.concat([frame, self.links], axis=1)
+        return with_links(self.curve.to_frame(), self.links)
 
 
 def link_continuation(
