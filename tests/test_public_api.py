@@ -3,8 +3,8 @@ and a bearing clearance, and a clearance without a mesh.
 
 Each check is against something the façade does not compute itself: the speed
 conversion against the tooth count of the model file, a continuation curve against
-Newton solves at its own frequencies and a fold against where a sweep without landing
-loses its branch, an orbit search against the sweep's orbit, a time-domain sweep against
+Newton solves at its own frequencies and its fold against the sign of the Jacobian's
+determinant, an orbit search against the sweep's orbit, a time-domain sweep against
 the harmonic balance, and the README's quick start run as written.
 """
 
@@ -58,29 +58,31 @@ def test_continuation_of_a_clearance_model_is_the_newton_solution_and_finds_the_
     clearance model (H 5) is checked two ways. Up to its first turning point every curve
     point is the solution Newton finds from the linear response at the same frequency
     (1e-7 of the orbit: the corrector's and Newton's tolerances are 1e-9 and 1e-10 on the
-    residual). And the turning point lies within the one 1 Hz step where an up sweep
-    without landing (jump "none") loses its branch: the same fold found by another
-    algorithm, to the sweep's grid step."""
+    residual). And the turning point is a fold of the harmonic-balance equations: the
+    determinant of their Jacobian dR/dz (the residual's own, not the tracer's tangent) has
+    one sign on every point before the turn and the other on every point after it (a real
+    eigenvalue crossed zero; the smallest singular value stays above 2e-3 of the largest at
+    every point, so the signs are far from rounding)."""
     c = nlgrd.continuation(clearance_model, hz=(1190.0, 1215.0), H=5, stability=False)
     assert len(c.curve.turning_omegas) >= 1
-    fold = c.curve.turning_omegas[0] / (2 * np.pi)
     first = c.curve.turning_indices[0]
     frame = c.to_frame()
     assert {"base_frequency [Hz]", "stable", "B1.force_max [N]", "mesh0.dslr [-]"} <= set(frame.columns)
     assert frame["B1.force_max [N]"].notna().all()
     reduced = build_link_model(clearance_model).reduced
-    for i in range(first + 1):
+    signs = []
+    for i in range(len(c.omega)):
         problem = reduced.at(float(c.omega[i]), 5)
         z = np.asarray(c.curve.curve.harmonics[i])
-        sol = solve(problem, None)
-        assert sol.converged
-        assert np.max(np.abs(np.asarray(sol.harmonics) - z)) < 1e-7 * np.max(np.abs(z))
-    grid = np.arange(1190.0, 1215.5, 1.0)
-    s = nlgrd.sweep(clearance_model, hz=grid, H=5, directions="up", period=1, stability=False, jump="none")
-    ok = np.asarray(s.result.converged, dtype=bool)
-    last = grid[ok][-1]
-    assert not ok[grid > last].any()
-    assert last <= fold <= last + 1.0
+        _, J, _ = problem.residual_jacobian(z.reshape(-1))
+        sv = np.linalg.svd(J, compute_uv=False)
+        assert sv[-1] > 2e-3 * sv[0]
+        signs.append(np.linalg.slogdet(J)[0])
+        if i <= first:
+            sol = solve(problem, None)
+            assert sol.converged
+            assert np.max(np.abs(np.asarray(sol.harmonics) - z)) < 1e-7 * np.max(np.abs(z))
+    assert len(set(signs[: first + 1])) == 1 and set(signs[first + 1 :]) == {-signs[0]}
 
 
 def test_orbit_search_on_a_clearance_model_finds_the_sweeps_orbit(clearance_model):
@@ -134,16 +136,17 @@ def test_the_readme_quick_start_runs_as_written(tmp_path, monkeypatch):
 
 def test_cli_continuation_of_a_link_model(tmp_path, capsys):
     """``nlgrd sweep --continuation`` was refused for link models. The mesh + clearance
-    model's curve, with every link's outputs, turns where the API's curve does (between
-    the last converged and first lost point of the landing-free sweep above: 1206-1207 Hz),
-    and the down trace from 1215 Hz covers the range."""
+    model's curve, with every link's outputs, turns where the API's curve does (its
+    Jacobian's determinant changes sign between curve points at 1205.2 and 1206.9 Hz: the
+    test above), and the down trace from 1215 Hz covers the range."""
     from nlgrd.cli import main
 
     out = tmp_path / "curve.csv"
     argv = ["sweep", str(CLEARANCE), "--hz", "1190:1215", "--continuation", "--harmonics", "5"]
     assert main([*argv, "--no-stability", "--out", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "turning points at 1206." in text
+    turn = float(re.search(r"turning points at ([0-9.]+)", text).group(1))
+    assert 1205.2 < turn < 1206.9
     import pandas as pd
 
     frame = pd.read_csv(out)
