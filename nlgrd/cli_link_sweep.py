@@ -34,7 +34,7 @@ def link_quantity(text: str | None, model) -> tuple[str, str]:
     (str, str)
         The column ``<link>.<quantity> [unit]`` and its label.
     """
-    from nlgrd.nonlinear.link_model import metric_names
+    from nlgrd.nonlinear.link_results import metric_names
     from nlgrd.nonlinear.links import GearMeshLink
 
     keys = {lk.name: metric_names(lk) for lk in model.links}
@@ -194,7 +194,7 @@ class LinkOrbits:
     """
 
     def __init__(self, model, column: str):
-        from nlgrd.nonlinear.link_model import metric_names
+        from nlgrd.nonlinear.link_results import metric_names
 
         self.model, self.column = model, column
         self.per_base = model.receptance.plan.speed_per_base * 60  # [rpm per Hz of the base]
@@ -238,7 +238,7 @@ class LinkOrbits:
         return f"{self.column} {row[self.column]:.4g}"
 
     def frame(self, branch) -> pd.DataFrame:
-        from nlgrd.nonlinear.link_model import LinkSweepResult
+        from nlgrd.nonlinear.link_results import LinkSweepResult
 
         nu = int(branch.period[0]) if len(branch) else 1
         usable = branch.converged & ~np.asarray(branch.no_stable, dtype=bool)
