@@ -134,8 +134,7 @@ def model(system: RotorSystem, top: float, H: int):
 def _speed_per_base(system: RotorSystem) -> float:
     from nlgrd.nonlinear.frequency_plan import FrequencyPlan
 
-    shaft_orders = [abs(system.shafts[u.shaft].speed_ratio) for u in system.unbalance]
-    return FrequencyPlan.for_system(system, shaft_orders).speed_per_base
+    return FrequencyPlan.of_model(system).speed_per_base
 
 
 def _omegas(system: RotorSystem, rpm, hz, name: str = "rpm") -> NDArray:

@@ -203,8 +203,7 @@ def _check_link_speeds(system, values, in_rpm: bool, option: str, given: str) ->
     if in_rpm:
         speed = top * math.pi / 30
     else:
-        orders = [abs(system.shafts[u.shaft].speed_ratio) for u in system.unbalance]
-        speed = 2 * math.pi * top * FrequencyPlan.for_system(system, orders).speed_per_base
+        speed = 2 * math.pi * top * FrequencyPlan.of_model(system).speed_per_base
     for gp in system.gear_pairs:
         mesh = speed * gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
         check_pitch_line_velocity(gp, mesh, option, given)

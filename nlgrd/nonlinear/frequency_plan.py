@@ -95,6 +95,22 @@ class FrequencyPlan:
         return FrequencyPlan(self.speed_per_base * nu, self.name if nu == 1 else f"{self.name}/{nu}")
 
     @classmethod
+    def of_model(cls, system: RotorSystem) -> FrequencyPlan:
+        """:meth:`for_system` with the system's own unbalances (each at |s| of its shaft), the
+        plan :func:`~nlgrd.nonlinear.link_model.build_link_model` uses by default.
+
+        Parameters
+        ----------
+        system : RotorSystem
+            The model.
+
+        Returns
+        -------
+        FrequencyPlan
+        """
+        return cls.for_system(system, [abs(system.shafts[u.shaft].speed_ratio) for u in system.unbalance])
+
+    @classmethod
     def for_system(cls, system: RotorSystem, shaft_orders: Sequence[float] = ()) -> FrequencyPlan:
         """The longest base making every mesh and every ``shaft_orders`` a harmonic.
 
