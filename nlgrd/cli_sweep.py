@@ -18,7 +18,7 @@ from nlgrd.io.command_line import (
     pyplot,
     snap_to_grid,
 )
-from nlgrd.io.model_checks import check_pitch_line_velocity
+from nlgrd.io.model_checks import check_speed_range
 
 
 class _Unit:
@@ -121,7 +121,7 @@ def cmd_sweep(args) -> int:
                 "--period",
                 f"--period {period} is not implemented yet for models with links (use --search-at)",
             )
-        _check_link_speeds(system, values, args.rpm is not None, option, repr(text))
+        check_speed_range(system, float(max(values)), args.rpm is not None, option, repr(text))
         if args.continuation:
             return _link_continuation(args, system, values, count, out, png)
         return link_sweep_command(
@@ -143,7 +143,7 @@ def cmd_sweep(args) -> int:
         None if args.continuation else values,
     )
     omegas = unit.omega(values)
-    check_pitch_line_velocity(gp, float(omegas.max()), option, repr(text))
+    check_speed_range(system, float(max(values)), args.rpm is not None, option, repr(text))
     pyplot()
     from nlgrd.nonlinear.auto_period import transitions
 
@@ -190,23 +190,6 @@ def cmd_sweep(args) -> int:
     if found is not None:
         print(f"wrote {_beside(out, 'orbits')} and {_beside(out, 'branches')}")
     return status
-
-
-def _check_link_speeds(system, values, in_rpm: bool, option: str, given: str) -> None:
-    """Every gear pair of a link model within the pitch-line limit at the range's top
-    (reference shaft speed from ``--rpm``, or from ``--hz`` through the frequency plan)."""
-    import math
-
-    from nlgrd.nonlinear.frequency_plan import FrequencyPlan
-
-    top = float(max(values))
-    if in_rpm:
-        speed = top * math.pi / 30
-    else:
-        speed = 2 * math.pi * top * FrequencyPlan.of_model(system).speed_per_base
-    for gp in system.gear_pairs:
-        mesh = speed * gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
-        check_pitch_line_velocity(gp, mesh, option, given)
 
 
 def _check_period_options(args, period: int) -> None:

@@ -32,6 +32,7 @@ ROOT = Path(__file__).resolve().parents[1]
 TWO = ROOT / "data" / "models" / "two_shaft.toml"
 KUBO = ROOT / "data" / "case_studies" / "kubo.toml"
 IDLER = ROOT / "data" / "models" / "idler_train.toml"
+TWO_STAGE = ROOT / "data" / "models" / "two_stage.toml"
 NLGRD = [sys.executable, "-m", "nlgrd.cli"]
 
 CLEARANCE = """
@@ -522,6 +523,22 @@ def test_bad_study_file(tmp_path, capsys, monkeypatch, edit, key):
     line = one_line(err)
     assert rc == 2 and line.startswith(f"nlgrd: error: {path}: {key}"), line
     assert not (tmp_path / "s").exists()  # nothing ran
+
+
+def test_study_speeds_read_as_the_base_frequency_of_a_link_model(tmp_path, capsys, monkeypatch):
+    """A study's ``hz`` is the base frequency, as in ``nlgrd sweep --hz``: on two_stage.toml
+    (base = 5 x the input shaft's speed, input pinion 25 teeth) 10 kHz is 120,000 rpm of the
+    input shaft, 628 m/s at its pinion's pitch line (limit 300 m/s at 57,296 rpm). Read as the
+    first pair's mesh frequency (the old reading) it was 24,000 rpm and passed."""
+    monkeypatch.chdir(tmp_path)
+    text = STUDY.replace(f'model = "{KUBO.as_posix()}"', f'model = "{TWO_STAGE.as_posix()}"')
+    text = text.replace("rpm = [6000.0, 12000.0, 7]", "hz = [1000.0, 10000.0, 3]")
+    path = tmp_path / "s.toml"
+    path.write_text(text)
+    rc, _, err = run(capsys, "study", path, "--executor", "serial", "--no-progress")
+    line = one_line(err)
+    assert rc == 2 and line.startswith(f"nlgrd: error: {path}: analysis.hz") and "pitch-line" in line, line
+    assert not (tmp_path / "s").exists()
 
 
 # ----------------------------------------------------------------------- reports, schedulers

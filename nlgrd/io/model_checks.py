@@ -125,6 +125,50 @@ def check_pitch_line_velocity(gear_pair, omega: float, key: str, given: str) -> 
         )
 
 
+def check_speed_range(system: RotorSystem, top: float, in_rpm: bool, key: str, given: str) -> None:
+    """Refuse a speed range whose top moves any gear pair's pitch circle faster than
+    :data:`MAX_PITCH_LINE_VELOCITY`, with the speeds read as every analysis reads them: rpm
+    of the reference shaft, or Hz of the base frequency (the mesh frequency of a single
+    mesh; the frequency plan's base on a link model).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    top : float
+        The range's highest speed [rpm or Hz].
+    in_rpm : bool
+        Whether ``top`` is a shaft speed [rpm] rather than a base frequency [Hz].
+    key : str
+        The option or key of the range, named in the error.
+    given : str
+        The range as the user gave it, quoted in the error.
+
+    Raises
+    ------
+    ModelError
+        When a gear pair's pitch-line velocity exceeds the limit.
+    """
+    from nlgrd.nonlinear.frequency_plan import FrequencyPlan
+    from nlgrd.nonlinear.link_model import needs_links
+
+    pairs = [g for g in system.gear_pairs if hasattr(g, "geometry")]
+    if not pairs:
+        return
+    if not needs_links(system):  # one mesh: its frequency is the base
+        gp = pairs[0]
+        per_speed = gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
+        mesh = top * math.pi / 30 * per_speed if in_rpm else 2 * math.pi * top
+        check_pitch_line_velocity(gp, mesh, key, given)
+        return
+    speed = top * math.pi / 30
+    if not in_rpm:
+        speed = 2 * math.pi * top * FrequencyPlan.of_model(system).speed_per_base
+    for gp in pairs:
+        mesh = speed * gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
+        check_pitch_line_velocity(gp, mesh, key, given)
+
+
 def _check_duplicate_meshes(system: RotorSystem) -> None:
     seen: dict[frozenset, int] = {}
     for i, g in enumerate(system.gear_pairs):

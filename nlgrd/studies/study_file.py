@@ -307,25 +307,12 @@ def _analysis(data: dict, w: _Where) -> Analysis:
 
 
 def _check_speeds(system, analysis: Analysis, w: _Where) -> None:
-    """The sweep's top speed within the model's pitch-line velocity limit."""
-    from nlgrd.io.model_checks import check_pitch_line_velocity
+    """The sweep's top speed within every gear pair's pitch-line velocity limit."""
+    from nlgrd.io.model_checks import check_speed_range
 
-    meshes = [g for g in system.gear_pairs if hasattr(g, "geometry")]
-    if not meshes:
-        return
-    g = meshes[0]
-    if analysis.unit == "rpm":
-        omega = (
-            analysis.stop
-            * math.pi
-            / 30
-            * g.geometry.teeth_pinion
-            * abs(system.shafts[g.pinion_shaft].speed_ratio)
-        )
-    else:
-        omega = 2 * math.pi * analysis.stop
     try:
-        check_pitch_line_velocity(g, omega, f"analysis.{analysis.unit}", f"{analysis.stop:g} {analysis.unit}")
+        key, given = f"analysis.{analysis.unit}", f"{analysis.stop:g} {analysis.unit}"
+        check_speed_range(system, analysis.stop, analysis.unit == "rpm", key, given)
     except ModelError as err:
         raise w.error(err.key, err.message) from None
 
