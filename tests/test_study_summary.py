@@ -158,3 +158,26 @@ def test_a_summary_column_missing_from_the_table_is_an_error(missing):
     bad = SummaryColumns(**{**cols.__dict__, missing: ["nope [-]"]})
     with pytest.raises(KeyError, match="nope"):
         summarise(frame, [], "x [Hz]", 1.0, bad)
+
+
+def test_a_study_asks_every_model_for_period_auto(tmp_path, monkeypatch):
+    """The same study file answers the same question on both paths (issue 33: the link
+    path's sweep defaulted to period 1, the single mesh's to "auto"): the link model's
+    sweep is asked for ``period="auto"``, geared_sweep's own default."""
+    import inspect
+
+    import nlgrd.nonlinear.link_model as link_model
+    from nlgrd.nonlinear.geared import geared_sweep
+
+    asked = {}
+    real = link_model.link_sweep
+
+    def spy(*args, **kwargs):
+        asked.update(kwargs)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(link_model, "link_sweep", spy)
+    model_file = tmp_path / "two_shaft_clearance.toml"
+    model_file.write_text(TWO_SHAFT.read_text() + CLEARANCE)
+    one_task(tmp_path, model_file)
+    assert asked["period"] == inspect.signature(geared_sweep).parameters["period"].default == "auto"

@@ -201,8 +201,13 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
 
         model = build_link_model(system)
         per_rad = 30 / math.pi * model.receptance.plan.speed_per_base if rpm else 1 / (2 * math.pi)
-        res = link_sweep(
-            model, values / per_rad, H=analysis["harmonics"], rtol=analysis["tolerance"], **options
+        res = link_sweep(  # period "auto", as geared_sweep's default: one question of every model
+            model,
+            values / per_rad,
+            H=analysis["harmonics"],
+            rtol=analysis["tolerance"],
+            period="auto",
+            **options,
         )
         frame = res.to_frame()
         x_col = "shaft_speed [rpm]" if rpm else "base_frequency [Hz]"
