@@ -15,7 +15,14 @@ from nlgrd.errors import ModelError
 from nlgrd.io.command_line import Outputs, harmonics_line, snap_to_grid
 from nlgrd.nonlinear.link_model import needs_links
 
-__all__ = ["LinkOrbits", "link_quantity", "link_search", "link_sweep_command", "needs_links"]
+__all__ = [
+    "LinkOrbits",
+    "link_period_response",
+    "link_quantity",
+    "link_search",
+    "link_sweep_command",
+    "needs_links",
+]
 
 
 def link_quantity(text: str | None, model) -> tuple[str, str]:
@@ -91,15 +98,30 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
     else:
         omegas = 2 * math.pi * np.asarray(values, dtype=float)
     column, label = link_quantity(args.quantity, model)
-    res = link_sweep(
-        model,
-        omegas,
-        H=args.harmonics,
-        directions=args.direction,
-        stability=not args.no_stability,
-        period=parse_period(args.period),
-        progress=ProgressBar("sweep"),
-    )
+    period, found = parse_period(args.period), None
+    if period != "auto" and period >= 3:  # searched, followed and merged (search: its speeds)
+        res, found = link_period_response(
+            model, omegas, search[0], period, args.harmonics, args.direction, unit_of(plan), column
+        )
+        if res is None:
+            where = ", ".join(f"{v:g}" for v in search[0]) + f" {unit_of(plan).name}"
+            print(
+                f"nlgrd: error: no period-{period} orbit found at {where}; nothing written: try other "
+                "--search-at speeds",
+                file=sys.stderr,
+            )
+            return 1
+        search = None  # the period-N orbits are the response
+    else:
+        res = link_sweep(
+            model,
+            omegas,
+            H=args.harmonics,
+            directions=args.direction,
+            stability=not args.no_stability,
+            period=period,
+            progress=ProgressBar("sweep"),
+        )
     H = res.result.H  # of the base frequency, whatever the period of the points (as the CSV's H)
     frame = res.to_frame()
     frame.insert(1, "shaft_speed [rpm]", frame["base_frequency [Hz]"] * plan.speed_per_base * 60)
@@ -114,11 +136,11 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
     ax.set_xlabel(axis_label(x_col))
     ax.set_ylabel(axis_label(column))
     ax.set_title(f"{(system.name or 'model')[:60]}\nbase frequency: {plan.name}, H = {H}", fontsize=9)
-    found = None
     if search is not None:
+        found = link_search(model, res, omegas, *search, unit_of(plan), column)
+    if found is not None:
         from nlgrd.cli_orbits import draw_branches
 
-        found = link_search(model, res, omegas, *search, unit_of(plan), column)
         draw_branches(ax, found[1], x_col, column.split(" [")[0])
     place_legend(ax, fontsize=7)
     fig.tight_layout()
@@ -237,7 +259,9 @@ class LinkOrbits:
     def text(self, row: dict) -> str:
         return f"{self.column} {row[self.column]:.4g}"
 
-    def frame(self, branch) -> pd.DataFrame:
+    def result(self, branch):
+        """``branch`` (one period) with every link's outputs where it is the response: a
+        :class:`~nlgrd.nonlinear.link_results.LinkSweepResult`."""
         from nlgrd.nonlinear.link_results import LinkSweepResult
 
         nu = int(branch.period[0]) if len(branch) else 1
@@ -247,9 +271,23 @@ class LinkOrbits:
             self.values(branch.harmonics[i], float(branch.omega[i]), nu) if usable[i] else blank
             for i in range(len(branch))
         ]
-        f = LinkSweepResult(branch, pd.DataFrame(rows)).to_frame()
+        return LinkSweepResult(branch, pd.DataFrame(rows, columns=self.outputs))
+
+    def frame(self, branch) -> pd.DataFrame:
+        f = self.result(branch).to_frame()
         f.insert(0, "shaft_speed [rpm]", f["base_frequency [Hz]"] * self.per_base)
         return f
+
+    def model_of(self, H: int, top: float):
+        """``model_of(nu)`` for :func:`nlgrd.cli_orbits.search_and_follow`: the period-ν
+        reduced model, its basis serving H harmonics of the base up to ``top`` [rad/s]."""
+
+        def model_of(nu: int):
+            m = self.period(nu)
+            m.receptance.prepare(H * top)  # a modal basis (large models) serving νH harmonics of ω/ν
+            return m.reduced
+
+        return model_of
 
 
 def link_search(model, res, omegas, at, periods, unit, column: str):
@@ -283,12 +321,7 @@ def link_search(model, res, omegas, at, periods, unit, column: str):
 
     r, view = res.result, LinkOrbits(model, column)
     H = r.H
-    top = float(np.max(omegas))
-
-    def model_of(nu: int):
-        m = view.period(nu)
-        m.receptance.prepare(H * top)  # a modal basis (large models) serving νH harmonics of ω/ν
-        return m.reduced
+    model_of = view.model_of(H, float(np.max(omegas)))
 
     def on_sweep(o, w: float, branches) -> bool:
         here = np.nonzero(
@@ -307,3 +340,66 @@ def link_search(model, res, omegas, at, periods, unit, column: str):
     if orbits.empty:
         print("orbit search: nothing converged at the speeds given")
     return orbits, branches
+
+
+def link_period_response(model, omegas, at, nu: int, H: int | None, directions: str, unit, column: str):
+    """``--period N`` (N >= 3) on a link model: period-N orbits searched at ``at``, each new
+    one followed over the grid, the branches merged into one response per grid point and
+    direction (:func:`nlgrd.cli_orbits.merge_branches`), its harmonic error estimated at
+    the next rung, as :func:`nlgrd.cli_orbits.period_search` does for one mesh.
+
+    Parameters
+    ----------
+    model : LinkModel
+        The sweep's model.
+    omegas : ndarray
+        The grid's base frequencies [rad/s].
+    at : ndarray
+        Search speeds, in the unit of ``unit``.
+    nu : int
+        The period sought [base periods].
+    H : int or None
+        Harmonics of the base (ν H of ω/ν); None: :data:`nlgrd.cli_orbits.PERIOD_HARMONICS`.
+    directions : {"both", "up", "down"}
+        Sweep directions of the response.
+    unit : callable
+        Base frequency [rad/s] to text in the range's unit; ``unit.omega`` the inverse.
+    column : str
+        The ``--quantity`` column, printed for each orbit.
+
+    Returns
+    -------
+    (LinkSweepResult or None, (DataFrame, DataFrame))
+        The response (None when no period-ν orbit was found), the orbits found and the
+        followed branches.
+    """
+    import dataclasses as dc
+
+    from nlgrd.cli_orbits import PERIOD_HARMONICS, merge_branches, on_followed_branch, search_and_follow
+    from nlgrd.nonlinear.harmonic_convergence import check_harmonics, next_harmonics
+    from nlgrd.nonlinear.orbit_search import N_STARTS
+
+    H = H or PERIOD_HARMONICS
+    view, top = LinkOrbits(model, column), float(np.max(omegas))
+    where = ", ".join(f"{v:g}" for v in at) + f" {unit.name}"
+    print(f"period {nu}: searching at {where} ({N_STARTS} starts each, H = {H})")
+    orbits, frames, followed = search_and_follow(
+        view.model_of(H, top),
+        omegas,
+        at,
+        (nu,),
+        H,
+        unit,
+        on_followed_branch(nu),
+        "on a branch already followed",
+        view,
+        every=True,
+    )
+    if not followed:
+        return None, (orbits, frames)
+    res = merge_branches([b for _, b in followed], omegas, directions)
+    H_check = next_harmonics(H)
+    on_base = dc.replace(res, omega=res.omega / nu)  # the frequencies the period model takes
+    check = check_harmonics(view.model_of(H_check, top)(nu), on_base, nu * H_check, jumps=False)
+    res = dc.replace(res, harmonic_error=check.error, H_check=H_check)
+    return view.result(res), (orbits, frames)

@@ -332,6 +332,33 @@ def default_search(values: np.ndarray, count: int = DEFAULT_SEARCH_POINTS) -> np
     return grid[np.unique(np.round(np.linspace(0, grid.size - 1, min(count, grid.size))).astype(int))]
 
 
+def on_followed_branch(nu: int):
+    """The ``known`` test of a ``--period N`` search: an orbit is known when a branch
+    already followed has the same motion at its speed (a shift by whole base periods is
+    the same orbit).
+
+    Parameters
+    ----------
+    nu : int
+        The period sought [base periods].
+
+    Returns
+    -------
+    callable
+        ``known(orbit, omega, followed)`` for :func:`search_and_follow`.
+    """
+    from nlgrd.nonlinear.orbit_search import same_motion
+
+    def on_branch(o, w: float, followed) -> bool:
+        return any(
+            same_motion(b.harmonics[i], o.harmonics, nu)
+            for _, b in followed
+            for i in np.nonzero(np.isclose(b.omega, w, rtol=1e-12) & b.converged)[0]
+        )
+
+    return on_branch
+
+
 def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
     """``--period N``: search at ``at`` for period-ν orbits, follow each new one over the grid
     and merge the branches into one response per grid point and direction (module notes).
@@ -362,14 +389,6 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
     from nlgrd.nonlinear.bearing_loads import bearing_response
     from nlgrd.nonlinear.geared import GearedSweepResult, build_geared_model
     from nlgrd.nonlinear.harmonic_convergence import check_harmonics, next_harmonics
-    from nlgrd.nonlinear.orbit_search import same_motion
-
-    def on_branch(o, w: float, followed) -> bool:
-        return any(
-            same_motion(b.harmonics[i], o.harmonics, nu)
-            for _, b in followed
-            for i in np.nonzero(np.isclose(b.omega, w, rtol=1e-12) & b.converged)[0]
-        )
 
     orbits, frames, followed = search_and_follow(
         lambda _: model.reduced,
@@ -378,7 +397,7 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
         (nu,),
         H,
         unit,
-        on_branch,
+        on_followed_branch(nu),
         "on a branch already followed",
         GearOrbits(model.pinion_rpm),
         every=True,

@@ -116,11 +116,6 @@ def cmd_sweep(args) -> int:
     if needs_links(system):
         if not system.gear_pairs and not system.bearing_clearances:
             raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
-        if period != "auto" and period >= 3:
-            raise ModelError(
-                "--period",
-                f"--period {period} is not implemented yet for models with links (use --search-at)",
-            )
         check_speed_range(system, float(max(values)), args.rpm is not None, option, repr(text))
         if args.continuation:
             return _link_continuation(args, system, values, count, out, png)

@@ -65,16 +65,9 @@ REFUSALS = {
     ("models/single_shaft.toml", "*"): "the model has no gear pair and no clearance",
 }
 
-#: (model, option) -> why the refusal is only the code path's (xfail, strict).
-PATH_ONLY = {
-    (model, "period 3"): "--period N >= 3 not implemented yet for models with links"
-    for model in (
-        "models/idler_train.toml",
-        "models/rub_rotor.toml",
-        "models/two_shaft_clearance.toml",
-        "models/two_stage.toml",
-    )
-}
+#: (model, option) -> why the refusal is only the code path's (xfail, strict). None left:
+#: ``--period N >= 3`` on link models came last (tests/test_cli_period_n.py).
+PATH_ONLY: dict[tuple[str, str], str] = {}
 
 
 #: option -> the one line of exit 1 when the range holds no orbit of that period (a

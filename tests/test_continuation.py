@@ -56,6 +56,9 @@ def test_unstable_branch_between_stable_branches_and_folds_at_sweep_jumps():
     frame = c.to_frame()
     assert "arclength [-]" in frame and str(frame["stable"].dtype) == "boolean"
     assert frame["stable"].notna().all()  # stability computed at every point
+    # an unstable orbit is never written as "periodic" (issue 33): its response says unstable
+    assert set(frame.loc[~frame["stable"], "response"]) == {"unstable periodic"}
+    assert set(frame.loc[frame["stable"], "response"]) == {"periodic"}
 
 
 def _torsional_chain(n_motor_springs=1):

@@ -427,6 +427,12 @@ class ReducedModel:
     metrics : PointMetrics
         What a sweep writes per point in ``SweepResult.metrics``
         (:class:`~nlgrd.nonlinear.metrics.PointMetrics`; NaN by default).
+    output_scales : ndarray, optional
+        Each output's physical scale in its unit (a clearance's displacement: the
+        clearance), 0 where it has none: the H estimate measures a change against at least
+        :data:`~nlgrd.nonlinear.harmonic_convergence.FLOOR` times it, so that a journal
+        resting on its bearing, nanometres from the centre of a 1 mm clearance, does not
+        decide H. None: zeros.
     """
 
     kappa: Callable[[float, int], ArrayLike]
@@ -441,6 +447,7 @@ class ReducedModel:
     outputs: Callable[[NDArray, float], NDArray] = field(kw_only=True)
     branch_signature: Callable[[NDArray, float], NDArray] = field(kw_only=True)
     metrics: PointMetrics = field(default_factory=PointMetrics, kw_only=True)
+    output_scales: NDArray | None = field(default=None, kw_only=True)
 
     def __post_init__(self):
         object.__setattr__(self, "nonlinearities", tuple(self.nonlinearities))

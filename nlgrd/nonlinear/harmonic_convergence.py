@@ -241,6 +241,8 @@ def check_harmonics(
     # never touches) is measured against its values at H'; zero at both, it carries nothing
     top = np.max(np.where(np.isnan(fine_values), 0.0, np.abs(fine_values)), axis=0, initial=0.0)
     scale = np.maximum(np.where(np.asarray(scale) > 0, scale, FLOOR * top), np.finfo(float).tiny)
+    if model.output_scales is not None and values.shape[1]:  # a physical scale: the clearance
+        scale = np.maximum(scale, FLOOR * np.asarray(model.output_scales, dtype=float))
     for i in np.nonzero(~np.all(np.isnan(fine_values), axis=1))[0]:
         v2 = fine_values[i]
         error[i] = float(np.max(np.abs(v2 - values[i]) / np.maximum(np.abs(v2), scale)))

@@ -305,6 +305,13 @@ def _reduce(system: RotorSystem, links: tuple, plan: FrequencyPlan, loads: dict,
         outputs=outputs,
         branch_signature=branch_signature,
         metrics=PointMetrics(first_mesh),
+        output_scales=np.array(
+            [
+                getattr(lk, "output_scales", {}).get(q, 0.0)
+                for lk, qs in zip(links, picks, strict=True)
+                for q in qs
+            ]
+        ),
     )
     orders = [lk.order for lk in links if isinstance(lk, GearMeshLink)] + [u[-1] for u in unb]
     return LinkModel(system, links, rec, reduced, max(orders, default=1), period, dict(loads))

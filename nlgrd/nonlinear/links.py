@@ -157,6 +157,12 @@ class BearingClearance:
     converged_outputs = ("force_max [N]", "displacement_max [m]")
     contact_outputs = ("contact_fraction [-]",)
 
+    @property
+    def output_scales(self) -> dict[str, float]:
+        """The physical scale of an output the H estimate compares: the displacement's is
+        the clearance."""
+        return {"displacement_max [m]": self.clearance}
+
     def projection(self, system: RotorSystem) -> NDArray:
         """P (n_dofs, 2): the journal's (u_y, u_z) less the housing's.
 

@@ -558,9 +558,14 @@ class ContinuationResult:
         return self.turning_omegas
 
     def to_frame(self):
-        """Tidy table (see :meth:`SweepResult.to_frame`) with the arc length."""
+        """Tidy table (see :meth:`SweepResult.to_frame`) with the arc length; an orbit on the
+        curve that is known unstable says so in ``response`` ("unstable periodic",
+        "unstable period 2"): a continuation keeps its unstable orbits, but none is the
+        response there."""
         df = self.curve.to_frame()
         df.insert(1, "arclength [-]", self.arclength)
+        unstable = df["stable"].eq(False).fillna(False).to_numpy(dtype=bool)
+        df.loc[unstable, "response"] = "unstable " + df.loc[unstable, "response"]
         return df
 
     def plot(self, quantity: str = "dte_rms", ax=None):
