@@ -181,3 +181,28 @@ def test_a_study_asks_every_model_for_period_auto(tmp_path, monkeypatch):
     model_file.write_text(TWO_SHAFT.read_text() + CLEARANCE)
     one_task(tmp_path, model_file)
     assert asked["period"] == inspect.signature(geared_sweep).parameters["period"].default == "auto"
+
+
+def test_a_period_two_answer_is_not_counted_as_no_stable_response():
+    """``no_stable_points`` counts converged points without a stable periodic orbit of any
+    period: a period-2 answer is a stable response (it was counted as none), a
+    quasi-periodic or "no stable response" point is not, an unconverged point is a failure."""
+    import pandas as pd
+
+    from nlgrd.studies.study_tasks import SummaryColumns, summarise
+
+    frame = pd.DataFrame(
+        {
+            "mesh_frequency [Hz]": [1.0, 2.0, 3.0, 4.0, 5.0],
+            "direction": ["up"] * 5,
+            "converged": [True, True, True, True, False],
+            "response": pd.array(
+                ["periodic", "period 2", "quasi-periodic", "no stable response", pd.NA], dtype="string"
+            ),
+            "H": [9, 9, 9, 9, pd.NA],
+            "dslr [-]": [1.0, 1.2, np.nan, np.nan, np.nan],
+        }
+    )
+    columns = SummaryColumns(dslr=["dslr [-]"], dte_rms=[], mesh_force=[], bearing_force=[])
+    row = summarise(frame, [], "mesh_frequency [Hz]", 1.0, columns)
+    assert row["no_stable_points"] == 2 and row["failed_points"] == 1

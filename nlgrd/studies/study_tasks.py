@@ -299,7 +299,9 @@ def summarise(
     up = main.get("up", (0, math.nan))[1]
     down = main.get("down", (0, math.nan))[1]
     converged = frame["converged"].astype(bool)
-    no_stable = frame["response"].astype("string").fillna("").ne("periodic") & converged
+    # a stable periodic orbit of any period answers; anything else has none
+    periodic = frame["response"].astype("string").fillna("").str.fullmatch(r"periodic|period \d+")
+    no_stable = ~periodic.astype(bool) & converged
     return {
         "dslr_peak [-]": _peak(frame, dslr_cols),
         "dte_rms_peak [um]": _peak(frame, dte_cols, [f for _, f in columns.dte_rms]),
