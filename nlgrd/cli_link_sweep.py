@@ -41,10 +41,13 @@ def link_quantity(text: str | None, model) -> tuple[str, str]:
     (str, str)
         The column ``<link>.<quantity> [unit]`` and its label.
     """
-    from nlgrd.nonlinear.link_results import metric_names
+    from nlgrd.nonlinear.link_results import output_names
     from nlgrd.nonlinear.links import GearMeshLink
 
-    keys = {lk.name: metric_names(lk) for lk in model.links}
+    keys: dict[str, list[str]] = {}  # every link's and linear bearing's outputs, by name
+    for column in output_names(model):
+        name, _, q = column.partition(".")
+        keys.setdefault(name, []).append(q)
     if text is None:  # the default: a mesh's DSLR, else the first link's largest force
         has_dslr = any(isinstance(lk, GearMeshLink) for lk in model.links)
         text = "dslr" if has_dslr else f"{model.links[0].name}.force_max"
@@ -216,11 +219,11 @@ class LinkOrbits:
     """
 
     def __init__(self, model, column: str):
-        from nlgrd.nonlinear.link_results import metric_names
+        from nlgrd.nonlinear.link_results import output_names
 
         self.model, self.column = model, column
         self.per_base = model.receptance.plan.speed_per_base * 60  # [rpm per Hz of the base]
-        self.outputs = [f"{lk.name}.{k}" for lk in model.links for k in metric_names(lk)]
+        self.outputs = output_names(model)
         self.columns = (
             "search at",
             "base_frequency [Hz]",
@@ -241,12 +244,11 @@ class LinkOrbits:
         return period_model(self.model, nu)
 
     def values(self, harmonics, omega: float, nu: int) -> dict:
-        """Every link's outputs of an orbit of ν base periods at the base frequency ω [rad/s]."""
-        links = self.period(nu).links
-        out = {}
-        for link, sl in zip(links, self.model.receptance.slices, strict=True):
-            out.update({f"{link.name}.{k}": v for k, v in link.metrics(harmonics[sl], omega / nu).items()})
-        return out
+        """Every link's and bearing's outputs of an orbit of ν base periods at the base
+        frequency ω [rad/s]."""
+        from nlgrd.nonlinear.link_results import point_outputs
+
+        return point_outputs(self.period(nu), harmonics, omega / nu)
 
     def row(self, o) -> dict:
         hz = o.omega / (2 * np.pi)

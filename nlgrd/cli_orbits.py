@@ -386,7 +386,7 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
         The response (None when no period-ν orbit was found), the orbits found and the
         followed branches (as :func:`search_command`'s).
     """
-    from nlgrd.nonlinear.bearing_loads import bearing_response
+    from nlgrd.nonlinear.bearing_loads import bearing_names, bearing_response
     from nlgrd.nonlinear.geared import GearedSweepResult, build_geared_model
     from nlgrd.nonlinear.harmonic_convergence import check_harmonics, next_harmonics
 
@@ -415,9 +415,7 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
     )
     check = check_harmonics(fine.reduced, on_base, nu * H_check, jumps=False)
     res = dc.replace(res, harmonic_error=check.error, H_check=H_check)  # of ω, as H
-    names = [
-        b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(model.system.bearings)
-    ]
+    names = bearing_names(model.system)
     out = GearedSweepResult(res, bearing_response(model, on_base), model.pinion_rpm(res.omega), names, H)
     return out, orbits, frames
 

@@ -34,6 +34,7 @@ from functools import cache
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from nlgrd.errors import ModelError
@@ -241,6 +242,49 @@ def test_a_tabulated_bearing_in_place_of_a_linear_one_builds_on_both_paths():
     w = 2 * np.pi * 3600.0
     kl = _flat(lk.reduced.kappa(w, H))
     assert _rel(g.reduced.kappa(w, H), kl, np.max(np.abs(kl[1:]))) <= REDUCTION_RTOL
+
+
+#: Points of the bearing-output check, away from the gear-pair mode (a coarse sweep through
+#: two_shaft's 3662 Hz mode fails to converge at 3600 Hz on both paths, and Newton from the
+#: linear solution at kubo's 4500 Hz).
+BEARING_POINTS_HZ = {"two_shaft": (1500.0, 2500.0, 5200.0), "kubo": (2000.0, 3000.0, 3400.0)}
+#: The bearing columns of the two tables: single path (unit, factor to SI), link path.
+BEARING_COLUMNS = {
+    "displacement_max": ("[um]", 1e-6, "[m]"),
+    "displacement_rms": ("[um]", 1e-6, "[m]"),
+    "force_mean": ("[N]", 1.0, "[N]"),
+    "force_rms": ("[N]", 1.0, "[N]"),
+    "force_max": ("[N]", 1.0, "[N]"),
+}
+
+
+@pytest.mark.parametrize(
+    ("name", "variant"), [*(("two_shaft", v) for v in VARIANTS), ("kubo", "loss"), ("kubo", "tabulated")]
+)
+def test_link_sweep_bearing_outputs_equal_the_single_path(name, variant):
+    """Every linear bearing's force and displacement columns of a link sweep (issue 33:
+    linear bearings are outputs on every model; ``bearing_loads.link_bearing_outputs``)
+    against the single path's ``<name> <quantity>`` columns at three points, H = 5,
+    period 1: each quantity to REDUCTION_RTOL of its largest over bearings and points (both
+    sweeps solve to a relative residual of 1e-10). Kubo's base and cross variants are left
+    to the recovery test above (the link path's pole-residue recovery: xfail, 3.8e-7 here)."""
+    s, lk = system(name, variant), None
+    single, link = [], []
+    for w in 2 * np.pi * np.array(BEARING_POINTS_HZ[name]):  # each from its linear solution
+        single.append(geared_sweep(s, omegas=[w], H=H, directions="up", period=1, stability=False).to_frame())
+        lk = lk or build_link_model(s)
+        link.append(link_sweep(lk, [w], H=H, directions="up", period=1, stability=False).to_frame())
+    single, link = pd.concat(single, ignore_index=True), pd.concat(link, ignore_index=True)
+    assert single["converged"].all() and link["converged"].all()
+    names = [b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(s.bearings)]
+    worst = 0.0
+    for q, (unit, factor, si) in BEARING_COLUMNS.items():
+        a = np.array([single[f"{n} {q} {unit}"].to_numpy() * factor for n in names])
+        b = np.array([link[f"{n}.{q} {si}"].to_numpy() for n in names])
+        assert np.isfinite(a).all() and np.isfinite(b).all() and np.max(np.abs(a)) > 0
+        worst = max(worst, _rel(a, b, np.max(np.abs(a))))
+    print(f"{name} {variant}: bearing outputs {worst:.1e}")
+    assert worst <= REDUCTION_RTOL
 
 
 # ----------------------------------------------------------------------------- Floquet

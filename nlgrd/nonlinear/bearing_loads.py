@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from nlgrd.nonlinear.harmonics import real_to_complex
+from nlgrd.nonlinear.harmonics import complex_to_real, real_to_complex
 from nlgrd.nonlinear.results import SweepResult
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -17,6 +17,16 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 RECOVERY_RTOL = 1e-12
+
+#: Each linear bearing's outputs on a link model (:func:`link_bearing_outputs`), radial
+#: magnitudes as :class:`BearingResponse`'s.
+BEARING_OUTPUTS = (
+    "displacement_max [m]",
+    "displacement_rms [m]",
+    "force_mean [N]",
+    "force_rms [N]",
+    "force_max [N]",
+)
 
 
 @dataclass(frozen=True)
@@ -72,6 +82,12 @@ def _radial_maxima(X: NDArray) -> NDArray:
     return np.maximum(peak, y1)
 
 
+def _radial_rms(X: NDArray) -> NDArray:
+    """RMS over a period of the alternating part of |(x_y, x_z)| from complex harmonics
+    X (..., H+1, 2 n_b): sqrt(Σ_k≥1 (|X_y,k|² + |X_z,k|²) / 2)."""
+    return np.sqrt(np.sum(np.abs(X[..., 1:, 0::2]) ** 2 + np.abs(X[..., 1:, 1::2]) ** 2, axis=-2) / 2)
+
+
 def bearing_harmonics(model: GearedModel, omega: float, harmonics: NDArray) -> tuple[NDArray, NDArray]:
     """Complex harmonics of every bearing's displacement and force at one solved point.
 
@@ -104,14 +120,124 @@ def bearing_harmonics(model: GearedModel, omega: float, harmonics: NDArray) -> t
     F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
     kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, -1)
     Q = mr.recover(w, Y, F - kap * Y, F)
-    speed = mr.speed(w)
-    k = np.arange(H + 1)
+    return Q, bearing_forces(system, Q, w, mr.speed(w))
+
+
+def bearing_forces(system, Q: NDArray, omega: float, speed: float) -> NDArray:
+    """Harmonics of the (y, z) force of each bearing on its node from its node's
+    displacement harmonics: -(K_b + i k ω C_b) q_k at the bearing's own shaft speed.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model (its bearings, in order).
+    Q : ndarray (H+1, 2 n_bearings), complex
+        Harmonics of each bearing node's (y, z) displacement [m], on the base ``omega``.
+    omega : float
+        The base frequency of the harmonics [rad/s].
+    speed : float
+        The reference shaft's speed [rad/s] (speed-dependent bearings).
+
+    Returns
+    -------
+    ndarray (H+1, 2 n_bearings), complex
+        [N].
+    """
+    k = np.arange(Q.shape[0])
     Fb = np.empty_like(Q)
     for j, b in enumerate(system.bearings):
         s = system.shafts[b.shaft].speed_ratio * speed
         q = Q[:, 2 * j : 2 * j + 2]
-        Fb[:, 2 * j : 2 * j + 2] = -(q @ b.stiffness(s).T + (1j * k * w)[:, None] * (q @ b.damping(s).T))
-    return Q, Fb
+        Fb[:, 2 * j : 2 * j + 2] = -(q @ b.stiffness(s).T + (1j * k * omega)[:, None] * (q @ b.damping(s).T))
+    return Fb
+
+
+def bearing_node_dofs(system) -> NDArray:
+    """The (u_y, u_z) DOFs of each bearing's node, bearing by bearing.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+
+    Returns
+    -------
+    ndarray of int (2 n_bearings,)
+    """
+    dofs = []
+    for b in system.bearings:
+        d = system.dofs.node_dofs(b.shaft, b.node)
+        dofs += [d[1], d[2]]
+    return np.array(dofs, dtype=int)
+
+
+def bearing_names(system) -> list[str]:
+    """One name per bearing: its own, or its shaft and node.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+
+    Returns
+    -------
+    list of str
+    """
+    return [b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(system.bearings)]
+
+
+def link_bearing_outputs(model, harmonics: NDArray, omega: float) -> dict[str, float]:
+    """Every linear bearing's outputs at one solved point of a link model, named
+    ``<bearing>.<quantity> [unit]`` like a link's: the bearing nodes' displacements
+    recovered from the link coordinates and their forces G = F - κ Y (the balance the
+    solver met; :meth:`~nlgrd.nonlinear.link_reduction.LinkReceptance.recover`), then
+    -(K_b + i k ω C_b) q_k.
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.link_model.LinkModel
+        The model solved (a period-ν model for a period-ν point).
+    harmonics : ndarray (n_coords, 2H+1)
+        Real harmonics of the link coordinates on the model's base [m].
+    omega : float
+        The frequency the model's receptances take [rad/s].
+
+    Returns
+    -------
+    dict
+        ``<bearing>.displacement_max [m]``, ``.displacement_rms [m]``, ``.force_mean [N]``,
+        ``.force_rms [N]``, ``.force_max [N]`` per bearing (radial magnitudes, as
+        :class:`BearingResponse`).
+    """
+    system, rec = model.system, model.receptance
+    if not system.bearings:
+        return {}
+    z = np.asarray(harmonics, dtype=float).reshape(rec.n_coords, -1)
+    H = (z.shape[1] - 1) // 2
+    w = float(omega)
+    Y = real_to_complex(z).T  # (H+1, d)
+    F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
+    kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, Y.shape[1], Y.shape[1])
+    G = F - np.einsum("kij,kj->ki", kap, Y)
+    q = rec.recover(w, H, z, complex_to_real(G.T), bearing_node_dofs(system))
+    Q = real_to_complex(q).T  # (H+1, 2 n_b)
+    Fb = bearing_forces(system, Q, w, rec.plan.speed(w))
+    stats = dict(
+        zip(
+            BEARING_OUTPUTS,
+            (
+                _radial_maxima(Q[None])[0],
+                _radial_rms(Q),
+                np.hypot(Fb[0, 0::2].real, Fb[0, 1::2].real),
+                _radial_rms(Fb),
+                _radial_maxima(Fb[None])[0],
+            ),
+            strict=True,
+        )
+    )
+    return {
+        f"{name}.{q}": float(v[j]) for j, name in enumerate(bearing_names(system)) for q, v in stats.items()
+    }
 
 
 def bearing_response(model: GearedModel, result: SweepResult) -> BearingResponse:
@@ -146,13 +272,9 @@ def bearing_response(model: GearedModel, result: SweepResult) -> BearingResponse
         Qs[row], Fs[row] = bearing_harmonics(model, float(result.omega[i]), result.harmonics[i])
     rows = np.array(pts)
     out["displacement_mean"][rows] = np.hypot(Qs[:, 0, 0::2].real, Qs[:, 0, 1::2].real)
-    out["displacement_rms"][rows] = np.sqrt(
-        np.sum(np.abs(Qs[:, 1:, 0::2]) ** 2 + np.abs(Qs[:, 1:, 1::2]) ** 2, axis=1) / 2
-    )
+    out["displacement_rms"][rows] = _radial_rms(Qs)
     out["force_mean"][rows] = np.hypot(Fs[:, 0, 0::2].real, Fs[:, 0, 1::2].real)
-    out["force_rms"][rows] = np.sqrt(
-        np.sum(np.abs(Fs[:, 1:, 0::2]) ** 2 + np.abs(Fs[:, 1:, 1::2]) ** 2, axis=1) / 2
-    )
+    out["force_rms"][rows] = _radial_rms(Fs)
     m = mr.period  # the mesh harmonic on the base of a period-ν model
     amp = np.maximum(np.abs(Fs[:, m, 0::2]), np.abs(Fs[:, m, 1::2])) if H >= m else 0.0
     out["force_amplitude"][rows] = amp

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.auto_period import beyond_period_one, check_period, rows_of
-from nlgrd.nonlinear.bearing_loads import BearingResponse, bearing_response
+from nlgrd.nonlinear.bearing_loads import BearingResponse, bearing_names, bearing_node_dofs, bearing_response
 from nlgrd.nonlinear.continuation import continuation
 from nlgrd.nonlinear.floquet import FloquetCache
 from nlgrd.nonlinear.force_laws import BacklashMesh
@@ -153,11 +153,7 @@ def build_geared_model(
     mesh = gear_mesh_force(
         gp, mr.k_h[0], mr.c_m[0], lste_harmonics, order=period, method="aft" if aft else "exact"
     )
-    dofs = []
-    for b in system.bearings:
-        d = system.dofs.node_dofs(b.shaft, b.node)
-        dofs += [d[1], d[2]]
-    bearing_dofs = np.array(dofs, dtype=int)
+    bearing_dofs = bearing_node_dofs(system)
     mr.set_output_dofs(bearing_dofs)
 
     def force(omega: float, H_: int) -> NDArray:
@@ -367,10 +363,7 @@ def geared_sweep(
         bearings = bearing_response(model, res)
     else:
         res, bearings = _beyond_period_one(model, res, omegas, directions, period, harmonic_rtol)
-    names = [
-        b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(model.system.bearings)
-    ]
-    return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), names, res.H)
+    return GearedSweepResult(res, bearings, model.pinion_rpm(res.omega), bearing_names(model.system), res.H)
 
 
 def _beyond_period_one(model: GearedModel, p1: SweepResult, omegas, directions, period, harmonic_rtol):

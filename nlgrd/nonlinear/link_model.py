@@ -38,6 +38,8 @@ from nlgrd.nonlinear.link_results import (  # re-exported: the tables live there
     LinkSweepResult,
     link_rows,
     metric_names,
+    output_names,
+    point_outputs,
 )
 from nlgrd.nonlinear.links import GearMeshLink
 from nlgrd.nonlinear.metrics import PointMetrics
@@ -411,22 +413,19 @@ def link_sweep(
             max_iter=options.get("max_iter", 50),
         )
     two = period_model(model, 2) if p2 is not None else None
+    blank = dict.fromkeys(output_names(model), np.nan)
     rows = []
     for i in range(len(res)):
-        row = {}
-        ok = bool(res.converged[i]) and not bool(res.no_stable[i])
-        on_two = two is not None and int(res.period[i]) == 2
+        if not res.converged[i] or res.no_stable[i]:
+            rows.append(blank)
+            continue
         # a period-2 point over 2T on the base ω/2, a period-1 one on its own harmonics
-        links = two.links if on_two else model.links
-        z, w = (res.harmonics[i], res.omega[i] / 2) if on_two else (p1.harmonics[i], res.omega[i])
-        for link, sl in zip(links, model.receptance.slices, strict=True):
-            if ok:
-                values = link.metrics(z[sl], float(w))
-            else:
-                values = dict.fromkeys(metric_names(link), np.nan)
-            row.update({f"{link.name}.{k}": v for k, v in values.items()})
-        rows.append(row)
-    return LinkSweepResult(res, pd.DataFrame(rows))
+        on_two = two is not None and int(res.period[i]) == 2
+        m, z, w = (
+            (two, res.harmonics[i], res.omega[i] / 2) if on_two else (model, p1.harmonics[i], res.omega[i])
+        )
+        rows.append(point_outputs(m, z, float(w)))
+    return LinkSweepResult(res, pd.DataFrame(rows, columns=list(blank)))
 
 
 def link_continuation(

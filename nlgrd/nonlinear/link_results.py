@@ -13,9 +13,18 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.bearing_loads import BEARING_OUTPUTS, bearing_names, link_bearing_outputs
 from nlgrd.nonlinear.results import ContinuationResult, SweepResult
 
-__all__ = ["LinkContinuationResult", "LinkSweepResult", "link_rows", "metric_names", "with_links"]
+__all__ = [
+    "LinkContinuationResult",
+    "LinkSweepResult",
+    "link_rows",
+    "metric_names",
+    "output_names",
+    "point_outputs",
+    "with_links",
+]
 
 
 def with_links(frame: pd.DataFrame, links: pd.DataFrame) -> pd.DataFrame:
@@ -105,6 +114,50 @@ def metric_names(link) -> list[str]:
     return list(link.metrics(np.zeros((link.n_coords, 3)), 1.0))
 
 
+def output_names(model) -> list[str]:
+    """The ``<name>.<quantity> [unit]`` columns of a link model's points: every link's,
+    then every linear bearing's (:data:`BEARING_OUTPUTS`).
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.link_model.LinkModel
+        The model.
+
+    Returns
+    -------
+    list of str
+    """
+    links = [f"{lk.name}.{k}" for lk in model.links for k in metric_names(lk)]
+    return links + [f"{b}.{q}" for b in bearing_names(model.system) for q in BEARING_OUTPUTS]
+
+
+def point_outputs(model, harmonics: NDArray, omega: float) -> dict[str, float]:
+    """Every link's outputs (its ``metrics``) and every linear bearing's (force and
+    displacement recovered from the link coordinates:
+    :func:`~nlgrd.nonlinear.bearing_loads.link_bearing_outputs`) at one solved point.
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.link_model.LinkModel
+        The model solved (the period-ν model of a period-ν point).
+    harmonics : ndarray (n_coords, 2H+1)
+        Real harmonics of the link coordinates on the model's base [m].
+    omega : float
+        The frequency the model's receptances take [rad/s].
+
+    Returns
+    -------
+    dict
+        In the order of :func:`output_names`.
+    """
+    z = np.asarray(harmonics, dtype=float)
+    row = {}
+    for link, sl in zip(model.links, model.receptance.slices, strict=True):
+        row.update({f"{link.name}.{k}": v for k, v in link.metrics(z[sl], float(omega)).items()})
+    row.update(link_bearing_outputs(model, z, float(omega)))
+    return row
+
+
 def link_rows(model, res: SweepResult, usable: NDArray) -> pd.DataFrame:
     """Every link's outputs at the period-1 points of ``res`` (NaN where not ``usable``).
 
@@ -122,17 +175,12 @@ def link_rows(model, res: SweepResult, usable: NDArray) -> pd.DataFrame:
     pandas.DataFrame
         One row per point, ``<link>.<quantity>`` columns.
     """
-    rows = []
-    for i in range(len(res)):
-        row = {}
-        for link, sl in zip(model.links, model.receptance.slices, strict=True):
-            if usable[i]:
-                values = link.metrics(np.asarray(res.harmonics[i])[sl], float(res.omega[i]))
-            else:
-                values = dict.fromkeys(metric_names(link), np.nan)
-            row.update({f"{link.name}.{k}": v for k, v in values.items()})
-        rows.append(row)
-    return pd.DataFrame(rows)
+    blank = dict.fromkeys(output_names(model), np.nan)
+    rows = [
+        point_outputs(model, res.harmonics[i], float(res.omega[i])) if usable[i] else blank
+        for i in range(len(res))
+    ]
+    return pd.DataFrame(rows, columns=list(blank))
 
 
 @dataclass(frozen=True)

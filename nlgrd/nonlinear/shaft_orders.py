@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.bearing_loads import bearing_harmonics, bearing_response
+from nlgrd.nonlinear.bearing_loads import bearing_harmonics, bearing_names, bearing_response
 from nlgrd.nonlinear.geared import GearedModel, GearedSweepResult, build_geared_model
 from nlgrd.nonlinear.harmonic_convergence import LADDER, OUTPUT_RTOL, converged_sweep
 from nlgrd.nonlinear.subharmonic import amplitudes, subharmonic_mask
@@ -149,8 +149,7 @@ def shaft_order_sweep(
         base=N,
         H_check=None if res.H_check is None else res.H_check // N,
     )
-    names = [b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(system.bearings)]
-    return GearedSweepResult(mesh, bearings, model.pinion_rpm(base), names, mesh.H)
+    return GearedSweepResult(mesh, bearings, model.pinion_rpm(base), bearing_names(system), mesh.H)
 
 
 def dte_spectrum(result: GearedSweepResult, index: int) -> tuple[NDArray, NDArray]:

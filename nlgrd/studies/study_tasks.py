@@ -174,12 +174,14 @@ class SummaryColumns:
     bearing_force: list = field(default_factory=list)
 
 
-def _link_columns(links) -> SummaryColumns:
-    """The summary columns of a link sweep (``<link>.<quantity> [unit]``), by link type."""
+def _link_columns(model) -> SummaryColumns:
+    """The summary columns of a link sweep (``<link>.<quantity> [unit]``), by link type;
+    the bearing forces those of the clearances and of every linear bearing."""
+    from nlgrd.nonlinear.bearing_loads import bearing_names
     from nlgrd.nonlinear.links import BearingClearance, GearMeshLink
 
-    out = SummaryColumns()
-    for link in links:
+    out = SummaryColumns(bearing_force=[f"{name}.force_max [N]" for name in bearing_names(model.system)])
+    for link in model.links:
         if isinstance(link, GearMeshLink):
             out.dslr.append(f"{link.name}.dslr [-]")
             out.dte_rms.append((f"{link.name}.dte_rms [m]", 1e6))
@@ -213,7 +215,7 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
         x_col = "shaft_speed [rpm]" if rpm else "base_frequency [Hz]"
         if rpm:
             frame.insert(1, x_col, frame["base_frequency [Hz]"] * 2 * math.pi * per_rad)
-        return frame, res.jumps(), x_col, per_rad, _link_columns(model.links)
+        return frame, res.jumps(), x_col, per_rad, _link_columns(model)
     from nlgrd.nonlinear.geared import geared_sweep
     from nlgrd.nonlinear.shaft_orders import shaft_order_sweep
 
