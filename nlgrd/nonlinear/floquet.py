@@ -178,13 +178,12 @@ def _magnus_monodromy(
 ) -> tuple[NDArray, NDArray]:
     """Φ by the fourth-order Magnus method with two Gauss points per step (Iserles & Nørsett
     1999, Phil. Trans. R. Soc. A 357:983; Blanes, Casas, Oteo & Ros 2009, Phys. Rep.
-    470:151, §5): Ω = h/2 (C₁ + C₂) + √3 h²/12 [C₂, C₁], exp(Ω) per step, about ``steps``
-    steps per period spread over the pieces by length (at least one each, at least
-    ``least[i]`` on piece i, and halved until the commutator term is below
-    ``MAGNUS_COMMUTATOR``); one exact exponential on a piece where no tangent varies. In
-    the scaled state (w_s η, η') of :func:`_exponentials`, where C₂ - C₁ = [[0, 0], [X, 0]],
-    X = -(S₂ - S₁)/w_s, gives [C₂, C₁] = [[-w_s X, 0], [M⁻¹D X, w_s X]]. Returns Φ and the
-    exponentials per piece."""
+    470:151, §5), in the interaction picture of each piece's mean state matrix A₀
+    (the modified Magnus method of Iserles 2002, BIT 42:561):
+    about ``steps`` steps per period spread over the pieces by length (at least one each,
+    at least ``least[i]`` on piece i, and halved until the commutator term is below
+    ``MAGNUS_COMMUTATOR``); one exact exponential on a piece where no tangent varies.
+    Returns Φ and the steps per piece (:func:`_interaction_piece`)."""
     N = prep.N
     g = np.sqrt(3.0) / 6.0
     lengths = np.diff(breaks)
@@ -219,22 +218,55 @@ def _magnus_monodromy(
             C = base.copy()
             C[N:, :N] = -prep.stiffness(K0[i]) / ws
             Es.append(expm(C * (lengths[i] / omega)))
-            continue
-        m, h, Kt = p
-        dt = h / omega
-        W = prep.MW
-        S = prep.MK[None] + np.einsum("ij,sjk,kl->sil", W, Kt, prep.Wt)
-        for j in range(m):
-            S1, S2 = S[j], S[m + j]
-            Om = base * dt
-            Om[N:, :N] = -(S1 + S2) * (0.5 * dt / ws)
-            X = -(S2 - S1) / ws
-            c = np.sqrt(3.0) / 12.0 * dt * dt
-            Om[:N, :N] -= c * ws * X
-            Om[N:, :N] += c * (prep.MD @ X)
-            Om[N:, N:] += c * ws * X
-            Es.append(expm(Om))
+        else:
+            Es.append(_interaction_piece(prep, base, ws, p[2], p[1] / omega))
     return _product(Es), counts
+
+
+def _interaction_piece(prep: _Prepared, base: NDArray, ws: float, Kt: NDArray, dt: float) -> NDArray:
+    """The propagator of one piece of m Magnus steps of length ``dt`` [s], the tangent
+    ``Kt`` (2m, n, n) at the two Gauss points of every step (first points, then second).
+
+    With A₀ the state matrix of the mean tangent K̄ (the Gauss mean over the piece) and
+    B(t) = U₀ C(t) V₀ᵀ, U₀ = [0; M⁻¹W], V₀ᵀ = [Wᵀ/w_s, 0], C = -(K_t - K̄), a step is
+    e^{A₀ h} exp(Ω̃) with Ω̃ the fourth-order Magnus term of B̃(s) = e^{-A₀ s} B e^{A₀ s}:
+    Ω̃ = h/2 (B̃₁ + B̃₂) + √3 h²/12 [B̃₂, B̃₁] = L S Rᵀ, L = [U₁ U₂], R = [V₁ V₂] (the
+    same for every step: only C changes), U_g = e^{-A₀ s_g} U₀, V_gᵀ = V₀ᵀ e^{A₀ s_g}, and
+    S = [[h/2 C₁, -c C₁ G₁₂ C₂], [c C₂ G₂₁ C₁, h/2 C₂]] (c = √3 h²/12, G = Rᵀ L). So
+    exp(Ω̃) = I + L φ₁(S G) S Rᵀ exactly (φ₁(X) = (e^X - I) X⁻¹, from the exponential of
+    [[X, I], [0, 0]]), and a step costs one product with e^{A₀ h} instead of a full
+    exponential: two exponentials per piece, not one per step."""
+    N, n = prep.N, Kt.shape[1]
+    m = Kt.shape[0] // 2
+    g = np.sqrt(3.0) / 6.0
+    Kbar = Kt.mean(axis=0)
+    A0 = base.copy()
+    A0[N:, :N] = -prep.stiffness(Kbar) / ws
+    U0 = np.zeros((2 * N, n))
+    U0[N:] = prep.MW
+    V0t = np.zeros((n, 2 * N))
+    V0t[:, :N] = prep.Wt / ws
+    Fs = [expm(A0 * sg) for sg in (dt * (0.5 - g), dt * (0.5 + g))]
+    E = Fs[1] @ Fs[0]  # e^{A₀ h}: s₁ + s₂ = h
+    Us = [np.linalg.solve(F, U0) for F in Fs]
+    Vts = [V0t @ F for F in Fs]
+    L, Rt = np.hstack(Us), np.vstack(Vts)
+    G = Rt @ L
+    C1, C2 = Kbar - Kt[:m], Kbar - Kt[m:]
+    c = np.sqrt(3.0) / 12.0 * dt * dt
+    S = np.zeros((m, 2 * n, 2 * n))
+    S[:, :n, :n], S[:, n:, n:] = 0.5 * dt * C1, 0.5 * dt * C2
+    S[:, :n, n:] = -c * (C1 @ G[:n, n:] @ C2)
+    S[:, n:, :n] = c * (C2 @ G[n:, :n] @ C1)
+    aug = np.zeros((m, 4 * n, 4 * n))
+    aug[:, : 2 * n, : 2 * n] = S @ G
+    aug[:, : 2 * n, 2 * n :] = np.eye(2 * n)
+    P = sla.expm(aug)[:, : 2 * n, 2 * n :] @ S  # φ₁(S G) S
+    EL = E @ L
+    Phi = np.eye(2 * N)
+    for j in range(m):
+        Phi = E @ Phi + EL @ (P[j] @ (Rt @ Phi))
+    return Phi
 
 
 def _state_sequence(breaks: NDArray, Kt: NDArray) -> tuple[list[NDArray], list[tuple[int, float]]]:
