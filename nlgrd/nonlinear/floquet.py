@@ -174,7 +174,14 @@ def _smooth_pieces(nonlinearities: Sequence, harmonics: NDArray, n: int):
 
 
 def _magnus_monodromy(
-    prep: _Prepared, breaks, K0, active, omega: float, steps: int, least: NDArray | None = None
+    prep: _Prepared,
+    breaks,
+    K0,
+    active,
+    omega: float,
+    steps: int,
+    least: NDArray | None = None,
+    memo: dict | None = None,
 ) -> tuple[NDArray, NDArray]:
     """Φ by the fourth-order Magnus method with two Gauss points per step (Iserles & Nørsett
     1999, Phil. Trans. R. Soc. A 357:983; Blanes, Casas, Oteo & Ros 2009, Phys. Rep.
@@ -183,7 +190,9 @@ def _magnus_monodromy(
     about ``steps`` steps per period spread over the pieces by length (at least one each,
     at least ``least[i]`` on piece i, and halved until the commutator term is below
     ``MAGNUS_COMMUTATOR``); one exact exponential on a piece where no tangent varies.
-    Returns Φ and the steps per piece (:func:`_interaction_piece`)."""
+    ``memo`` keeps, from one step count to the next, the scaling w_s, those exponentials
+    and each piece's A₀ with the exponentials of the next step count (:func:`_interaction_piece`).
+    Returns Φ and the steps per piece."""
     N = prep.N
     g = np.sqrt(3.0) / 6.0
     lengths = np.diff(breaks)
@@ -207,23 +216,30 @@ def _magnus_monodromy(
             m *= 2
         plan.append((i, (m, h, Kt)))
     counts = np.array([1 if p is None else p[0] for _, p in plan])
-    stiff_mid = [prep.stiffness(K0[i]) if p is None else prep.stiffness(p[2][0]) for i, p in plan]
-    ws = np.sqrt(max(max(float(np.linalg.norm(k, 1)) for k in stiff_mid), 1e-300))
+    memo = {} if memo is None else memo
+    if "ws" not in memo:
+        stiff_mid = [prep.stiffness(K0[i]) if p is None else prep.stiffness(p[2][0]) for i, p in plan]
+        memo["ws"] = np.sqrt(max(max(float(np.linalg.norm(k, 1)) for k in stiff_mid), 1e-300))
+    ws = memo["ws"]
     base = np.zeros((2 * N, 2 * N))
     base[:N, N:] = ws * np.eye(N)
     base[N:, N:] = -prep.MD
     Es = []
     for i, p in plan:
         if p is None:
-            C = base.copy()
-            C[N:, :N] = -prep.stiffness(K0[i]) / ws
-            Es.append(expm(C * (lengths[i] / omega)))
+            if ("exact", i) not in memo:
+                C = base.copy()
+                C[N:, :N] = -prep.stiffness(K0[i]) / ws
+                memo["exact", i] = expm(C * (lengths[i] / omega))
+            Es.append(memo["exact", i])
         else:
-            Es.append(_interaction_piece(prep, base, ws, p[2], p[1] / omega))
+            Es.append(_interaction_piece(prep, base, ws, p[2], p[1] / omega, memo.setdefault(i, {})))
     return _product(Es), counts
 
 
-def _interaction_piece(prep: _Prepared, base: NDArray, ws: float, Kt: NDArray, dt: float) -> NDArray:
+def _interaction_piece(
+    prep: _Prepared, base: NDArray, ws: float, Kt: NDArray, dt: float, memo: dict
+) -> NDArray:
     """The propagator of one piece of m Magnus steps of length ``dt`` [s], the tangent
     ``Kt`` (2m, n, n) at the two Gauss points of every step (first points, then second).
 
@@ -235,18 +251,25 @@ def _interaction_piece(prep: _Prepared, base: NDArray, ws: float, Kt: NDArray, d
     S = [[h/2 C₁, -c C₁ G₁₂ C₂], [c C₂ G₂₁ C₁, h/2 C₂]] (c = √3 h²/12, G = Rᵀ L). So
     exp(Ω̃) = I + L φ₁(S G) S Rᵀ exactly (φ₁(X) = (e^X - I) X⁻¹, from the exponential of
     [[X, I], [0, 0]]), and a step costs one product with e^{A₀ h} instead of a full
-    exponential: two exponentials per piece, not one per step."""
+    exponential. e^{A₀ s_g} are computed for half the step and squared; ``memo`` keeps
+    A₀ (any constant A₀ is exact in this picture) and the half-step ones for the next
+    step count: two exponentials per piece and step count, not one per step."""
     N, n = prep.N, Kt.shape[1]
     m = Kt.shape[0] // 2
     g = np.sqrt(3.0) / 6.0
-    Kbar = Kt.mean(axis=0)
-    A0 = base.copy()
-    A0[N:, :N] = -prep.stiffness(Kbar) / ws
+    if "A0" not in memo:
+        memo["Kbar"] = Kt.mean(axis=0)
+        memo["A0"] = base.copy()
+        memo["A0"][N:, :N] = -prep.stiffness(memo["Kbar"]) / ws
+    Kbar, A0 = memo["Kbar"], memo["A0"]
     U0 = np.zeros((2 * N, n))
     U0[N:] = prep.MW
     V0t = np.zeros((n, 2 * N))
     V0t[:, :N] = prep.Wt / ws
-    Fs = [expm(A0 * sg) for sg in (dt * (0.5 - g), dt * (0.5 + g))]
+    Fs = memo.pop(m, None)
+    if Fs is None:  # e^{A₀ s_g} of 2m steps, then squared
+        memo[2 * m] = [expm(A0 * (0.5 * sg)) for sg in (dt * (0.5 - g), dt * (0.5 + g))]
+        Fs = [F @ F for F in memo[2 * m]]
     E = Fs[1] @ Fs[0]  # e^{A₀ h}: s₁ + s₂ = h
     Us = [np.linalg.solve(F, U0) for F in Fs]
     Vts = [V0t @ F for F in Fs]
@@ -653,9 +676,9 @@ def _magnus(ss: LinearStateSpace, pieces, omega: float, dominant: bool, H: int) 
     dense = not (dominant and 2 * prep.N > DENSE_STATE_LIMIT)
     side = np.exp(prep.side * (breaks[-1] - breaks[0]) / omega)
     steps, prev = max(MAGNUS_FIRST_STEPS, 1 << int(np.ceil(np.log2(H + 1)))), None
-    least = None
+    least, memo = None, {}
     while True:  # every piece's step count doubles from one product to the next
-        Phi, counts = _magnus_monodromy(prep, breaks, K0, active, omega, steps, least)
+        Phi, counts = _magnus_monodromy(prep, breaks, K0, active, omega, steps, least, memo)
         mu = _eigen(Phi, side, dense) if np.all(np.isfinite(Phi)) else np.array([np.inf + 0j])
         top = float(np.max(np.abs(mu)))
         lead = mu[np.abs(mu) >= (1 - MAGNUS_LEADING) * top]
