@@ -57,6 +57,7 @@ from numpy.typing import ArrayLike, NDArray
 from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.linear_algebra import _moved, expm, mesh_block, psd_null_space, psd_to_tolerance
+from nlgrd.nonlinear.magnus_steps import interaction_piece
 from nlgrd.rotor.rigid_body import CONSTRAINT_RTOL
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -191,8 +192,9 @@ def _magnus_monodromy(
     at least ``least[i]`` on piece i, and halved until the commutator term is below
     ``MAGNUS_COMMUTATOR``); one exact exponential on a piece where no tangent varies.
     ``memo`` keeps, from one step count to the next, the scaling w_s, those exponentials
-    and each piece's A₀ with the exponentials of the next step count (:func:`_interaction_piece`).
-    Returns Φ and the steps per piece."""
+    and each piece's A₀ (the state matrix of its mean tangent K̄) with the exponentials of the
+    next step count.
+    Returns Φ and the steps per piece (:func:`~nlgrd.nonlinear.magnus_steps.interaction_piece`)."""
     N = prep.N
     g = np.sqrt(3.0) / 6.0
     lengths = np.diff(breaks)
@@ -233,63 +235,15 @@ def _magnus_monodromy(
                 memo["exact", i] = expm(C * (lengths[i] / omega))
             Es.append(memo["exact", i])
         else:
-            Es.append(_interaction_piece(prep, base, ws, p[2], p[1] / omega, memo.setdefault(i, {})))
+            piece = memo.setdefault(i, {})
+            if "A0" not in piece:  # the mean tangent of the first step count, kept for the next
+                piece["Kbar"] = p[2].mean(axis=0)
+                piece["A0"] = base.copy()
+                piece["A0"][N:, :N] = -prep.stiffness(piece["Kbar"]) / ws
+            U0, V0t = np.zeros((2 * N, prep.Wt.shape[0])), np.zeros((prep.Wt.shape[0], 2 * N))
+            U0[N:], V0t[:, :N] = prep.MW, prep.Wt / ws
+            Es.append(interaction_piece(piece["A0"], U0, V0t, piece["Kbar"], p[2], p[1] / omega, piece))
     return _product(Es), counts
-
-
-def _interaction_piece(
-    prep: _Prepared, base: NDArray, ws: float, Kt: NDArray, dt: float, memo: dict
-) -> NDArray:
-    """The propagator of one piece of m Magnus steps of length ``dt`` [s], the tangent
-    ``Kt`` (2m, n, n) at the two Gauss points of every step (first points, then second).
-
-    With A₀ the state matrix of the mean tangent K̄ (the Gauss mean over the piece) and
-    B(t) = U₀ C(t) V₀ᵀ, U₀ = [0; M⁻¹W], V₀ᵀ = [Wᵀ/w_s, 0], C = -(K_t - K̄), a step is
-    e^{A₀ h} exp(Ω̃) with Ω̃ the fourth-order Magnus term of B̃(s) = e^{-A₀ s} B e^{A₀ s}:
-    Ω̃ = h/2 (B̃₁ + B̃₂) + √3 h²/12 [B̃₂, B̃₁] = L S Rᵀ, L = [U₁ U₂], R = [V₁ V₂] (the
-    same for every step: only C changes), U_g = e^{-A₀ s_g} U₀, V_gᵀ = V₀ᵀ e^{A₀ s_g}, and
-    S = [[h/2 C₁, -c C₁ G₁₂ C₂], [c C₂ G₂₁ C₁, h/2 C₂]] (c = √3 h²/12, G = Rᵀ L). So
-    exp(Ω̃) = I + L φ₁(S G) S Rᵀ exactly (φ₁(X) = (e^X - I) X⁻¹, from the exponential of
-    [[X, I], [0, 0]]), and a step costs one product with e^{A₀ h} instead of a full
-    exponential. e^{A₀ s_g} are computed for half the step and squared; ``memo`` keeps
-    A₀ (any constant A₀ is exact in this picture) and the half-step ones for the next
-    step count: two exponentials per piece and step count, not one per step."""
-    N, n = prep.N, Kt.shape[1]
-    m = Kt.shape[0] // 2
-    g = np.sqrt(3.0) / 6.0
-    if "A0" not in memo:
-        memo["Kbar"] = Kt.mean(axis=0)
-        memo["A0"] = base.copy()
-        memo["A0"][N:, :N] = -prep.stiffness(memo["Kbar"]) / ws
-    Kbar, A0 = memo["Kbar"], memo["A0"]
-    U0 = np.zeros((2 * N, n))
-    U0[N:] = prep.MW
-    V0t = np.zeros((n, 2 * N))
-    V0t[:, :N] = prep.Wt / ws
-    Fs = memo.pop(m, None)
-    if Fs is None:  # e^{A₀ s_g} of 2m steps, then squared
-        memo[2 * m] = [expm(A0 * (0.5 * sg)) for sg in (dt * (0.5 - g), dt * (0.5 + g))]
-        Fs = [F @ F for F in memo[2 * m]]
-    E = Fs[1] @ Fs[0]  # e^{A₀ h}: s₁ + s₂ = h
-    Us = [np.linalg.solve(F, U0) for F in Fs]
-    Vts = [V0t @ F for F in Fs]
-    L, Rt = np.hstack(Us), np.vstack(Vts)
-    G = Rt @ L
-    C1, C2 = Kbar - Kt[:m], Kbar - Kt[m:]
-    c = np.sqrt(3.0) / 12.0 * dt * dt
-    S = np.zeros((m, 2 * n, 2 * n))
-    S[:, :n, :n], S[:, n:, n:] = 0.5 * dt * C1, 0.5 * dt * C2
-    S[:, :n, n:] = -c * (C1 @ G[:n, n:] @ C2)
-    S[:, n:, :n] = c * (C2 @ G[n:, :n] @ C1)
-    aug = np.zeros((m, 4 * n, 4 * n))
-    aug[:, : 2 * n, : 2 * n] = S @ G
-    aug[:, : 2 * n, 2 * n :] = np.eye(2 * n)
-    P = sla.expm(aug)[:, : 2 * n, 2 * n :] @ S  # φ₁(S G) S
-    EL = E @ L
-    Phi = np.eye(2 * N)
-    for j in range(m):
-        Phi = E @ Phi + EL @ (P[j] @ (Rt @ Phi))
-    return Phi
 
 
 def _state_sequence(breaks: NDArray, Kt: NDArray) -> tuple[list[NDArray], list[tuple[int, float]]]:
