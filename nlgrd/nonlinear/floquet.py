@@ -450,8 +450,10 @@ class FloquetResult:
     exponentials : int
         Matrix exponentials in the accepted monodromy product [-]: one per contact
         interval between the union of all laws' crossings for piecewise-linear laws, the
-        Magnus steps for smooth ones, 0 when the multipliers came without a product (one
-        state all period, a certificate, a revisited frequency).
+        Magnus steps for smooth ones (each a rank-2 n_nl update; a piece with steps takes
+        three full exponentials: :mod:`nlgrd.nonlinear.magnus_steps`), 0 when the
+        multipliers came without a product (one state all period, a certificate, a
+        revisited frequency).
     error : float
         Estimated error of max |μ| [-]: 0 for the exact piecewise product, the step-doubling
         estimate |m₂ₙ - mₙ| of the Magnus product (or the larger distance between the
