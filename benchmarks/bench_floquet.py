@@ -66,6 +66,7 @@ def side_by_side(before_file: str, n_models: int) -> None:
     """Before/after in one process (module docstring)."""
     spec = importlib.util.spec_from_file_location("floquet_before", before_file)
     before = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = before  # dataclasses look their module up there
     spec.loader.exec_module(before)
     print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip(), flush=True)
     best, answers = {}, {}

@@ -451,7 +451,7 @@ class FloquetResult:
         Matrix exponentials in the accepted monodromy product [-]: one per contact
         interval between the union of all laws' crossings for piecewise-linear laws, the
         Magnus steps for smooth ones (each a rank-2 n_nl update; a piece with steps takes
-        three full exponentials: :mod:`nlgrd.nonlinear.magnus_steps`), 0 when the
+        two full exponentials per new step count: :mod:`nlgrd.nonlinear.magnus_steps`), 0 when the
         multipliers came without a product (one state all period, a certificate, a
         revisited frequency).
     error : float

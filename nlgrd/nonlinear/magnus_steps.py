@@ -81,7 +81,7 @@ def interaction_piece(
     aug[:, : 2 * n, 2 * n :] = np.eye(2 * n)
     P = sla.expm(aug)[:, : 2 * n, 2 * n :] @ S  # φ₁(S G) S
     if "Em" not in memo:  # e^{A₀ m h}: the piece's length, the same at every step count
-        memo["Em"] = expm(A0 * (m * dt))
+        memo["Em"] = np.linalg.matrix_power(E, m)  # by squarings, as expm's last stage
     X = thin_steps(E, L, Rt, P)
     if X is not None:
         return memo["Em"] @ X
