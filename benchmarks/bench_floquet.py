@@ -4,6 +4,13 @@
 Run from the repository root::
 
     .venv/bin/python benchmarks/bench_floquet.py [--stage-points 3]
+    git show <commit>:nlgrd/nonlinear/floquet.py > /tmp/floquet_before.py
+    .venv/bin/python benchmarks/bench_floquet.py --before /tmp/floquet_before.py --models 3
+
+``--before FILE``: the same sweeps side by side in this process with the
+``floquet_multipliers`` of another version of ``nlgrd/nonlinear/floquet.py`` (before,
+after, before, after; the best of two each; the idler on its stable points only), with
+the verdicts and dominant multipliers of both compared.
 
 Up sweeps (``link_sweep``, fixed H, one BLAS thread) side by side in one process:
 two_shaft.toml (one mesh), the same rotor with the pinion's free-end bearing replaced by
@@ -19,6 +26,8 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import importlib.util
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -35,9 +44,10 @@ MODELS = Path(__file__).resolve().parents[1] / "data" / "models"
 _SPENT = {"t": 0.0, "n": 0}
 
 
-def _wrap() -> None:
-    """Time every call of floquet_multipliers, wherever a module imported it."""
-    original = floquet.floquet_multipliers
+def _wrap(original=None) -> None:
+    """Time every call of ``original`` (default floquet_multipliers), installed wherever a
+    module imported floquet_multipliers."""
+    original = floquet.floquet_multipliers if original is None else original
 
     def timed(*args, **kwargs):
         t0 = time.perf_counter()
@@ -48,8 +58,55 @@ def _wrap() -> None:
             _SPENT["n"] += 1
 
     for name, mod in list(sys.modules.items()):
-        if name.startswith("nlgrd") and getattr(mod, "floquet_multipliers", None) is original:
+        if name.startswith("nlgrd") and mod is not floquet and hasattr(mod, "floquet_multipliers"):
             mod.floquet_multipliers = timed
+
+
+def side_by_side(before_file: str, n_models: int) -> None:
+    """Before/after in one process (module docstring)."""
+    spec = importlib.util.spec_from_file_location("floquet_before", before_file)
+    before = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = before  # dataclasses look their module up there
+    spec.loader.exec_module(before)
+    print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip(), flush=True)
+    best, answers = {}, {}
+    with threadpool_limits(1):
+        for _, (label, model, omegas, H) in zip(range(n_models), cases(0), strict=False):
+            if label.startswith("idler"):  # its stable points: the others cost the landing search
+                _wrap()
+                r = link_sweep(model, omegas, H=H, directions="up").result
+                omegas = omegas[r.converged & r.stable.astype(bool)]
+                label = f"{label}, its {omegas.size} stable points"
+            for tag, fn in (
+                ("before", before.floquet_multipliers),
+                ("after", floquet.floquet_multipliers),
+            ) * 2:
+                _wrap(fn)
+                link_sweep(model, omegas[:2], H=H, directions="up")
+                _SPENT.update(t=0.0, n=0)
+                t0 = time.perf_counter()
+                r = link_sweep(model, omegas, H=H, directions="up").result
+                total = time.perf_counter() - t0
+                per, fl = 1e3 * total / omegas.size, 1e3 * _SPENT["t"] / omegas.size
+                print(
+                    f"{label} [{tag}]: {per:.1f} ms per point, "
+                    f"Floquet {fl:.1f} ms ({100 * _SPENT['t'] / total:.0f} %)"
+                )
+                if per < best.get((label, tag), (np.inf,))[0]:
+                    best[label, tag] = (per, fl)
+                answers.setdefault(label, {})[tag] = r
+    print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip(), flush=True)
+    one = next(iter(answers))
+    for (label, tag), (per, fl) in best.items():
+        print(
+            f"best {label} [{tag}]: {per:.1f} ms per point (Floquet {fl:.1f}), "
+            f"{per / best[one, tag][0]:.1f}x one mesh"
+        )
+    for label, d in answers.items():
+        a, b = d["before"], d["after"]
+        same = np.array_equal(a.stable, b.stable) and np.array_equal(a.converged, b.converged)
+        diff = float(np.nanmax(np.abs(np.abs(a.dominant_multiplier) - np.abs(b.dominant_multiplier))))
+        print(f"{label}: verdicts identical {same}, largest change of |dominant multiplier| {diff:.1e}")
 
 
 def cases(stage_points: int):
@@ -78,7 +135,11 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--stage-points", type=int, default=3)
     ap.add_argument("--models", type=int, default=4, help="the first this many models only")
+    ap.add_argument("--before", help="another floquet.py to run side by side (module docstring)")
     args = ap.parse_args()
+    if args.before:
+        side_by_side(args.before, min(args.models, 3))
+        return
     _wrap()
     rows = []
     with threadpool_limits(1):

@@ -66,6 +66,7 @@ import nlgrd.nonlinear.floquet as nl_floquet
 import nlgrd.nonlinear.geared as nl_geared
 import nlgrd.nonlinear.harmonic_balance as nl_hb
 import nlgrd.nonlinear.landing as nl_landing
+import nlgrd.nonlinear.metrics as nl_metrics
 import nlgrd.nonlinear.receptance as nl_receptance
 import nlgrd.nonlinear.sweep as nl_sweep
 from nlgrd.io.model_file import load_model
@@ -246,7 +247,7 @@ class Probe:
         w(nl_sweep, "floquet_multipliers", "stability")
         # every point starts with placeholder metrics: the end of the point
         w(nl_sweep.MeshMetrics, "nan", "output metrics", boundary=True)
-        w(nl_sweep, "metrics_of_points", "output metrics")  # all points at once, after the last
+        w(nl_metrics, "metrics_of_points", "output metrics")  # all points at once, after the last
         w(nl_sweep, "jump_to_branch", "jump", sticky=True)
         for name in ("restart", "follow_branch", "pool_candidates", "approach"):  # landings
             w(nl_landing, name, "jump", sticky=True)

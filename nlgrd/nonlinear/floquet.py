@@ -57,6 +57,7 @@ from numpy.typing import ArrayLike, NDArray
 from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.linear_algebra import _moved, expm, mesh_block, psd_null_space, psd_to_tolerance
+from nlgrd.nonlinear.magnus_steps import interaction_piece
 from nlgrd.rotor.rigid_body import CONSTRAINT_RTOL
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -174,17 +175,26 @@ def _smooth_pieces(nonlinearities: Sequence, harmonics: NDArray, n: int):
 
 
 def _magnus_monodromy(
-    prep: _Prepared, breaks, K0, active, omega: float, steps: int, least: NDArray | None = None
+    prep: _Prepared,
+    breaks,
+    K0,
+    active,
+    omega: float,
+    steps: int,
+    least: NDArray | None = None,
+    memo: dict | None = None,
 ) -> tuple[NDArray, NDArray]:
     """Φ by the fourth-order Magnus method with two Gauss points per step (Iserles & Nørsett
     1999, Phil. Trans. R. Soc. A 357:983; Blanes, Casas, Oteo & Ros 2009, Phys. Rep.
-    470:151, §5): Ω = h/2 (C₁ + C₂) + √3 h²/12 [C₂, C₁], exp(Ω) per step, about ``steps``
-    steps per period spread over the pieces by length (at least one each, at least
-    ``least[i]`` on piece i, and halved until the commutator term is below
-    ``MAGNUS_COMMUTATOR``); one exact exponential on a piece where no tangent varies. In
-    the scaled state (w_s η, η') of :func:`_exponentials`, where C₂ - C₁ = [[0, 0], [X, 0]],
-    X = -(S₂ - S₁)/w_s, gives [C₂, C₁] = [[-w_s X, 0], [M⁻¹D X, w_s X]]. Returns Φ and the
-    exponentials per piece."""
+    470:151, §5), in the interaction picture of each piece's mean state matrix A₀
+    (the modified Magnus method of Iserles 2002, BIT 42:561):
+    about ``steps`` steps per period spread over the pieces by length (at least one each,
+    at least ``least[i]`` on piece i, and halved until the commutator term is below
+    ``MAGNUS_COMMUTATOR``); one exact exponential on a piece where no tangent varies.
+    ``memo`` keeps, from one step count to the next, the scaling w_s, those exponentials
+    and each piece's A₀ (the state matrix of its mean tangent K̄) with the exponentials of the
+    next step count.
+    Returns Φ and the steps per piece (:func:`~nlgrd.nonlinear.magnus_steps.interaction_piece`)."""
     N = prep.N
     g = np.sqrt(3.0) / 6.0
     lengths = np.diff(breaks)
@@ -208,32 +218,31 @@ def _magnus_monodromy(
             m *= 2
         plan.append((i, (m, h, Kt)))
     counts = np.array([1 if p is None else p[0] for _, p in plan])
-    stiff_mid = [prep.stiffness(K0[i]) if p is None else prep.stiffness(p[2][0]) for i, p in plan]
-    ws = np.sqrt(max(max(float(np.linalg.norm(k, 1)) for k in stiff_mid), 1e-300))
+    memo = {} if memo is None else memo
+    if "ws" not in memo:
+        stiff_mid = [prep.stiffness(K0[i]) if p is None else prep.stiffness(p[2][0]) for i, p in plan]
+        memo["ws"] = np.sqrt(max(max(float(np.linalg.norm(k, 1)) for k in stiff_mid), 1e-300))
+    ws = memo["ws"]
     base = np.zeros((2 * N, 2 * N))
     base[:N, N:] = ws * np.eye(N)
     base[N:, N:] = -prep.MD
     Es = []
     for i, p in plan:
         if p is None:
-            C = base.copy()
-            C[N:, :N] = -prep.stiffness(K0[i]) / ws
-            Es.append(expm(C * (lengths[i] / omega)))
-            continue
-        m, h, Kt = p
-        dt = h / omega
-        W = prep.MW
-        S = prep.MK[None] + np.einsum("ij,sjk,kl->sil", W, Kt, prep.Wt)
-        for j in range(m):
-            S1, S2 = S[j], S[m + j]
-            Om = base * dt
-            Om[N:, :N] = -(S1 + S2) * (0.5 * dt / ws)
-            X = -(S2 - S1) / ws
-            c = np.sqrt(3.0) / 12.0 * dt * dt
-            Om[:N, :N] -= c * ws * X
-            Om[N:, :N] += c * (prep.MD @ X)
-            Om[N:, N:] += c * ws * X
-            Es.append(expm(Om))
+            if ("exact", i) not in memo:
+                C = base.copy()
+                C[N:, :N] = -prep.stiffness(K0[i]) / ws
+                memo["exact", i] = expm(C * (lengths[i] / omega))
+            Es.append(memo["exact", i])
+        else:
+            piece = memo.setdefault(i, {})
+            if "A0" not in piece:  # the mean tangent of the first step count, kept for the next
+                piece["Kbar"] = p[2].mean(axis=0)
+                piece["A0"] = base.copy()
+                piece["A0"][N:, :N] = -prep.stiffness(piece["Kbar"]) / ws
+            U0, V0t = np.zeros((2 * N, prep.Wt.shape[0])), np.zeros((prep.Wt.shape[0], 2 * N))
+            U0[N:], V0t[:, :N] = prep.MW, prep.Wt / ws
+            Es.append(interaction_piece(piece["A0"], U0, V0t, piece["Kbar"], p[2], p[1] / omega, piece))
     return _product(Es), counts
 
 
@@ -441,8 +450,10 @@ class FloquetResult:
     exponentials : int
         Matrix exponentials in the accepted monodromy product [-]: one per contact
         interval between the union of all laws' crossings for piecewise-linear laws, the
-        Magnus steps for smooth ones, 0 when the multipliers came without a product (one
-        state all period, a certificate, a revisited frequency).
+        Magnus steps for smooth ones (each a rank-2 n_nl update; a piece with steps takes
+        two full exponentials per new step count: :mod:`nlgrd.nonlinear.magnus_steps`), 0 when the
+        multipliers came without a product (one state all period, a certificate, a
+        revisited frequency).
     error : float
         Estimated error of max |μ| [-]: 0 for the exact piecewise product, the step-doubling
         estimate |m₂ₙ - mₙ| of the Magnus product (or the larger distance between the
@@ -621,9 +632,9 @@ def _magnus(ss: LinearStateSpace, pieces, omega: float, dominant: bool, H: int) 
     dense = not (dominant and 2 * prep.N > DENSE_STATE_LIMIT)
     side = np.exp(prep.side * (breaks[-1] - breaks[0]) / omega)
     steps, prev = max(MAGNUS_FIRST_STEPS, 1 << int(np.ceil(np.log2(H + 1)))), None
-    least = None
+    least, memo = None, {}
     while True:  # every piece's step count doubles from one product to the next
-        Phi, counts = _magnus_monodromy(prep, breaks, K0, active, omega, steps, least)
+        Phi, counts = _magnus_monodromy(prep, breaks, K0, active, omega, steps, least, memo)
         mu = _eigen(Phi, side, dense) if np.all(np.isfinite(Phi)) else np.array([np.inf + 0j])
         top = float(np.max(np.abs(mu)))
         lead = mu[np.abs(mu) >= (1 - MAGNUS_LEADING) * top]
