@@ -520,7 +520,8 @@ def solve_torus(
     w2 = float(secondary)
     c = phase_row(Y_ref if Y_ref is not None else grid.to_complex(z, n), grid) if autonomous else None
     res, it, ok = np.inf, 0, False
-    for it in range(1, max_iter + 1):
+    while it < max_iter:
+        it += 1
         R, J, dR, scale = prob.residual(z, w2)
         res = float(np.max(np.abs(R)) / scale)
         if autonomous:
