@@ -14,6 +14,7 @@ from scipy.integrate import solve_ivp
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear import quasi_periodic as qp
+from nlgrd.nonlinear import torus_grid as tg
 from nlgrd.nonlinear.force_laws import BacklashMesh
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
 
@@ -29,12 +30,12 @@ def _model():
 
 
 def _solve(model, H, start=None):
-    grid = qp.TorusGrid(H, H, *qp.default_grid(H, H))
+    grid = tg.TorusGrid(H, H, *tg.default_grid(H, H))
     if start is None:
         Y0 = np.zeros((1, grid.n_terms), dtype=complex)
         Y0[0, 0] = W0 / K + B
     else:
-        Y0 = qp.resize(start.Y, start.grid, grid)
+        Y0 = tg.resize(start.Y, start.grid, grid)
     sol = qp.solve_torus(model, W1, grid, Y0, W2)
     assert sol.converged, sol
     return sol
@@ -67,7 +68,7 @@ def reference():
 
 def test_tangent_block_is_the_aft_jacobian():
     # the O(|K|²) assembly against the plain product forward · diag(t) · inverse
-    g = qp.TorusGrid(3, 2, 16, 8)
+    g = tg.TorusGrid(3, 2, 16, 8)
     t = np.random.default_rng(0).standard_normal(g.theta1.size)
     plain = (g.forward * t[None, :]) @ g.inverse
     assert np.max(np.abs(g.tangent_block(t) - plain)) < 1e-13 * np.max(np.abs(plain))
@@ -91,4 +92,4 @@ def test_forced_torus_matches_time_integration(reference):
 
 def test_grid_too_coarse_is_refused():
     with pytest.raises(ModelError, match="does not resolve"):
-        qp.TorusGrid(8, 4, 16, 9)
+        tg.TorusGrid(8, 4, 16, 9)

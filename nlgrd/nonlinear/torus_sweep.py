@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear import quasi_periodic as qp
+from nlgrd.nonlinear import torus_grid as tg
 from nlgrd.nonlinear.floquet_mode import dominant_floquet_mode
 from nlgrd.nonlinear.harmonics import real_to_complex
 from nlgrd.nonlinear.solvers import solve
@@ -105,7 +106,7 @@ def torus_outputs(sol: qp.TorusSolution, mesh, n_samples: tuple[int, int] = (256
     if not sol.converged:
         return np.full(len(TORUS_OUTPUTS), np.nan)
     g = sol.grid
-    fine = qp.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
+    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
     Y = sol.Y[:1]
     d = fine.samples(Y)[0]
     dd = fine.samples(Y, derivative=(sol.omega, sol.secondary))[0]
@@ -306,8 +307,8 @@ def torus_sweep(
         raise ModelError("rpm", "give exactly one of omegas [rad/s] and rpm")
     omegas = np.atleast_1d(np.asarray(model.mesh_frequency(rpm) if omegas is None else omegas, dtype=float))
     tm = geared_torus_model(model)
-    grid = qp.TorusGrid(H, H2, *qp.default_grid(H, H2))
-    fine = qp.TorusGrid(H + 4, H2 + 2, *qp.default_grid(H + 4, H2 + 2)) if check else None
+    grid = tg.TorusGrid(H, H2, *tg.default_grid(H, H2))
+    fine = tg.TorusGrid(H + 4, H2 + 2, *tg.default_grid(H + 4, H2 + 2)) if check else None
     n = omegas.size
     out = np.full((n, len(TORUS_OUTPUTS)), np.nan)
     change = np.full((n, len(CHECKED)), np.nan)
@@ -341,7 +342,7 @@ def torus_sweep(
             out[i] = torus_outputs(sol, model.mesh)
             res[i], its[i] = sol.residual, sol.iterations
             if fine is not None:
-                big = qp.solve_torus(tm, float(w), fine, qp.resize(sol.Y, grid, fine), sol.secondary, tol=tol)
+                big = qp.solve_torus(tm, float(w), fine, tg.resize(sol.Y, grid, fine), sol.secondary, tol=tol)
                 if big.converged:
                     ob = torus_outputs(big, model.mesh)
                     change[i] = ob[idx] / out[i][idx] - 1
