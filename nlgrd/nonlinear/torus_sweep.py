@@ -365,3 +365,38 @@ def torus_sweep(
         int(H2),
         sols,
     )
+
+
+def tori_of_sweep(model, result, direction: str = "down", *, H2: int = 4, check: bool = True) -> TorusResult:
+    """The tori at the points a periodic sweep marked quasi-periodic (a complex pair of
+    Floquet multipliers outside the unit circle: finite ``secondary_frequency``), in the
+    sweep's order along ``direction``, started from the sweep's stored (unstable) orbits.
+
+    Parameters
+    ----------
+    model : GearedModel
+        The model the sweep was made on.
+    result : GearedSweepResult or SweepResult
+        The sweep (its mesh result holds the harmonics and the multipliers).
+    direction : {"up", "down"}
+        Which direction's points.
+    H2 : int
+        Harmonics of the secondary frequency [-].
+    check : bool
+        Also solve at (H + 4, H2 + 2) for the convergence estimate.
+
+    Returns
+    -------
+    TorusResult
+        One row per quasi-periodic point of that direction (none: an empty result).
+
+    Raises
+    ------
+    ModelError
+        When the sweep's harmonics are not of the mesh frequency itself (``base`` > 1).
+    """
+    mesh = getattr(result, "mesh", result)
+    if mesh.base != 1:
+        raise ModelError("result", f"harmonics of ω/{mesh.base}: take the period-1 sweep (period=1)")
+    keep = np.nonzero((mesh.direction == direction) & np.isfinite(mesh.secondary_frequency))[0]
+    return torus_sweep(model, mesh.omega[keep], H=mesh.H, H2=H2, periodic=mesh.harmonics[keep], check=check)
