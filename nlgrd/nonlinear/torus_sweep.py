@@ -42,6 +42,9 @@ TORUS_OUTPUTS = {
 }
 #: The outputs whose change with (H₁, H₂) is the convergence estimate.
 CHECKED = ("dte_rms", "force_max", "secondary_frequency")
+#: Largest relative speed step continued from the previous torus; beyond it the torus is
+#: started afresh from the periodic orbit.
+CONTINUATION_STEP = 0.02
 #: Starts tried, as fractions of the periodic orbit's first-harmonic amplitude.
 START_SIZES = (0.02, 0.1, 0.005, 0.3)
 
@@ -268,7 +271,7 @@ def torus_sweep(
     pair outside the unit circle the torus started from the critical mode
     (:func:`~nlgrd.nonlinear.quasi_periodic.critical_shape`) at ω₂ = |arg μ| ω₁ / 2π. Further
     speeds start from the previous torus, extrapolated linearly from the last two, with it as
-    the phase reference.
+    the phase reference (within ``CONTINUATION_STEP`` of the previous speed; farther, afresh).
 
     Parameters
     ----------
@@ -321,6 +324,8 @@ def torus_sweep(
     for i, w in enumerate(omegas):
         t0 = time.perf_counter()
         sol = None
+        if hist and abs(w - hist[-1][0]) > CONTINUATION_STEP * w:
+            hist = []  # a gap in speed (another band): start afresh
         if hist:
             (wa, sa) = hist[-1]
             Y0, w2 = sa.Y, sa.secondary
