@@ -25,14 +25,16 @@ periodic harmonic balance's set). The grid must resolve it: N₁ > 2 H₁, N₂ 
 
 Unknowns: the Y_k and, for an autonomous torus (one born at a Neimark-Sacker point), ω₂.
 The torus is invariant under a shift of θ₂, so one phase condition is added (Schilder,
-Osinga & Vogt 2005, SIAM J. Appl. Dyn. Syst. 4:459, Eq. 2.6): the solution is orthogonal
+Osinga & Vogt 2005, SIAM J. Appl. Dyn. Syst. 4:459): the solution is orthogonal
 to the θ₂-derivative of a reference torus (the previous point of a continuation),
 
     Σ_{k ∈ 𝒦, k₂ > 0} k₂ Im(conj(Y_k^ref) · Y_k) = 0.
 
-The same formulation, with the Fourier-AFT on the torus and ω₂ an unknown fixed by a phase
-condition, is that of Guillot, Lazarus, Thomas, Vergez & Cochelin 2020, J. Comput. Phys.
-416:109477. Every periodic orbit also solves (1) (its k₂ > 0 part zero) for any ω₂; Newton
+The two-frequency harmonic balance with ω₂ unknown and a phase condition is that of
+Guillot, Vergez & Cochelin 2017 (J. Sound Vib. 394:434); the start from the critical
+Floquet mode solves the Floquet problem in Hill's form (Guillot, Lazarus, Thomas, Vergez &
+Cochelin 2020, J. Comput. Phys. 416:109477), here on the receptance-reduced coordinates.
+Every periodic orbit also solves (1) (its k₂ > 0 part zero) for any ω₂; Newton
 is kept off that trivial family by deflation (Farrell, Birkisson & Funke 2015, SIAM J.
 Sci. Comput. 37:A2026): the residual is multiplied by 1/‖Y_{k₂>0}‖² + 1, which leaves the
 torus a root and makes the periodic orbits poles.
@@ -442,9 +444,8 @@ def critical_shape(
 ) -> NDArray:
     """The shape of the first secondary harmonics at the onset of the torus: the null vector
     of the linearised balance at the frequencies k₁ ω₁ + ω₂ about the periodic orbit (Hill's
-    form of the Floquet problem in the receptance coordinates; Guillot et al. 2020, §4 start
-    the torus the same way from the critical Floquet exponent). The right singular vector of
-    the smallest singular value, unit 2-norm.
+    form of the Floquet problem, Guillot et al. 2020, in the receptance coordinates). The
+    right singular vector of the smallest singular value, unit 2-norm.
 
     Parameters
     ----------
