@@ -42,6 +42,9 @@ TORUS_OUTPUTS = {
 }
 #: The outputs whose change with (H₁, H₂) is the convergence estimate.
 CHECKED = ("dte_rms", "force_max", "secondary_frequency")
+#: Bearing forces below this fraction of the largest are rounding of the recovery (as the
+#: sweep's :data:`nlgrd.nonlinear.geared` bearing columns).
+BEARING_FLOOR = 1e-9
 #: Largest relative speed step continued from the previous torus; beyond it the torus is
 #: started afresh from the periodic orbit.
 CONTINUATION_STEP = 0.02
@@ -137,6 +140,60 @@ def torus_outputs(sol: qp.TorusSolution, mesh, n_samples: tuple[int, int] = (256
     )
 
 
+def torus_bearing_forces(model, sol: qp.TorusSolution, n_samples: tuple[int, int] = (256, 48)) -> NDArray:
+    """The largest radial force of every bearing over a torus [N].
+
+    All the forcing a mesh-reduced model has at k ≠ 0 acts along w (the mesh force and the
+    LSTE's damping force), so each node follows δ: Q_k = (Z(Ω_k)⁻¹ w) h(Ω_k)⁻¹ Y_k at every
+    combination frequency Ω_k; the mean Q_0 is the periodic recovery's
+    (:meth:`~nlgrd.nonlinear.receptance.MeshReceptance.recover`). The force of bearing b on
+    its node, -(K_b + i Ω_k C_b) q_k in (y, z), is sampled on the torus.
+
+    Parameters
+    ----------
+    model : GearedModel
+        The model solved.
+    sol : TorusSolution
+        A converged torus.
+    n_samples : tuple of int
+        Samples along θ₁ and θ₂ [-].
+
+    Returns
+    -------
+    ndarray (n_bearings,)
+        max |(F_y, F_z)| per bearing [N]; NaN when not converged.
+    """
+    system, rec = model.system, model.receptance
+    nb = len(system.bearings)
+    if not sol.converged:
+        return np.full(nb, np.nan)
+    g, w = sol.grid, sol.omega
+    speed = rec.speed(w)
+    Y = sol.Y[0]
+    W = rec.W.astype(complex)
+    dofs = model.bearing_dofs
+    Q = np.zeros((g.n_terms, dofs.size), dtype=complex)
+    H1 = g.H1
+    F = np.asarray(model.reduced.force(w, H1), dtype=complex).reshape(H1 + 1, -1)
+    kap = np.asarray(model.reduced.kappa(w, H1), dtype=complex).reshape(H1 + 1, -1)
+    Yr = Y[: H1 + 1, None]
+    Q[0] = rec.recover(w, Yr[:1], F[:1] - kap[:1] * Yr[:1], F[:1], dofs)[0]
+    freqs = g.k1 * w + g.k2 * sol.secondary
+    for i in range(1, g.n_terms):
+        x = spla.splu(rec.model.dynamic_stiffness(float(freqs[i]), speed).tocsc()).solve(W)
+        Q[i] = x[dofs] @ np.linalg.solve(rec.W.T @ x, [Y[i]])
+    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
+    out = np.empty(nb)
+    for j, b in enumerate(system.bearings):
+        s_b = system.shafts[b.shaft].speed_ratio * speed
+        q = Q[:, 2 * j : 2 * j + 2]
+        Fb = -(q @ b.stiffness(s_b).T + (1j * freqs)[:, None] * (q @ b.damping(s_b).T))
+        fy, fz = fine.samples(Fb.T.copy())
+        out[j] = float(np.max(np.hypot(fy, fz)))
+    out[out <= BEARING_FLOOR * np.max(out)] = 0.0  # rounding of the recovery, not response
+    return out
+
+
 @dataclass(frozen=True)
 class TorusResult:
     """Tori of a geared model over speed, one row per speed.
@@ -165,6 +222,10 @@ class TorusResult:
         Wall time per point, the check included [s].
     H, H2 : int
         Harmonics of ω₁ and of ω₂ [-].
+    bearing_force_max : ndarray (n, n_bearings)
+        :func:`torus_bearing_forces` per point [N].
+    bearing_names : list of str
+        The bearings' names, as the sweep's columns.
     solutions : list
         The :class:`~nlgrd.nonlinear.quasi_periodic.TorusSolution` per point (None where
         not converged).
@@ -181,6 +242,8 @@ class TorusResult:
     seconds: NDArray
     H: int
     H2: int
+    bearing_force_max: NDArray
+    bearing_names: list
     solutions: list
 
     def output(self, name: str) -> NDArray:
@@ -222,6 +285,8 @@ class TorusResult:
         for j, name in enumerate(CHECKED):
             cols[f"{name}_change [-]"] = self.change[:, j]
         cols["torus_error [-]"] = np.max(np.abs(self.change), axis=1)
+        for j, name in enumerate(self.bearing_names):
+            cols[f"{name} force_max [N]"] = self.bearing_force_max[:, j]
         cols["floquet_multiplier_abs [-]"] = np.abs(self.multiplier)
         cols["seconds [s]"] = self.seconds
         return pd.DataFrame(cols)
@@ -318,6 +383,9 @@ def torus_sweep(
     mult = np.full(n, np.nan + 0j)
     res, its, secs = np.full(n, np.nan), np.zeros(n, dtype=int), np.zeros(n)
     sols: list = [None] * n
+    bears = model.system.bearings
+    bear = np.full((n, len(bears)), np.nan)
+    names = [b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(bears)]
     hist: list[tuple[float, qp.TorusSolution]] = []
     Zp = None
     idx = [list(TORUS_OUTPUTS).index(c) for c in CHECKED]
@@ -345,6 +413,7 @@ def torus_sweep(
             sols[i] = sol
             hist = (hist + [(float(w), sol)])[-2:]
             out[i] = torus_outputs(sol, model.mesh)
+            bear[i] = torus_bearing_forces(model, sol)
             res[i], its[i] = sol.residual, sol.iterations
             if fine is not None:
                 big = qp.solve_torus(tm, float(w), fine, tg.resize(sol.Y, grid, fine), sol.secondary, tol=tol)
@@ -368,6 +437,8 @@ def torus_sweep(
         secs,
         int(H),
         int(H2),
+        bear,
+        names,
         sols,
     )
 
