@@ -346,9 +346,9 @@ def solve_torus(
         Base frequency ω₁ [rad/s].
     grid : TorusGrid
         Index set and samples.
-    Y0 : ndarray (n_c, |𝒦'|) complex
-        Start [m]; harmonics are matched by (k₁, k₂) when it was on another index set
-        (pass ``Y0`` with the grid's shape, or use :func:`nlgrd.nonlinear.torus_grid.resize`).
+    Y0 : ndarray (n_c, |𝒦|) complex
+        Start on ``grid``'s index set [m] (a torus of another set is moved onto it by
+        :func:`nlgrd.nonlinear.torus_grid.resize`).
     secondary : float
         ω₂ [rad/s]: the start (autonomous torus) or the forcing's (forced torus).
     Y_ref : ndarray, optional
