@@ -22,6 +22,11 @@ from nlgrd.nonlinear.metrics import METRIC_NAMES, NO_STABLE, MeshMetrics
 
 #: The response where an orbit lost stability to a complex pair (a torus): not drawn.
 QUASI_PERIODIC = "quasi-periodic"
+#: The response of a point answered by time integration (:mod:`nlgrd.timedomain.time_answer`):
+#: its statistics carry a sampling uncertainty; "chaotic" when its largest Lyapunov
+#: exponent is positive.
+TIME_DOMAIN = "time domain"
+CHAOTIC = "chaotic"
 
 #: A point is stable when max |μ| < 1 + STABLE_RTOL.
 STABLE_RTOL = 1e-6

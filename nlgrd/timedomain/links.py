@@ -26,8 +26,9 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.harmonics import analyse
+from nlgrd.nonlinear.harmonics import analyse, evaluate
 from nlgrd.nonlinear.link_model import LinkModel
+from nlgrd.nonlinear.links import GearMeshLink
 from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import SweepResult, assemble_result
 from nlgrd.nonlinear.sweep import sweep_orders
@@ -154,6 +155,17 @@ class LinkIntegrator:
             forcing_harmonics = max([30] + [getattr(lk, "excitation_harmonics", 0) for lk in model.links])
         self.F = _forcing_samples(model, omega, self.ns, forcing_harmonics)
         self.theta = 2 * np.pi * np.arange(self.ns) / self.ns
+        self._eye = np.eye(self.d)
+        self._mesh_law = None
+        link0 = model.links[0]
+        if self.d == 1 and isinstance(link0, GearMeshLink):  # one mesh: the step's exact solution
+            th = self.theta
+            self._mesh_law = (
+                evaluate(link0.mesh.lste, th),
+                link0.mesh.stiffness_time(th),
+                float(link0.mesh.half_backlash),
+                self.step.ap * float(self.S[0, 0]),
+            )
         self.pmap = None
         if 3 * self.N + self.d <= MAX_STATE:
             ap = self.step.ap
@@ -200,7 +212,7 @@ class LinkIntegrator:
     def _solve_y(self, y_lin: NDArray, jn: int) -> tuple[NDArray, NDArray]:
         """Link coordinates and forces at phase jn from the prediction with g = 0 (Newton on d)."""
         y = y_lin.copy()
-        ap, eye = self.step.ap, np.eye(self.d)
+        ap, eye = self.step.ap, self._eye
         for _ in range(50):
             gy, Ty = self.link_forces(y, self.theta[jn])
             res = y - y_lin + ap * (self.S @ gy)
@@ -210,6 +222,18 @@ class LinkIntegrator:
         return y, self.link_forces(y, self.theta[jn])[0]
 
     def _solve_link(self, y_lin, j):
+        if self._mesh_law is not None:
+            # y + c k f(y - e) = y_lin with the dead zone f: piecewise linear, solved exactly
+            e, k, b, c = self._mesh_law
+            jn = (j + 1) % self.ns
+            x_lin, ck = y_lin - e[jn], c * k[jn]
+            if x_lin > b:
+                x = (x_lin + ck * b) / (1 + ck)
+                return x + e[jn], k[jn] * (x - b)
+            if x_lin < -b:
+                x = (x_lin - ck * b) / (1 + ck)
+                return x + e[jn], k[jn] * (x + b)
+            return float(y_lin), 0.0
         if self.d == 1:
             y1, g1 = self._solve_y(np.array([y_lin]), (j + 1) % self.ns)
             return float(y1[0]), float(g1[0])
