@@ -28,8 +28,9 @@ period. From the per-period values of every output:
   1e-3 per period (e-folding in under 1000 periods); else "time domain" (a torus, whose
   exponent is 0, or a periodic attractor of a period no harmonic balance was run for).
 
-The record grows by doubling from ``periods`` while the transient cut sits on its bound
-or a relative uncertainty of an RMS exceeds ``rtol`` (absolute for fractions), up to
+The record grows by doubling from ``periods`` while the transient cut sits on its bound,
+a relative uncertainty of an RMS exceeds ``rtol`` (absolute for fractions) or the
+exponent is above the floor but within 3 standard errors of 0, up to
 ``max_periods`` (``settled`` says whether the targets were met). The cost is about
 2 x the periods integrated (the twin), ~10 ms a period for an 84-DOF model at 256
 steps.
@@ -48,7 +49,7 @@ from numpy.typing import NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.harmonics import analyse
 from nlgrd.nonlinear.link_model import LinkModel
-from nlgrd.nonlinear.results import CHAOTIC, TIME_DOMAIN
+from nlgrd.nonlinear.response_kinds import CHAOTIC, TIME_DOMAIN
 from nlgrd.rotor.rigid_body import rigid_body_modes
 from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.links import LinkIntegrator, start_from_harmonics
@@ -86,7 +87,7 @@ class TimeAnswer:
     omega : float
         Base frequency [rad/s].
     kind : str
-        :data:`~nlgrd.nonlinear.results.CHAOTIC` or :data:`~nlgrd.nonlinear.results.TIME_DOMAIN`.
+        "chaotic" or "time domain" (:mod:`nlgrd.nonlinear.response_kinds`).
     links : dict of str to Estimate
         ``<link>.<quantity>`` with the units of the links' own outputs (the columns of a
         link sweep): a mesh's ``dte_rms [m]``, ``force_max [N]``, ``dslr [-]``,
@@ -264,8 +265,8 @@ class _Recorder:
             f"{n}.back": float(np.any(x < -mesh.half_backlash)),
         }
 
-    def series(self, key: str, cut: int = 0) -> NDArray:
-        return np.array([r[key] for r in self.rows[cut:]])
+    def series(self, key: str, cut: int = 0, stop: int | None = None) -> NDArray:
+        return np.array([r[key] for r in self.rows[cut:stop]])
 
     def cut_series(self) -> list[NDArray]:
         """The series MSER-5 is run on: each mesh's per-period mean square about the record's
@@ -309,14 +310,28 @@ def _wnorm(ds: NDArray, N: int, omega: float) -> float:
 
 
 def _statistics(rec: _Recorder, cut: int) -> tuple[dict, dict]:
-    """Every link's statistics over the periods after ``cut``, and the first mesh's metrics."""
+    """Every link's statistics over the periods after ``cut``, and the first mesh's metrics,
+    each uncertainty at least half the difference between the statistic over the first
+    and the second half of the record (a two-part stationarity check in the manner of
+    Geweke 1992, Bayesian Statistics 4:169: a slow drift that batch means miss)."""
+    half = cut + (len(rec.rows) - cut) // 2
+    links, mesh = _statistics_of(rec, cut, None)
+    (l1, m1), (l2, m2) = _statistics_of(rec, cut, half), _statistics_of(rec, half, None)
+    for full, a, b in ((links, l1, l2), (mesh, m1, m2)):
+        for k, e in full.items():
+            full[k] = Estimate(e.value, max(e.uncertainty, abs(a[k].value - b[k].value) / 2))
+    return links, mesh
+
+
+def _statistics_of(rec: _Recorder, cut: int, stop: int | None) -> tuple[dict, dict]:
+    """Every link's statistics over the periods ``cut:stop``, and the first mesh's metrics."""
     links: dict[str, Estimate] = {}
     mesh: dict[str, Estimate] = {}
     for link in rec.integ.model.links:
         n = link.name
 
         def s(key, n=n):
-            return rec.series(f"{n}.{key}", cut)
+            return rec.series(f"{n}.{key}", cut, stop)
 
         if hasattr(link, "mesh"):
             hi, lo = record_max(s("dmax")), record_max(-s("dmin"))
@@ -366,8 +381,8 @@ def time_answer(
     *,
     harmonics: NDArray | None = None,
     state0: tuple | None = None,
-    periods: int = 256,
-    max_periods: int = 2048,
+    periods: int = 512,
+    max_periods: int = 4096,
     steps_per_period: int = 256,
     alpha: float = -0.05,
     rtol: float = 0.01,
@@ -452,11 +467,12 @@ def time_answer(
         cuts = [mser5(x) for x in rec.cut_series()]
         cut = max(c for c, _ in cuts)
         links, mesh = _statistics(rec, cut)
-        settled = all(ok for _, ok in cuts) and _targets_met(links, rtol)
+        lam = batch_mean(np.array(logs[max(cut, 10) :]))
+        undecided = LYAPUNOV_FLOOR < lam.value <= 3 * lam.uncertainty
+        settled = all(ok for _, ok in cuts) and _targets_met(links, rtol) and not undecided
         if settled or target >= max_periods:
             break
         target = min(2 * target, int(max_periods))
-    lam = batch_mean(np.array(logs[max(cut, 10) :]))
     T = 2 * np.pi / omega
     chaotic = lam.value > max(3 * lam.uncertainty, LYAPUNOV_FLOOR)
     avg = np.mean(np.array(rec.y_sums[cut:]), axis=0)
