@@ -178,14 +178,15 @@ def plot_sweep_frame(
 
 def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms) -> None:
     """Period-ν points ringed where they are drawn; points without a stable periodic
-    response (quasi-periodic, or none found) marked on the bottom edge, each kind counted."""
+    response (quasi-periodic, or none found) and no time answer marked on the bottom edge,
+    each kind counted."""
     resp = np.asarray(resp, dtype=str)
     period = np.char.startswith(resp, "period ")
     for kind in sorted(set(resp[conv & period])):
         at = conv & (resp == kind) & np.isfinite(yv)
         ax.plot(xv[at], yv[at], "o", ms=2.2 * ms, mfc="none", mec=colour, mew=0.8, ls="none",
                 label=f"{name}: {kind} ({int(at.sum())})")  # fmt: skip
-    lost = conv & ~period & ~np.isin(resp, (PERIODIC, "<NA>", "nan"))
+    lost = conv & ~period & ~np.isin(resp, (PERIODIC, "<NA>", "nan", *(k for k, _ in TIME_ANSWERS)))
     quasi = resp == QUASI_PERIODIC
     mark_not_converged(ax, xv[lost & quasi], colour, name, "quasi-periodic", marker="2")
     mark_not_converged(ax, xv[lost & ~quasi], colour, name, "no stable periodic response", marker="1")

@@ -15,8 +15,9 @@ period. From the per-period values of every output:
   force, DTE peak-to-peak, largest clearance force and displacement) over the record.
 - **Sampling uncertainty** (standard uncertainty, k = 1): a mean's by non-overlapping
   batch means, B = 20 batches (Schmeiser 1982, Oper. Res. 30:556: 10-30 batches), the
-  standard error sd(b)/√B inflated by sqrt((1 + r)/(1 - r)) for a positive lag-1
-  correlation r of the batch means (the AR(1) variance factor); the RMS by the delta
+  standard error sd(b)/√B inflated by sqrt((1 + r)/(1 - r)) where the lag-1 correlation
+  r of the batch means is beyond 2/√B (Bartlett's band: the batches are too short; the
+  AR(1) variance factor); the RMS by the delta
   method (ms - m² linearised about the record's mean). An extreme's from the B batch
   extremes as Gumbel variates (Gumbel 1958, Statistics of Extremes, ch. 6): the record's
   extreme is Gumbel with the batches' scale β = √6 s/π, so its standard deviation is s,
@@ -189,7 +190,7 @@ def batch_mean(x: NDArray) -> Estimate:
     var = float(np.sum(dev * dev)) / (b.size - 1)
     den = float(np.sum(dev * dev))
     r = float(np.sum(dev[1:] * dev[:-1]) / den) if den > 0 else 0.0
-    r = min(max(r, 0.0), 0.9)
+    r = min(r, 0.9) if r > 2 / math.sqrt(b.size) else 0.0  # beyond Bartlett's 2/√B band only
     return Estimate(float(np.mean(x)), math.sqrt(var / b.size * (1 + r) / (1 - r)))
 
 
