@@ -30,7 +30,8 @@ period. From the per-period values of every output:
   exponent is 0, or a periodic attractor of a period no harmonic balance was run for).
 
 The record grows by doubling from ``periods`` while the transient cut sits on its bound,
-a relative uncertainty of an RMS exceeds ``rtol`` (absolute for fractions) or the
+a statistic drifts between the record's halves (beyond 3 uncertainties: its uncertainty
+is then that drift), a relative uncertainty of an RMS exceeds ``rtol`` (absolute for fractions) or the
 exponent is above the floor but within 3 standard errors of 0, up to
 ``max_periods`` (``settled`` says whether the targets were met). The cost is about
 2 x the periods integrated (the twin), ~10 ms a period for an 84-DOF model at 256
@@ -310,18 +311,31 @@ def _wnorm(ds: NDArray, N: int, omega: float) -> float:
     return math.sqrt(float(ds[:N] @ ds[:N]) + float(ds[N : 2 * N] @ ds[N : 2 * N]) / omega**2)
 
 
-def _statistics(rec: _Recorder, cut: int) -> tuple[dict, dict]:
-    """Every link's statistics over the periods after ``cut``, and the first mesh's metrics,
-    each uncertainty at least half the difference between the statistic over the first
-    and the second half of the record (a two-part stationarity check in the manner of
-    Geweke 1992, Bayesian Statistics 4:169: a slow drift that batch means miss)."""
+#: A drift between the record's halves below this relative size is rounding, not a trend;
+#: no uncertainty is stated below it.
+DRIFT_FLOOR = 1e-9
+
+
+def _statistics(rec: _Recorder, cut: int) -> tuple[dict, dict, bool]:
+    """Every link's statistics over the periods after ``cut``, the first mesh's metrics,
+    and whether any drifts: the statistic over the record's first half and over its second
+    differ by more than 3 of their combined uncertainties (and :data:`DRIFT_FLOOR`
+    relative), a two-part stationarity test in the manner of Geweke 1992 (Bayesian
+    Statistics 4:169) that catches the slow end of a transient batch means miss. A
+    drifting statistic's uncertainty is raised to that difference, every one to at least
+    :data:`DRIFT_FLOOR` of its value."""
     half = cut + (len(rec.rows) - cut) // 2
     links, mesh = _statistics_of(rec, cut, None)
     (l1, m1), (l2, m2) = _statistics_of(rec, cut, half), _statistics_of(rec, half, None)
+    drift = False
     for full, a, b in ((links, l1, l2), (mesh, m1, m2)):
         for k, e in full.items():
-            full[k] = Estimate(e.value, max(e.uncertainty, abs(a[k].value - b[k].value) / 2))
-    return links, mesh
+            gap = abs(a[k].value - b[k].value)
+            floor = DRIFT_FLOOR * abs(e.value)
+            drifts = gap > 3 * math.hypot(a[k].uncertainty, b[k].uncertainty) and gap > floor
+            drift = drift or drifts
+            full[k] = Estimate(e.value, max(e.uncertainty, gap if drifts else 0.0, floor))
+    return links, mesh, drift
 
 
 def _statistics_of(rec: _Recorder, cut: int, stop: int | None) -> tuple[dict, dict]:
@@ -467,10 +481,10 @@ def time_answer(
                 progress(len(rec.rows), target)
         cuts = [mser5(x) for x in rec.cut_series()]
         cut = max(c for c, _ in cuts)
-        links, mesh = _statistics(rec, cut)
+        links, mesh, drift = _statistics(rec, cut)
         lam = batch_mean(np.array(logs[max(cut, 10) :]))
         undecided = LYAPUNOV_FLOOR < lam.value <= 3 * lam.uncertainty
-        settled = all(ok for _, ok in cuts) and _targets_met(links, rtol) and not undecided
+        settled = all(ok for _, ok in cuts) and _targets_met(links, rtol) and not (undecided or drift)
         if settled or target >= max_periods:
             break
         target = min(2 * target, int(max_periods))
