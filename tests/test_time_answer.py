@@ -138,3 +138,21 @@ def test_sweep_answers_its_gaps_and_draws_them_apart(kb_sweep):
     lines = [ln for ln in ax.get_lines() if ln.get_linestyle() == "-"]
     for ln in lines:
         assert np.count_nonzero(np.isfinite(ln.get_ydata())) <= 1
+
+
+def test_command_line_switches():
+    from argparse import Namespace
+
+    from nlgrd.cli import build_parser
+    from nlgrd.cli_link_sweep import time_answers
+    from nlgrd.errors import ModelError
+
+    args = build_parser().parse_args(["sweep", KB, "--hz", "3500:3600:3", "--no-time-domain"])
+    assert args.no_time_domain and args.time_periods == 4096
+    sentinel = object()
+    assert time_answers(args, None, sentinel, "auto") is sentinel  # switched off: untouched
+    assert time_answers(Namespace(no_time_domain=False, no_stability=False), None, sentinel, 1) is sentinel
+    with pytest.raises(ModelError, match="--time-periods"):
+        time_answers(
+            Namespace(no_time_domain=False, no_stability=False, time_periods=10), None, sentinel, "auto"
+        )
