@@ -156,3 +156,32 @@ def test_command_line_switches():
         time_answers(
             Namespace(no_time_domain=False, no_stability=False, time_periods=10), None, sentinel, "auto"
         )
+
+
+@pytest.mark.slow
+def test_kubo_bands_against_four_times_longer_integrations():
+    """Kubo's rig on notebook 01's grid, swept down from 16 000 rpm onto the high branch:
+    8602 rpm (quasi-periodic rattling), 8508 rpm (chaotic) and 7057 rpm (leaves the
+    unstable orbit for the stable low-branch one), each against a 4x longer record
+    (docs/verification.md, "Time-domain answers"); minutes."""
+    system = nlgrd.load("data/case_studies/kubo.toml")
+    rpm = np.linspace(2000, 16000, 300)
+    rpm = rpm[rpm >= 6000]
+    res = nlgrd.sweep(system, rpm=rpm, directions="down", time_domain=False).mesh
+    model = build_link_model(system)
+    expect = {8602.0: (20.0e-6, 0.5), 8508.4: (20.0e-6, 0.5), 7056.9: (3.0e-6, 0.0)}
+    for speed, (dte_low, loss_low) in expect.items():
+        i = int(np.argmin(np.abs(rpm - speed)))
+        assert res.no_stable[i]
+        z = base_harmonics(res.harmonics[i], int(res.base))
+        a = time_answer(model, float(res.omega[i]), harmonics=z)
+        b = time_answer(
+            model, float(res.omega[i]), harmonics=z, periods=4 * a.periods, max_periods=4 * a.periods
+        )
+        for key, e in a.links.items():
+            f = b.links[key]
+            assert abs(e.value - f.value) <= 2 * e.uncertainty + 2 * f.uncertainty, (speed, key, e, f)
+        assert a.links["mesh0.dte_rms [m]"].value > dte_low  # the rattling branch / the low branch
+        assert a.links["mesh0.contact_loss_fraction [-]"].value >= loss_low
+        if speed == 8508.4:
+            assert a.kind == b.kind == CHAOTIC
