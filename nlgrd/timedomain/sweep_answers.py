@@ -5,8 +5,9 @@ from that unstable orbit (its mesh-periodic part), and its ``response`` becomes
 "time domain" or "chaotic" with the values' sampling uncertainty beside them.
 
 A point whose harmonic balance did not converge stays "not converged" (no orbit to start
-from). The bearing forces of the linear bearings are not computed for the time-answered
-points (NaN).
+from); a point whose transient outlasts ``max_periods`` (its MSER-5 cut in the record's
+second half) stays unanswered, as it was. The bearing forces of the linear bearings are
+not computed for the time-answered points (NaN).
 """
 
 from __future__ import annotations
@@ -82,7 +83,9 @@ def answer_gaps(
     answers: dict[int, TimeAnswer] = {}
     for n, i in enumerate(rows):
         z = base_harmonics(result.harmonics[i], int(result.base))
-        answers[int(i)] = time_answer(model, float(result.omega[i]), harmonics=z, **options)
+        a = time_answer(model, float(result.omega[i]), harmonics=z, **options)
+        if a.transient_over:  # else not answered: the transient outlasts the cap
+            answers[int(i)] = a
         if progress is not None:
             progress(n + 1, rows.size)
     if not answers:

@@ -112,6 +112,9 @@ class TimeAnswer:
         Wall time [s].
     state : tuple of ndarray
         (q, q', q'') at the end, to continue from.
+    transient_over : bool
+        Every MSER-5 cut lies inside the record's first half: the transient ended within
+        it (False: it outlasts the record; the statistics are not the steady ones).
     """
 
     omega: float
@@ -125,6 +128,7 @@ class TimeAnswer:
     harmonics: NDArray
     seconds: float
     state: tuple = field(repr=False, default=())
+    transient_over: bool = True
 
 
 def mser5(x: NDArray, batch: int = MSER_BATCH) -> tuple[int, bool]:
@@ -324,18 +328,32 @@ def _statistics(rec: _Recorder, cut: int) -> tuple[dict, dict, bool]:
     Statistics 4:169) that catches the slow end of a transient batch means miss. A
     drifting statistic's uncertainty is raised to that difference, every one to at least
     :data:`DRIFT_FLOOR` of its value."""
-    half = cut + (len(rec.rows) - cut) // 2
+    n = len(rec.rows) - cut
     links, mesh = _statistics_of(rec, cut, None)
-    (l1, m1), (l2, m2) = _statistics_of(rec, cut, half), _statistics_of(rec, half, None)
+    halves = _statistics_of(rec, cut, cut + n // 2), _statistics_of(rec, cut + n // 2, None)
+    thirds = [_statistics_of(rec, cut + j * n // 3, cut + (j + 1) * n // 3) for j in range(3)]
     drift = False
-    for full, a, b in ((links, l1, l2), (mesh, m1, m2)):
+    for w, full in enumerate((links, mesh)):
+        a, b = halves[0][w], halves[1][w]
         for k, e in full.items():
             gap = abs(a[k].value - b[k].value)
             floor = DRIFT_FLOOR * abs(e.value)
             drifts = gap > 3 * math.hypot(a[k].uncertainty, b[k].uncertainty) and gap > floor
             drift = drift or drifts
-            full[k] = Estimate(e.value, max(e.uncertainty, gap if drifts else 0.0, floor))
+            full[k] = Estimate(
+                e.value,
+                max(e.uncertainty, _tail(gap, [t[w][k].value for t in thirds]) if drifts else 0.0, floor),
+            )
     return links, mesh, drift
+
+
+def _tail(gap: float, thirds: list[float]) -> float:
+    """What a drifting statistic may still move: the gap between the record's halves, or
+    more, the geometric tail d₂ r/(1 - r) of its thirds' steps d₁, d₂ (r = d₂/d₁: a
+    transient decaying exponentially, Aitken's extrapolation) when it decays that way."""
+    d1, d2 = thirds[1] - thirds[0], thirds[2] - thirds[1]
+    r = d2 / d1 if d1 != 0 else 0.0
+    return max(gap, abs(d2) * r / (1 - r)) if 0 < r < 1 else gap
 
 
 def _statistics_of(rec: _Recorder, cut: int, stop: int | None) -> tuple[dict, dict]:
@@ -503,4 +521,5 @@ def time_answer(
         analyse(avg, H),
         time.perf_counter() - t0,
         (s[:N].copy(), s[N : 2 * N].copy(), s[2 * N : 3 * N].copy()),
+        all(ok for _, ok in cuts),
     )
