@@ -106,6 +106,7 @@ def test_statistics_against_a_four_times_longer_integration(kb_sweep):
     a = time_answer(model, w, harmonics=z, periods=256, max_periods=512)
     b = time_answer(model, w, harmonics=z, periods=4 * a.periods, max_periods=4 * a.periods)
     assert b.periods == 4 * a.periods
+    assert a.transient_over and b.transient_over
     for key, e in a.links.items():
         f = b.links[key]
         bound = 2 * e.uncertainty + 2 * f.uncertainty
