@@ -187,3 +187,18 @@ def test_kubo_bands_against_four_times_longer_integrations():
         assert a.links["mesh0.contact_loss_fraction [-]"].value >= loss_low
         if speed == 8508.4:
             assert a.kind == b.kind == CHAOTIC
+
+
+def test_link_sweep_answers_its_gaps():
+    """The link path (any model): K&B's rig reduced to its links and swept as a link model."""
+    from nlgrd.nonlinear.link_model import link_sweep
+
+    model = build_link_model(nlgrd.load(KB))
+    res = link_sweep(model, 2 * np.pi * np.array([3500.0, 3600.0]), 5, directions="up")
+    assert list(np.asarray(res.result.no_stable)) == [False, True]
+    out = with_time_answers(res, model, periods=80, max_periods=80)
+    frame = out.to_frame()
+    assert frame["response"].iloc[1] in (TIME_DOMAIN, CHAOTIC)
+    assert np.isfinite(frame["mesh0.dte_rms [m]"].iloc[1])
+    assert frame["mesh0.dte_rms_uncertainty [m]"].iloc[1] > 0
+    assert np.isnan(frame["mesh0.dte_rms_uncertainty [m]"].iloc[0])
