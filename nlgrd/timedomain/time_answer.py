@@ -17,25 +17,28 @@ period. From the per-period values of every output:
   batch means, B = 20 batches (Schmeiser 1982, Oper. Res. 30:556: 10-30 batches), the
   standard error sd(b)/√B inflated by sqrt((1 + r)/(1 - r)) where the lag-1 correlation
   r of the batch means is beyond 2/√B (Bartlett's band: the batches are too short; the
-  AR(1) variance factor); the RMS by the delta
-  method (ms - m² linearised about the record's mean). An extreme's from the B batch
-  extremes as Gumbel variates (Gumbel 1958, Statistics of Extremes, ch. 6): the record's
-  extreme is Gumbel with the batches' scale β = √6 s/π, so its standard deviation is s,
-  the standard deviation of the batch extremes. An extreme only grows with the record:
-  a 4x longer one is on average β ln 4 ≈ 1.1 s higher (for a bounded attractor less).
+  AR(1) variance factor); the RMS by the delta method (ms - m² linearised about the
+  record's mean). An extreme's from the B batch extremes as Gumbel variates (Gumbel
+  1958, Statistics of Extremes, ch. 6): the record's extreme is Gumbel with the
+  batches' scale β = √6 s/π, so its standard deviation is s, the standard deviation of
+  the batch extremes. An extreme only grows with the record: a 4x longer one is on
+  average β ln 4 ≈ 1.1 s higher (for a bounded attractor less).
 - **Classification**: "chaotic" when the largest Lyapunov exponent, from a twin
   trajectory started d₀ away and renormalised every period (Benettin et al. 1980,
-  Meccanica 15:9), is positive beyond 3 of its batch-means standard errors and above
-  1e-3 per period (e-folding in under 1000 periods); else "time domain" (a torus, whose
-  exponent is 0, or a periodic attractor of a period no harmonic balance was run for).
+  Meccanica 15:9; the separation measured on (q, q'/ω) without its rigid-body part, a
+  free mode's drift being neutral), is positive beyond 3 of its batch-means standard
+  errors and above 1e-3 per period (e-folding in under 1000 periods); else "time
+  domain" (a torus, whose exponent is 0, or a periodic attractor no harmonic balance
+  was run for). A clear two-frequency spectrum is thus "time domain".
 
 The record grows by doubling from ``periods`` while the transient cut sits on its bound,
 a statistic drifts between the record's halves (beyond 3 uncertainties: its uncertainty
-is then that drift), a relative uncertainty of an RMS exceeds ``rtol`` (absolute for fractions) or the
-exponent is above the floor but within 3 standard errors of 0, up to
-``max_periods`` (``settled`` says whether the targets were met). The cost is about
-2 x the periods integrated (the twin), ~10 ms a period for an 84-DOF model at 256
-steps.
+is then that drift, or Aitken's tail of its thirds), a relative uncertainty of an RMS
+exceeds ``rtol`` (absolute for fractions) or the exponent is above the floor but within 3
+standard errors of 0, up to ``max_periods`` (``settled`` says whether the targets were
+met, ``transient_over`` whether the cut lies in the first half). The cost is 2 x the
+periods integrated (the twin): 2-4 ms a period on Kubo's 84-DOF and K&B's 60-DOF
+models at 256 steps (docs/verification.md, "Time-domain answers").
 """
 
 from __future__ import annotations
