@@ -166,6 +166,8 @@ def sweep(
     period: int | str = "auto",
     stability: bool = True,
     progress: Callable[[int, int], None] | None = None,
+    time_domain: bool = True,
+    time_options: dict | None = None,
     **options,
 ):
     """Up and/or down harmonic-balance sweep of any model.
@@ -186,6 +188,12 @@ def sweep(
         Floquet stability of each point.
     progress : callable, optional
         ``progress(i, n)`` once per point.
+    time_domain : bool
+        With ``period`` "auto" and stability: every point without a stable periodic
+        response answered by time integration (:mod:`nlgrd.timedomain.sweep_answers`;
+        ``response`` "time domain" or "chaotic", values with their uncertainty).
+    time_options : dict, optional
+        Options of :func:`nlgrd.timedomain.time_answer.time_answer` (``max_periods``, ...).
     **options
         Further options of :func:`nlgrd.nonlinear.sweep.sweep` (``tol``, ``jump``, ...).
 
@@ -200,10 +208,18 @@ def sweep(
     if _single_mesh(system):
         from nlgrd.nonlinear.geared import geared_sweep
 
-        return geared_sweep(system, omegas, H=H, model=m, **common, **options)
-    from nlgrd.nonlinear.link_model import link_sweep
+        res = geared_sweep(system, omegas, H=H, model=m, **common, **options)
+    else:
+        from nlgrd.nonlinear.link_model import link_sweep
 
-    return link_sweep(m, omegas, H, **common, **options)
+        res = link_sweep(m, omegas, H, **common, **options)
+    if time_domain and period == "auto" and stability:
+        from nlgrd.nonlinear.link_model import build_link_model
+        from nlgrd.timedomain.sweep_answers import with_time_answers
+
+        links = m if not _single_mesh(system) else build_link_model(system)
+        res = with_time_answers(res, links, **(time_options or {}))
+    return res
 
 
 def continuation(

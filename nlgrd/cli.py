@@ -446,6 +446,19 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"periods sought by --search-at, in mesh periods (default {DEFAULT_PERIODS}; at most 6)",
     )
     sw.add_argument("--no-stability", action="store_true", help="skip the Floquet stability of each point")
+    sw.add_argument(
+        "--no-time-domain",
+        action="store_true",
+        help="with --period auto, leave the points without a stable periodic response unanswered "
+        "(default: each is integrated in time from its unstable orbit; response 'time domain' or "
+        "'chaotic', values with their sampling uncertainty)",
+    )
+    sw.add_argument(
+        "--time-periods",
+        type=int,
+        default=4096,
+        help="most base periods integrated per time-domain point (default 4096; at least 80)",
+    )
     sw.add_argument("--out", default="sweep.csv", help="CSV file (default sweep.csv)")
     sw.add_argument("--plot", default=None, help="PNG file (default: the CSV's name with .png)")
     sw.set_defaults(func=cmd_sweep)

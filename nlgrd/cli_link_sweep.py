@@ -22,6 +22,7 @@ __all__ = [
     "link_search",
     "link_sweep_command",
     "needs_links",
+    "time_answers",
 ]
 
 
@@ -63,6 +64,51 @@ def link_quantity(text: str | None, model) -> tuple[str, str]:
         quantities = ", ".join(k.split(" ")[0] for k in keys[name])
         raise ModelError("--quantity", f"link {name!r} has no {q!r}; it has {quantities}")
     return f"{name}.{match[0]}", f"{name}: {match[0]}"
+
+
+def time_answers(args, system, res, period, model=None):
+    """``res`` with its points without a stable periodic response answered in the time
+    domain (:func:`nlgrd.timedomain.sweep_answers.with_time_answers`), unless
+    ``--no-time-domain``, ``--no-stability`` or a ``--period`` other than auto.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options of ``nlgrd sweep``.
+    system : RotorSystem
+        The model.
+    res : GearedSweepResult or LinkSweepResult
+        The sweep.
+    period : int or str
+        The parsed ``--period``.
+    model : LinkModel, optional
+        The link model (built from ``system`` when None).
+
+    Returns
+    -------
+    GearedSweepResult or LinkSweepResult
+
+    Raises
+    ------
+    ModelError
+        ``--time-periods`` below 80.
+    """
+    if args.no_time_domain or args.no_stability or period != "auto":
+        return res
+    if args.time_periods < 80:
+        raise ModelError("--time-periods", f"must be at least 80, got {args.time_periods}")
+    from nlgrd.io.command_line import ProgressBar
+    from nlgrd.nonlinear.link_model import build_link_model
+    from nlgrd.timedomain.sweep_answers import with_time_answers
+
+    cap = int(args.time_periods)
+    return with_time_answers(
+        res,
+        model if model is not None else build_link_model(system),
+        progress=ProgressBar("time domain"),
+        periods=min(512, cap),
+        max_periods=cap,
+    )
 
 
 def link_sweep_command(args, system, values, out, png, search=None, unit_of=None) -> int:
@@ -125,6 +171,7 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
             period=period,
             progress=ProgressBar("sweep"),
         )
+        res = time_answers(args, system, res, period, model)
     H = res.result.H  # of the base frequency, whatever the period of the points (as the CSV's H)
     frame = res.to_frame()
     frame.insert(1, "shaft_speed [rpm]", frame["base_frequency [Hz]"] * plan.speed_per_base * 60)
@@ -132,10 +179,10 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
     snap_to_grid(frame, x_col, values)  # the speeds as typed, not their round trip through rad/s
     plt = pyplot()
     from nlgrd.plotting.common import axis_label, place_legend
+    from nlgrd.plotting.nonlinear import plot_sweep_frame
 
     fig, ax = plt.subplots(figsize=(7, 4))
-    for direction, part in frame.groupby("direction", sort=False):
-        ax.plot(part[x_col], part[column], ".-", label=f"sweep {direction}")
+    plot_sweep_frame(frame, x_col, column, ax, label="sweep")
     ax.set_xlabel(axis_label(x_col))
     ax.set_ylabel(axis_label(column))
     ax.set_title(f"{(system.name or 'model')[:60]}\nbase frequency: {plan.name}, H = {H}", fontsize=9)
@@ -158,12 +205,14 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
         files.commit()
     r = res.result
     bad = int(np.sum(~r.converged))
-    lost = int(np.sum(np.asarray(r.no_stable, dtype=bool)))
+    timed = int(np.sum(r.time_answered))
+    lost = int(np.sum(np.asarray(r.no_stable, dtype=bool))) - timed
     print(
         f"sweep: {len(r)} points ({args.direction}), links {', '.join(lk.name for lk in model.links)}, "
         f"base frequency = {plan.name} ({1 / plan.speed_per_base:.6g} x the shaft speed), "
         f"{harmonics_line(r)}, "
-        f"{bad} not converged, {lost} without a stable periodic response"
+        f"{bad} not converged, {lost} without a stable periodic response, {timed} answered in the "
+        "time domain"
     )
     _periods(r, unit=(60 * plan.speed_per_base, "rpm") if args.rpm is not None else (1.0, "Hz"))
     print(f"wrote {out} and {png}" + "".join(f", {path}" for path, _ in beside))

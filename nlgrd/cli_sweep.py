@@ -175,6 +175,9 @@ def cmd_sweep(args) -> int:
         progress=ProgressBar("sweep"),
         period=period,
     )
+    from nlgrd.cli_link_sweep import time_answers
+
+    res = time_answers(args, system, res, period)
     found = None
     if search is not None:
         from nlgrd.cli_orbits import search_command
@@ -352,8 +355,9 @@ def _summary(args, res, unit, out, png, transitions) -> int:
         print(f"wrote {out} and {png}")
         print(f"nlgrd: error: no point of the sweep converged{none_of(args.period)}", file=sys.stderr)
         return 1
-    torus = np.isfinite(res.mesh.secondary_frequency)
-    lost = np.atleast_1d(res.mesh.omega[res.mesh.no_stable & ~torus])
+    timed = res.mesh.time_answered
+    torus = np.isfinite(res.mesh.secondary_frequency) & ~timed
+    lost = np.atleast_1d(res.mesh.omega[res.mesh.no_stable & ~torus & ~timed])
     if len(lost):
         print(
             f"no stable periodic response (response column; NaN outputs) at {unit.name}: "
@@ -368,6 +372,14 @@ def _summary(args, res, unit, out, png, transitions) -> int:
                 for w, f in zip(res.mesh.omega[torus], res.mesh.secondary_frequency[torus], strict=True)
             )
         )
+    kinds = np.asarray(res.mesh.time_kind, dtype=object)
+    for kind in ("time domain", "chaotic"):
+        at = timed & (kinds == kind)
+        if np.any(at):
+            print(
+                f"{kind} (no stable periodic orbit; integrated in time, values ± their uncertainty) at "
+                f"{unit.name}: " + ", ".join(unit(w) for w in res.mesh.omega[at])
+            )
     two = np.atleast_1d(res.mesh.omega[(res.mesh.period == 2) & res.mesh.converged & ~res.mesh.no_stable])
     if len(two):
         print(f"period 2 (period doubled) at {unit.name}: " + ", ".join(unit(w) for w in two))

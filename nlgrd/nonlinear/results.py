@@ -18,10 +18,8 @@ from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.jumps import Jump, find_jumps
-from nlgrd.nonlinear.metrics import METRIC_NAMES, NO_STABLE, MeshMetrics
-
-#: The response where an orbit lost stability to a complex pair (a torus): not drawn.
-QUASI_PERIODIC = "quasi-periodic"
+from nlgrd.nonlinear.metrics import METRIC_NAMES, MeshMetrics
+from nlgrd.nonlinear.response_kinds import QUASI_PERIODIC, response_kind, uncertainty_column  # noqa: F401
 
 #: A point is stable when max |μ| < 1 + STABLE_RTOL.
 STABLE_RTOL = 1e-6
@@ -112,26 +110,6 @@ def instability_kind(mu: NDArray, stable: NDArray) -> NDArray:
     return out
 
 
-def response_kind(result: SweepResult) -> NDArray:
-    """Per point: "periodic" (the mesh period), "period ν", "quasi-periodic" (lost to a
-    complex pair, ``secondary_frequency`` known) or :data:`NO_STABLE`.
-
-    Parameters
-    ----------
-    result : SweepResult
-        The sweep.
-
-    Returns
-    -------
-    ndarray of str (object)
-    """
-    period = np.asarray(result.period, dtype=int)
-    out = np.array(["periodic" if p == 1 else f"period {p}" for p in period], dtype=object).reshape(-1)
-    out[result.no_stable] = NO_STABLE
-    out[result.no_stable & np.isfinite(result.secondary_frequency)] = QUASI_PERIODIC
-    return out
-
-
 def _significant(values: NDArray, digits: int) -> NDArray:
     """``values`` rounded to ``digits`` significant digits (an estimate's noise not written)."""
     v = np.asarray(values, dtype=float).copy()
@@ -209,6 +187,12 @@ class SweepResult:
     base : int
         The harmonics are of ω/base (2 when some point has period 2, N for a shaft-order
         sweep): :attr:`H_stored` = base · :attr:`H` of them (docs/conventions.md, "H").
+    time_kind : ndarray of str (object), optional
+        Per point: "" or, where no stable periodic response exists and a time integration
+        answered (:mod:`nlgrd.timedomain.time_answer`), :data:`TIME_DOMAIN` or
+        :data:`CHAOTIC`; the metrics there are its statistics.
+    uncertainty : dict of str -> ndarray, optional
+        Standard uncertainty of each metric of the time-answered points (SI; NaN elsewhere).
     """
 
     omega: NDArray
@@ -231,6 +215,8 @@ class SweepResult:
     period: NDArray | None = None
     subharmonic_amplitude: NDArray | None = None
     base: int = 1
+    time_kind: NDArray | None = None
+    uncertainty: dict | None = None
 
     def __post_init__(self):
         if self.residual_kind not in RESIDUAL_COLUMNS:
@@ -247,6 +233,13 @@ class SweepResult:
             object.__setattr__(self, "dominant_multiplier", np.full(self.omega.size, np.nan + 0j))
         if self.harmonic_error is None:
             object.__setattr__(self, "harmonic_error", np.full(self.omega.size, np.nan))
+        if self.time_kind is None:
+            object.__setattr__(self, "time_kind", np.full(n, "", dtype=object))
+
+    @property
+    def time_answered(self) -> NDArray:
+        """Points without a stable periodic response that a time integration answered."""
+        return np.asarray(self.time_kind != "", dtype=bool) & np.asarray(self.no_stable, dtype=bool)
 
     @property
     def H(self) -> int:
@@ -321,6 +314,8 @@ class SweepResult:
             self.period[keep],
             self.subharmonic_amplitude[keep],
             self.base,
+            self.time_kind[keep],
+            None if self.uncertainty is None else {k: v[keep] for k, v in self.uncertainty.items()},
         )
 
     def failures(self) -> NDArray:
@@ -420,11 +415,17 @@ class SweepResult:
         data["period"][~ok | self.no_stable] = pd.NA
         data["subharmonic_amp [um]"][self.no_stable] = np.nan
         data["instability"][~ok | ~self.stability_known] = pd.NA
-        ok = ok & ~self.no_stable  # the metrics: of the response only
+        timed = self.time_answered
+        ok = ok & (~self.no_stable | timed)  # the metrics: of the response only
         for name in METRIC_NAMES:
             col, scale = _UNITS[name]
             v = self.metrics[name]
             data[col] = flag(v, ok) if scale is None else num(v) * scale
+        if timed.any() and self.uncertainty is not None:  # the time answers' sampling uncertainty
+            for name, u in self.uncertainty.items():
+                col, scale = _UNITS[name]
+                if scale is not None:
+                    data[uncertainty_column(col)] = np.where(timed, np.asarray(u, float) * scale, np.nan)
         for k in range(self.amplitudes.shape[1]):
             data[f"dte_amp_{k} [um]"] = num(self.amplitudes[:, k]) * 1e6
         return pd.DataFrame(data)

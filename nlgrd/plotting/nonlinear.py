@@ -48,6 +48,8 @@ PERIODIC = "periodic"
 QUASI_PERIODIC = "quasi-periodic"
 #: ... of a point where no stable periodic response was found.
 NO_STABLE = "no stable mesh-periodic response"
+#: ... of points answered by time integration: (value, marker), drawn with error bars.
+TIME_ANSWERS = (("time domain", "D"), ("chaotic", "*"))
 
 
 def _stability(frame: pd.DataFrame) -> np.ndarray:
@@ -93,7 +95,9 @@ def plot_sweep_frame(
     frame : pandas.DataFrame
         The sweep table(s), e.g. :func:`sweep_table` or a written sweep table, several
         concatenated. Rows with an optional ``response`` column other than "periodic" that
-        converged are marked apart on the bottom edge ("no stable periodic response").
+        converged are marked apart on the bottom edge ("no stable periodic response"),
+        but "time domain" and "chaotic" rows at their value as open diamonds and stars with
+        error bars of 2 x the ``<y>_uncertainty`` column when there is one.
     x : str
         Column of the abscissa (its :func:`~nlgrd.plotting.common.axis_label` is the x label).
     y : str
@@ -139,6 +143,9 @@ def plot_sweep_frame(
         conv = flags(part["converged"].to_numpy(object)) if "converged" in part else np.isfinite(yv)
         codes = _stability(part)
         yv = np.where(conv, yv, np.nan)
+        resp = part["response"].astype(str).to_numpy() if "response" in part else np.full(len(part), "")
+        timed = np.isin(resp, [k for k, _ in TIME_ANSWERS]) & conv
+        yt, yv = np.where(timed, yv, np.nan), np.where(timed, np.nan, yv)  # never drawn as periodic
         colour = colours.get(d, next(iter(colours.values())))
         name = f"{label} {d}" if label else d
         yv, _ = clip_to_scale(ax, xv, yv, ylim, colour, name, codes)
@@ -158,7 +165,10 @@ def plot_sweep_frame(
         )
         mark_not_converged(ax, xv[~conv], colour, name, not_converged)
         if "response" in part:
-            _mark_responses(ax, part["response"].astype(str).to_numpy(), conv, xv, yv, colour, name, ms)
+            _mark_responses(ax, resp, conv, xv, yv, colour, name, ms)
+            err = _uncertainty_column(y)
+            ev = pd.to_numeric(part[err], errors="coerce").to_numpy(float) if err in part else None
+            _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms)
     if ylim is not None:
         ax.set_ylim(*[lim if lim is not None else cur for lim, cur in zip(ylim, ax.get_ylim(), strict=True)])
     ax.set_xlabel(axis_label(x))
@@ -168,17 +178,38 @@ def plot_sweep_frame(
 
 def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms) -> None:
     """Period-ν points ringed where they are drawn; points without a stable periodic
-    response (quasi-periodic, or none found) marked on the bottom edge, each kind counted."""
+    response (quasi-periodic, or none found) and no time answer marked on the bottom edge,
+    each kind counted."""
     resp = np.asarray(resp, dtype=str)
     period = np.char.startswith(resp, "period ")
     for kind in sorted(set(resp[conv & period])):
         at = conv & (resp == kind) & np.isfinite(yv)
         ax.plot(xv[at], yv[at], "o", ms=2.2 * ms, mfc="none", mec=colour, mew=0.8, ls="none",
                 label=f"{name}: {kind} ({int(at.sum())})")  # fmt: skip
-    lost = conv & ~period & ~np.isin(resp, (PERIODIC, "<NA>", "nan"))
+    lost = conv & ~period & ~np.isin(resp, (PERIODIC, "<NA>", "nan", *(k for k, _ in TIME_ANSWERS)))
     quasi = resp == QUASI_PERIODIC
     mark_not_converged(ax, xv[lost & quasi], colour, name, "quasi-periodic", marker="2")
     mark_not_converged(ax, xv[lost & ~quasi], colour, name, "no stable periodic response", marker="1")
+
+
+def _uncertainty_column(column: str) -> str:
+    """ "dte_rms [um]" -> "dte_rms_uncertainty [um]" (the tables' rule,
+    :func:`nlgrd.nonlinear.response_kinds.uncertainty_column`; plotting imports no analysis)."""
+    stem, sep, unit = column.partition(" [")
+    return f"{stem}_uncertainty{sep}{unit}"
+
+
+def _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms) -> None:
+    """Time-domain answers: open diamonds ("time domain") or stars ("chaotic") at their
+    value, not joined, with error bars of 2 standard uncertainties, each kind counted."""
+    for kind, marker in TIME_ANSWERS:
+        at = (resp == kind) & np.isfinite(yt)
+        if not at.any():
+            continue
+        yerr = None if ev is None else 2 * np.where(np.isfinite(ev[at]), ev[at], 0.0)
+        ax.errorbar(xv[at], yt[at], yerr=yerr, fmt=marker, ms=1.3 * ms, mfc="none", mec=colour,
+                    ecolor=colour, elinewidth=0.8, capsize=1.5, ls="none",
+                    label=f"{name}: {kind} ({int(at.sum())}; ±2σ)")  # fmt: skip
 
 
 def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
@@ -205,6 +236,7 @@ def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
     _, scale = _LABELS.get(quantity, (quantity, 1.0))
     n = len(result.omega)
     fm = getattr(result, "floquet_max", None)
+    unc = getattr(result, "uncertainty", None) or {}
     return pd.DataFrame(
         {
             "mesh_frequency [Hz]": np.asarray(result.omega, dtype=float) / (2 * np.pi),
@@ -213,6 +245,7 @@ def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
             "stable": np.asarray(result.stable, dtype=object),
             FLOQUET: np.full(n, np.nan) if fm is None else np.asarray(fm, dtype=float),
             "value": np.asarray(result.metrics[quantity], dtype=float) * scale,
+            "value_uncertainty": np.asarray(unc.get(quantity, np.full(n, np.nan)), dtype=float) * scale,
             "response": _responses(result),
         }
     )

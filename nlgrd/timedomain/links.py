@@ -26,8 +26,9 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.harmonics import analyse
+from nlgrd.nonlinear.harmonics import analyse, evaluate
 from nlgrd.nonlinear.link_model import LinkModel
+from nlgrd.nonlinear.links import GearMeshLink
 from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import SweepResult, assemble_result
 from nlgrd.nonlinear.sweep import sweep_orders
@@ -89,6 +90,213 @@ def _forcing_samples(model: LinkModel, omega: float, ns: int, H: int) -> NDArray
     return np.real(np.exp(1j * np.outer(theta, k)) @ f)
 
 
+class LinkIntegrator:
+    """Fixed-step HHT-α integration of a link model at one base frequency, period by period.
+
+    The state is the extended one of :class:`~nlgrd.timedomain.period_map.PeriodMap`,
+    s = (q, q', q'', g) with g the link forces of the last step. Up to
+    :data:`~nlgrd.timedomain.period_map.MAX_STATE` a period runs on the precomputed period
+    map; above, step by step on all DOFs.
+
+    Parameters
+    ----------
+    model : LinkModel
+        From :func:`nlgrd.nonlinear.link_model.build_link_model`.
+    omega : float
+        Base frequency [rad/s].
+    steps_per_period : int
+        Fixed time steps per period [-].
+    alpha : float
+        HHT-α parameter in [-1/3, 0] [-].
+    forcing_harmonics : int, optional
+        Harmonics of the forcing kept [-]; default all the links' excitation holds (at
+        least 30).
+
+    Attributes
+    ----------
+    N, d, ns : int
+        DOFs, link coordinates and steps per period [-].
+    dt : float
+        Time step [s].
+    step : HHTStep
+        The step matrices (their Newmark coefficients give the link velocities).
+
+    Raises
+    ------
+    ModelError
+        ``alpha`` outside [-1/3, 0].
+    """
+
+    def __init__(
+        self,
+        model: LinkModel,
+        omega: float,
+        *,
+        steps_per_period: int = 512,
+        alpha: float = -0.05,
+        forcing_harmonics: int | None = None,
+    ):
+        if not -1 / 3 <= alpha <= 0:
+            raise ModelError("alpha", f"HHT-α needs -1/3 <= alpha <= 0, got {alpha}")
+        rec = model.receptance
+        self.model, self.omega, self.alpha = model, float(omega), float(alpha)
+        speed = rec.plan.speed(omega)
+        self.M = rec.model.M.tocsc()
+        self.D = (rec.model.damping(speed) + rec.C_link).tocsc()
+        self.K = rec.model.stiffness(speed).tocsc()
+        self.P = rec.P
+        self.N, self.d = self.P.shape
+        self.ns = int(steps_per_period)
+        self.dt = 2 * np.pi / omega / self.ns
+        self.step = hht_step(self.M, self.D, self.K, self.dt, alpha)
+        self.Zp = self.step.lu.solve(self.P)  # K_eff⁻¹ P
+        self.S = self.P.T @ self.Zp
+        if forcing_harmonics is None:
+            forcing_harmonics = max([30] + [getattr(lk, "excitation_harmonics", 0) for lk in model.links])
+        self.F = _forcing_samples(model, omega, self.ns, forcing_harmonics)
+        self.theta = 2 * np.pi * np.arange(self.ns) / self.ns
+        self._eye = np.eye(self.d)
+        self._mesh_law = None
+        link0 = model.links[0]
+        if self.d == 1 and isinstance(link0, GearMeshLink):  # one mesh: the step's exact solution
+            th = self.theta
+            self._mesh_law = (
+                evaluate(link0.mesh.lste, th),
+                link0.mesh.stiffness_time(th),
+                float(link0.mesh.half_backlash),
+                self.step.ap * float(self.S[0, 0]),
+            )
+        self.pmap = None
+        if 3 * self.N + self.d <= MAX_STATE:
+            ap = self.step.ap
+            self.pmap = PeriodMap(self.step, alpha, self.P, ap * np.roll(self.F, -1, axis=0) - alpha * self.F)
+
+    def link_forces(self, y: NDArray, th: float) -> tuple[NDArray, NDArray]:
+        """The links' forces g(y, θ) (d,) [N] and their tangent (d, d) [N/m]."""
+        d = self.d
+        g = np.zeros(d)
+        T = np.zeros((d, d))
+        for link, sl in zip(self.model.links, self.model.receptance.slices, strict=True):
+            gi, ti = link.pointwise(y[sl], th)
+            g[sl] = gi
+            T[sl, sl] = ti
+        return g, T
+
+    def start(self, state0: tuple | None = None) -> NDArray:
+        """The extended state from (q, q'[, q'']); default at rest at the static position of
+        the linear system with the links at their linear stiffness.
+
+        Parameters
+        ----------
+        state0 : tuple of ndarray, optional
+            (q, q') or (q, q', q'') [m, m/s, m/s²].
+
+        Returns
+        -------
+        ndarray (3N + d,)
+        """
+        rec = self.model.receptance
+        N = self.N
+        if state0 is None:
+            u = rec.mean.solve(rec.plan.speed(self.omega), rec.static_force[:, None])[:, 0]
+            v = np.zeros(N)
+        else:
+            u, v = np.array(state0[0], dtype=float), np.array(state0[1], dtype=float)
+        g, _ = self.link_forces(self.P.T @ u, 0.0)
+        if state0 is not None and len(state0) > 2:
+            acc = np.array(state0[2], dtype=float)
+        else:
+            acc = spla.splu(self.M).solve(self.F[0] - self.P @ g - self.D @ v - self.K @ u)
+        return np.concatenate([u, v, acc, g])
+
+    def _solve_y(self, y_lin: NDArray, jn: int) -> tuple[NDArray, NDArray]:
+        """Link coordinates and forces at phase jn from the prediction with g = 0 (Newton on d)."""
+        y = y_lin.copy()
+        ap, eye = self.step.ap, self._eye
+        for _ in range(50):
+            gy, Ty = self.link_forces(y, self.theta[jn])
+            res = y - y_lin + ap * (self.S @ gy)
+            if abs(res).max() <= 1e-13 * (abs(y).max() + 1e-12):
+                return y, gy
+            y = y - np.linalg.solve(eye + ap * (self.S @ Ty), res)
+        return y, self.link_forces(y, self.theta[jn])[0]
+
+    def _solve_link(self, y_lin, j):
+        if self._mesh_law is not None:
+            # y + c k f(y - e) = y_lin with the dead zone f: piecewise linear, solved exactly
+            e, k, b, c = self._mesh_law
+            jn = (j + 1) % self.ns
+            x_lin, ck = y_lin - e[jn], c * k[jn]
+            if x_lin > b:
+                x = (x_lin + ck * b) / (1 + ck)
+                return x + e[jn], k[jn] * (x - b)
+            if x_lin < -b:
+                x = (x_lin - ck * b) / (1 + ck)
+                return x + e[jn], k[jn] * (x + b)
+            return float(y_lin), 0.0
+        if self.d == 1:
+            y1, g1 = self._solve_y(np.array([y_lin]), (j + 1) % self.ns)
+            return float(y1[0]), float(g1[0])
+        return self._solve_y(y_lin, (j + 1) % self.ns)
+
+    def stepped(self, s: NDArray, output_dofs=()) -> tuple[NDArray, NDArray, NDArray]:
+        """One period step by step on all DOFs from the extended state ``s``.
+
+        Parameters
+        ----------
+        s : ndarray (3N + d,)
+            The extended state at the start of the period.
+        output_dofs : sequence of int
+            DOFs recorded.
+
+        Returns
+        -------
+        y : ndarray (d, ns)
+            Link coordinates at the start of each step [m].
+        q : ndarray (len(output_dofs), ns)
+            The output DOFs at the start of each step [m, rad].
+        s : ndarray (3N + d,)
+            The extended state at the end of the period.
+        """
+        N, ns, st, alpha = self.N, self.ns, self.step, self.alpha
+        state, g = s[: 3 * N], s[3 * N :]
+        out = np.asarray(output_dofs, dtype=int)
+        y_hist, q_hist = np.empty((self.d, ns)), np.empty((out.size, ns))
+        for j in range(ns):
+            y_hist[:, j] = self.P.T @ state[:N]
+            q_hist[:, j] = state[out]
+            jn = (j + 1) % ns
+            rhs = st.A_all @ state + st.ap * self.F[jn] - alpha * self.F[j] + alpha * (self.P @ g)
+            q_lin = st.lu.solve(rhs)
+            _, g = self._solve_y(self.P.T @ q_lin, jn)
+            q_new = q_lin - st.ap * (self.Zp @ g)
+            u_old, v_old, acc_old = state[:N], state[N : 2 * N], state[2 * N :]
+            acc_new = st.a1 * (q_new - u_old) - st.a2 * v_old - st.a3 * acc_old
+            v_new = v_old + self.dt * ((1 - st.gamma) * acc_old + st.gamma * acc_new)
+            state = np.concatenate([q_new, v_new, acc_new])
+        return y_hist, q_hist, np.concatenate([state, g])
+
+    def period(self, s: NDArray) -> tuple[NDArray, NDArray]:
+        """One period from the extended state ``s``: on the period map when there is one.
+
+        Parameters
+        ----------
+        s : ndarray (3N + d,)
+            The extended state at the start of the period.
+
+        Returns
+        -------
+        y : ndarray (d, ns)
+            Link coordinates at the start of each step [m].
+        s : ndarray (3N + d,)
+            The extended state at the end of the period.
+        """
+        if self.pmap is None:
+            y, _, s_end = self.stepped(s)
+            return y, s_end
+        return self.pmap.run(s, self._solve_link)
+
+
 @single_blas_thread
 def link_time_response(
     model: LinkModel,
@@ -134,99 +342,17 @@ def link_time_response(
     -------
     LinkTimeResponse
     """
-    if not -1 / 3 <= alpha <= 0:
-        raise ModelError("alpha", f"HHT-α needs -1/3 <= alpha <= 0, got {alpha}")
-    rec = model.receptance
-    speed = rec.plan.speed(omega)
-    M = rec.model.M.tocsc()
-    D = (rec.model.damping(speed) + rec.C_link).tocsc()
-    K = rec.model.stiffness(speed).tocsc()
-    P = rec.P
-    N, d = P.shape
-    ns = int(steps_per_period)
-    dt = 2 * np.pi / omega / ns
-    step = hht_step(M, D, K, dt, alpha)
-    gamma, a1, a2, a3, ap = step.gamma, step.a1, step.a2, step.a3, step.ap
-    lu, A_all = step.lu, step.A_all
-    Zp = lu.solve(P)  # K_eff⁻¹ P
-    S = P.T @ Zp
-    if forcing_harmonics is None:
-        forcing_harmonics = max([30] + [getattr(lk, "excitation_harmonics", 0) for lk in model.links])
-    F = _forcing_samples(model, omega, ns, forcing_harmonics)
-    theta = 2 * np.pi * np.arange(ns) / ns
-
-    def link_forces(y: NDArray, th: float) -> tuple[NDArray, NDArray]:
-        g = np.zeros(d)
-        T = np.zeros((d, d))
-        for link, sl in zip(model.links, rec.slices, strict=True):
-            gi, ti = link.pointwise(y[sl], th)
-            g[sl] = gi
-            T[sl, sl] = ti
-        return g, T
-
-    if state0 is None:
-        u = rec.mean.solve(speed, rec.static_force[:, None])[:, 0]
-        v = np.zeros(N)
-    else:
-        u, v = np.array(state0[0], dtype=float), np.array(state0[1], dtype=float)
-    g, _ = link_forces(P.T @ u, 0.0)
-    if state0 is not None and len(state0) > 2:
-        acc = np.array(state0[2], dtype=float)
-    else:
-        acc = spla.splu(M).solve(F[0] - P @ g - D @ v - K @ u)
-    y_hist = np.empty((d, ns))
-    out = np.asarray(output_dofs, dtype=int)
-    q_hist = np.empty((out.size, ns))
-    eye = np.eye(d)
-
-    def solve_y(y_lin: NDArray, jn: int) -> tuple[NDArray, NDArray]:
-        """Link coordinates and forces at phase jn from the prediction with g = 0 (Newton on d)."""
-        y = y_lin.copy()
-        for _ in range(50):
-            gy, Ty = link_forces(y, theta[jn])
-            res = y - y_lin + ap * (S @ gy)
-            if abs(res).max() <= 1e-13 * (abs(y).max() + 1e-12):
-                return y, gy
-            y = y - np.linalg.solve(eye + ap * (S @ Ty), res)
-        return y, link_forces(y, theta[jn])[0]
-
-    def step_period(state: NDArray, g: NDArray) -> tuple[NDArray, NDArray]:
-        """One period step by step (all DOFs), recording y and the output DOFs."""
-        for j in range(ns):
-            y_hist[:, j] = P.T @ state[:N]
-            q_hist[:, j] = state[out]
-            jn = (j + 1) % ns
-            rhs = A_all @ state + ap * F[jn] - alpha * F[j] + alpha * (P @ g)
-            q_lin = lu.solve(rhs)
-            _, g = solve_y(P.T @ q_lin, jn)
-            q_new = q_lin - ap * (Zp @ g)
-            u_old, v_old, acc_old = state[:N], state[N : 2 * N], state[2 * N :]
-            acc_new = a1 * (q_new - u_old) - a2 * v_old - a3 * acc_old
-            v_new = v_old + dt * ((1 - gamma) * acc_old + gamma * acc_new)
-            state = np.concatenate([q_new, v_new, acc_new])
-        return state, g
-
-    pmap = None
-    if 3 * N + d <= MAX_STATE:
-        pmap = PeriodMap(step, alpha, P, ap * np.roll(F, -1, axis=0) - alpha * F)
-
-    def solve_link(y_lin, j):
-        if d == 1:
-            y1, g1 = solve_y(np.array([y_lin]), (j + 1) % ns)
-            return float(y1[0]), float(g1[0])
-        return solve_y(y_lin, (j + 1) % ns)
-
+    integ = LinkIntegrator(
+        model, omega, steps_per_period=steps_per_period, alpha=alpha, forcing_harmonics=forcing_harmonics
+    )
+    N = integ.N
     scale_c = max((getattr(lk, "clearance", 0.0) for lk in model.links), default=0.0)
     prev, diffs, converged, p = None, [], False, 0
-    state = np.concatenate([u, v, acc])
+    s = integ.start(state0)
+    start = s
     for p in range(1, max_periods + 1):
-        start = (state, g)
-        if pmap is None:
-            state, g = step_period(state, g)
-            cur = y_hist.copy()
-        else:
-            cur, s_end = pmap.run(np.concatenate([state, g]), solve_link)
-            state, g = s_end[: 3 * N], s_end[3 * N :]
+        start = s
+        cur, s = integ.period(s)
         if prev is not None:
             scale = float(np.max(np.ptp(cur, axis=1))) + scale_c + 1e-300
             diffs.append(float(np.max(np.abs(cur - prev))) / scale)
@@ -237,16 +363,17 @@ def link_time_response(
                     converged = True
                     break
         prev = cur
-    if pmap is not None and p:
-        state, g = step_period(*start)  # the last period again, to record the output DOFs
+    y_hist, q_hist, s_end = integ.stepped(start, output_dofs)  # the last period, all DOFs recorded
+    if integ.pmap is not None:
+        s = s_end
     return LinkTimeResponse(
         float(omega),
-        y_hist.copy(),
+        y_hist,
         converged,
         p,
         diffs[-1] if diffs else np.inf,
-        (state[:N].copy(), state[N : 2 * N].copy(), state[2 * N :].copy()),
-        q_hist.copy(),
+        (s[:N].copy(), s[N : 2 * N].copy(), s[2 * N : 3 * N].copy()),
+        q_hist,
     )
 
 

@@ -1,0 +1,161 @@
+"""A sweep's gaps answered in the time domain: every point where the harmonic balance
+converged on an orbit but no stable periodic response exists (``no_stable``: quasi-periodic
+or none) gets the statistics of :func:`nlgrd.timedomain.time_answer.time_answer`, started
+from that unstable orbit (its mesh-periodic part), and its ``response`` becomes
+"time domain" or "chaotic" with the values' sampling uncertainty beside them.
+
+A point whose harmonic balance did not converge stays "not converged" (no orbit to start
+from); a point whose transient outlasts ``max_periods`` (its MSER-5 cut in the record's
+second half) stays unanswered, as it was. The bearing forces of the linear bearings are
+not computed for the time-answered points (NaN).
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+from collections.abc import Callable
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from nlgrd.nonlinear.geared import GearedSweepResult
+from nlgrd.nonlinear.link_model import LinkModel
+from nlgrd.nonlinear.link_results import LinkSweepResult
+from nlgrd.nonlinear.metrics import METRIC_NAMES
+from nlgrd.nonlinear.response_kinds import uncertainty_column
+from nlgrd.nonlinear.results import SweepResult
+from nlgrd.timedomain.time_answer import TimeAnswer, time_answer
+
+__all__ = ["answer_gaps", "base_harmonics", "with_time_answers"]
+
+
+def base_harmonics(harmonics: NDArray, base: int) -> NDArray:
+    """The harmonics of ω from harmonics of ω/``base`` (the orbit's mesh-periodic part).
+
+    Parameters
+    ----------
+    harmonics : ndarray (n, 2 H base + 1)
+        Real harmonics of ω/base [m].
+    base : int
+        The base divisor [-].
+
+    Returns
+    -------
+    ndarray (n, 2H + 1)
+    """
+    z = np.atleast_2d(np.asarray(harmonics, dtype=float))
+    Hs = (z.shape[-1] - 1) // 2
+    keep = [0] + [c for k in range(base, Hs + 1, base) for c in (2 * k - 1, 2 * k)]
+    return z[:, keep]
+
+
+def answer_gaps(
+    model: LinkModel,
+    result: SweepResult,
+    *,
+    progress: Callable[[int, int], None] | None = None,
+    **options,
+) -> tuple[SweepResult, dict[int, TimeAnswer]]:
+    """Time answers at the points of ``result`` without a stable periodic response.
+
+    Parameters
+    ----------
+    model : LinkModel
+        The sweep's model as a link model (one mesh too:
+        :func:`nlgrd.nonlinear.link_model.build_link_model`).
+    result : SweepResult
+        The sweep (its harmonics of ω/``base`` on the link coordinates of ``model``).
+    progress : callable, optional
+        ``progress(done, total)`` after each point answered.
+    **options
+        Options of :func:`~nlgrd.timedomain.time_answer.time_answer` (``max_periods``, ...).
+
+    Returns
+    -------
+    SweepResult
+        ``time_kind``, the first mesh's metrics and their ``uncertainty`` set at the
+        answered points, the DTE amplitudes those of the synchronous average.
+    dict of int to TimeAnswer
+        The answers by row.
+    """
+    rows = np.nonzero(np.asarray(result.converged, bool) & np.asarray(result.no_stable, bool))[0]
+    answers: dict[int, TimeAnswer] = {}
+    for n, i in enumerate(rows):
+        z = base_harmonics(result.harmonics[i], int(result.base))
+        a = time_answer(model, float(result.omega[i]), harmonics=z, **options)
+        if a.transient_over:  # else not answered: the transient outlasts the cap
+            answers[int(i)] = a
+        if progress is not None:
+            progress(n + 1, rows.size)
+    if not answers:
+        return result, answers
+    kind = np.array(result.time_kind, dtype=object)
+    metrics = {k: np.array(v, copy=True) for k, v in result.metrics.items()}
+    unc = {k: np.full(len(result), np.nan) for k in METRIC_NAMES if k != "back_contact"}
+    if result.uncertainty is not None:
+        unc.update({k: np.array(v, dtype=float) for k, v in result.uncertainty.items()})
+    amps = np.array(result.amplitudes, dtype=float, copy=True)
+    H = amps.shape[1] - 1
+    for i, a in answers.items():
+        kind[i] = a.kind
+        for name, e in a.mesh.items():
+            metrics[name][i] = e.value
+            if name in unc:
+                unc[name][i] = e.uncertainty
+        if a.mesh:
+            z = a.harmonics[0]
+            k = min(H, (z.size - 1) // 2)
+            amps[i] = np.nan
+            amps[i, 0] = abs(z[0])
+            amps[i, 1 : k + 1] = np.hypot(z[1 : 2 * k : 2], z[2 : 2 * k + 1 : 2])
+    metrics["back_contact"] = metrics["back_contact"].astype(bool)
+    return dc.replace(result, time_kind=kind, metrics=metrics, uncertainty=unc, amplitudes=amps), answers
+
+
+def _link_frame(links: pd.DataFrame, answers: dict[int, TimeAnswer]) -> pd.DataFrame:
+    """A link sweep's columns with the answered rows' values and their uncertainty columns."""
+    out = links.copy()
+    for i, a in answers.items():
+        for key, e in a.links.items():
+            out.loc[i, key] = e.value
+            if key.rsplit(".", 1)[-1] != "back_contact":
+                col = uncertainty_column(key)
+                if col not in out:
+                    out[col] = np.nan
+                out.loc[i, col] = e.uncertainty
+    return out
+
+
+def with_time_answers(
+    result,
+    model: LinkModel,
+    *,
+    progress: Callable[[int, int], None] | None = None,
+    **options,
+):
+    """A sweep's result (one mesh, a link model, or the bare points) with its gaps answered
+    in the time domain (:func:`answer_gaps`).
+
+    Parameters
+    ----------
+    result : GearedSweepResult, LinkSweepResult or SweepResult
+        The sweep.
+    model : LinkModel
+        Its model as a link model.
+    progress : callable, optional
+        ``progress(done, total)`` after each point answered.
+    **options
+        Options of :func:`~nlgrd.timedomain.time_answer.time_answer`.
+
+    Returns
+    -------
+    The same type as ``result``.
+    """
+    if isinstance(result, GearedSweepResult):
+        res, _ = answer_gaps(model, result.mesh, progress=progress, **options)
+        return dc.replace(result, mesh=res)
+    if isinstance(result, LinkSweepResult):
+        res, answers = answer_gaps(model, result.result, progress=progress, **options)
+        return LinkSweepResult(res, _link_frame(result.links, answers))
+    return answer_gaps(model, result, progress=progress, **options)[0]

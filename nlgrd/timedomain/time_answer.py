@@ -1,0 +1,528 @@
+"""A time-domain answer at a speed where no periodic orbit is stable: the steady
+statistics of a long integration, each with its sampling uncertainty, and whether the
+motion is chaotic.
+
+The reduced model's equations are integrated (:class:`nlgrd.timedomain.links.LinkIntegrator`:
+HHT-α on the precomputed period map) from a start near the unstable orbit, period by
+period. From the per-period values of every output:
+
+- **Transient cut** by MSER-5 (White 1997, Simulation 69:323; White, Cobb & Spratt 2000,
+  Proc. Winter Simulation Conf. 755): on the means of 5 periods b_j, j < m, the cut d
+  minimises (1/(m - d)²) Σ_{j>=d} (b_j - b̄_d)², d <= m/2; the largest cut over the
+  outputs is taken. A minimum on the bound m/2 says the record is too short.
+- **Statistics** over the kept periods: the mean DTE, the RMS of its alternating part,
+  the contact fractions (means of per-sample values) and the extremes (largest mesh
+  force, DTE peak-to-peak, largest clearance force and displacement) over the record.
+- **Sampling uncertainty** (standard uncertainty, k = 1): a mean's by non-overlapping
+  batch means, B = 20 batches (Schmeiser 1982, Oper. Res. 30:556: 10-30 batches), the
+  standard error sd(b)/√B inflated by sqrt((1 + r)/(1 - r)) where the lag-1 correlation
+  r of the batch means is beyond 2/√B (Bartlett's band: the batches are too short; the
+  AR(1) variance factor); the RMS by the delta method (ms - m² linearised about the
+  record's mean). An extreme's from the B batch extremes as Gumbel variates (Gumbel
+  1958, Statistics of Extremes, ch. 6): the record's extreme is Gumbel with the
+  batches' scale β = √6 s/π, so its standard deviation is s, the standard deviation of
+  the batch extremes. An extreme only grows with the record: a 4x longer one is on
+  average β ln 4 ≈ 1.1 s higher (for a bounded attractor less).
+- **Classification**: "chaotic" when the largest Lyapunov exponent, from a twin
+  trajectory started d₀ away and renormalised every period (Benettin et al. 1980,
+  Meccanica 15:9; the separation measured on (q, q'/ω) without its rigid-body part, a
+  free mode's drift being neutral), is positive beyond 3 of its batch-means standard
+  errors and above 1e-3 per period (e-folding in under 1000 periods); else "time
+  domain" (a torus, whose exponent is 0, or a periodic attractor no harmonic balance
+  was run for). A clear two-frequency spectrum is thus "time domain".
+
+The record grows by doubling from ``periods`` while the transient cut sits on its bound,
+a statistic drifts between the record's halves (beyond 3 uncertainties: its uncertainty
+is then that drift, or Aitken's tail of its thirds), a relative uncertainty of an RMS
+exceeds ``rtol`` (absolute for fractions) or the exponent is above the floor but within 3
+standard errors of 0, up to ``max_periods`` (``settled`` says whether the targets were
+met, ``transient_over`` whether the cut lies in the first half). The cost is 2 x the
+periods integrated (the twin): 2-4 ms a period on Kubo's 84-DOF and K&B's 60-DOF
+models at 256 steps (docs/verification.md, "Time-domain answers").
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from nlgrd.errors import ModelError
+from nlgrd.nonlinear.harmonics import analyse
+from nlgrd.nonlinear.link_model import LinkModel
+from nlgrd.nonlinear.response_kinds import CHAOTIC, TIME_DOMAIN
+from nlgrd.rotor.rigid_body import rigid_body_modes
+from nlgrd.threads import single_blas_thread
+from nlgrd.timedomain.links import LinkIntegrator, start_from_harmonics
+
+#: Batches of the batch-means uncertainty (Schmeiser 1982: 10 to 30).
+BATCHES = 20
+#: Periods a batch of MSER-5 averages (White 1997).
+MSER_BATCH = 5
+#: Chaotic: the Lyapunov exponent per base period above this and above 3 standard errors.
+LYAPUNOV_FLOOR = 1e-3
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A statistic and its standard uncertainty.
+
+    Attributes
+    ----------
+    value : float
+        The statistic (SI).
+    uncertainty : float
+        Its standard uncertainty (k = 1), same unit.
+    """
+
+    value: float
+    uncertainty: float
+
+
+@dataclass(frozen=True)
+class TimeAnswer:
+    """The steady statistics of a long integration at one base frequency.
+
+    Attributes
+    ----------
+    omega : float
+        Base frequency [rad/s].
+    kind : str
+        "chaotic" or "time domain" (:mod:`nlgrd.nonlinear.response_kinds`).
+    links : dict of str to Estimate
+        ``<link>.<quantity>`` with the units of the links' own outputs (the columns of a
+        link sweep): a mesh's ``dte_rms [m]``, ``force_max [N]``, ``dslr [-]``,
+        ``contact_loss_fraction [-]``, ``back_contact``; a clearance's
+        ``contact_fraction [-]``, ``force_max [N]``, ``displacement_max [m]``.
+    mesh : dict of str to Estimate
+        The first mesh's :data:`~nlgrd.nonlinear.metrics.METRIC_NAMES` (SI; empty without a mesh).
+    lyapunov : Estimate
+        Largest Lyapunov exponent [1/s].
+    transient : int
+        Periods cut as transient [-].
+    periods : int
+        Periods integrated (each twice: the twin trajectory) [-].
+    settled : bool
+        The transient cut and the uncertainty targets were met within ``max_periods``.
+    harmonics : ndarray (d, 2H+1)
+        Harmonics of the synchronous average of the link coordinates over the kept
+        periods (the part of the motion locked to the base frequency) [m].
+    seconds : float
+        Wall time [s].
+    state : tuple of ndarray
+        (q, q', q'') at the end, to continue from.
+    transient_over : bool
+        Every MSER-5 cut lies inside the record's first half: the transient ended within
+        it (False: it outlasts the record; the statistics are not the steady ones).
+    """
+
+    omega: float
+    kind: str
+    links: dict
+    mesh: dict
+    lyapunov: Estimate
+    transient: int
+    periods: int
+    settled: bool
+    harmonics: NDArray
+    seconds: float
+    state: tuple = field(repr=False, default=())
+    transient_over: bool = True
+
+
+def mser5(x: NDArray, batch: int = MSER_BATCH) -> tuple[int, bool]:
+    """MSER-5 truncation of a series (White 1997; White, Cobb & Spratt 2000).
+
+    Parameters
+    ----------
+    x : ndarray
+        One value per period [any unit].
+    batch : int
+        Values averaged per batch [-].
+
+    Returns
+    -------
+    cut : int
+        Values to discard from the start [-].
+    ok : bool
+        The minimum is inside the admissible half (False: the record is too short).
+    """
+    x = np.asarray(x, dtype=float)
+    m = x.size // batch
+    if m < 4:
+        return 0, False
+    b = x[x.size - m * batch :].reshape(m, batch).mean(axis=1)  # align on the end
+    offset = x.size - m * batch
+    tail = b[::-1]
+    n = np.arange(1, m + 1)
+    s1 = np.cumsum(tail)[::-1]  # sums of b[d:]
+    s2 = np.cumsum(tail * tail)[::-1]
+    k = n[::-1]  # m - d
+    sse = np.maximum(s2 - s1 * s1 / k, 0.0)
+    dmax = m // 2
+    crit = sse[: dmax + 1] / k[: dmax + 1] ** 2
+    scale = float(np.max(np.abs(b))) or 1.0
+    crit = np.where(crit <= (1e-14 * scale) ** 2, 0.0, crit)  # a settled series: no cut beyond rounding
+    d = int(np.argmin(crit))
+    return offset + batch * d, d < dmax
+
+
+def _batches(n: int) -> tuple[int, int]:
+    """(start, batch length) of BATCHES equal batches ending at n."""
+    size = max(n // BATCHES, 1)
+    return n - size * min(BATCHES, n), size
+
+
+def batch_mean(x: NDArray) -> Estimate:
+    """The mean of a per-period series and its batch-means standard uncertainty.
+
+    Parameters
+    ----------
+    x : ndarray
+        One value per kept period [any unit].
+
+    Returns
+    -------
+    Estimate
+    """
+    x = np.asarray(x, dtype=float)
+    start, size = _batches(x.size)
+    b = x[start:].reshape(-1, size).mean(axis=1)
+    if b.size < 3:
+        return Estimate(float(np.mean(x)), math.inf)
+    dev = b - b.mean()
+    var = float(np.sum(dev * dev)) / (b.size - 1)
+    den = float(np.sum(dev * dev))
+    r = float(np.sum(dev[1:] * dev[:-1]) / den) if den > 0 else 0.0
+    r = min(r, 0.9) if r > 2 / math.sqrt(b.size) else 0.0  # beyond Bartlett's 2/√B band only
+    return Estimate(float(np.mean(x)), math.sqrt(var / b.size * (1 + r) / (1 - r)))
+
+
+def record_max(x: NDArray) -> Estimate:
+    """The largest of per-period maxima and its Gumbel standard uncertainty.
+
+    Parameters
+    ----------
+    x : ndarray
+        Per-period maxima over the kept periods [any unit].
+
+    Returns
+    -------
+    Estimate
+        The record maximum; uncertainty the standard deviation of the batch maxima.
+    """
+    x = np.asarray(x, dtype=float)
+    start, size = _batches(x.size)
+    b = x[start:].reshape(-1, size).max(axis=1)
+    u = float(np.std(b, ddof=1)) if b.size >= 3 else math.inf
+    return Estimate(float(np.max(x)), u)
+
+
+def _rms(mean: NDArray, msq: NDArray) -> Estimate:
+    """RMS of the alternating part from per-period means and mean squares (delta method)."""
+    m = batch_mean(mean).value
+    ms = float(np.mean(msq))
+    rms = math.sqrt(max(ms - m * m, 0.0))
+    u = batch_mean(np.asarray(msq) - 2 * m * np.asarray(mean)).uncertainty
+    return Estimate(rms, u / (2 * rms) if rms > 0 else 0.0)
+
+
+class _Recorder:
+    """Per-period values of every link's outputs (the raw material of the statistics)."""
+
+    def __init__(self, integ: LinkIntegrator):
+        self.integ = integ
+        self.rows: list[dict[str, float]] = []
+        self.y_sums: list[NDArray] = []
+
+    def add(self, y: NDArray, v0: NDArray, a0: NDArray) -> None:
+        integ, st = self.integ, self.integ.step
+        row: dict[str, float] = {}
+        for link, sl in zip(integ.model.links, integ.model.receptance.slices, strict=True):
+            yl = y[sl]
+            if hasattr(link, "mesh"):
+                row.update(self._mesh(link, yl[0], _link_velocity(yl[0], v0[sl][0], a0[sl][0], st)))
+            else:
+                law = link.law((0, 1))
+                r = np.hypot(yl[0], yl[1])
+                f = law.force_at(yl)
+                row[f"{link.name}.contact"] = float(np.mean(r > link.clearance))
+                row[f"{link.name}.fmax"] = float(np.max(np.hypot(f[0], f[1])))
+                row[f"{link.name}.rmax"] = float(np.max(r))
+        self.rows.append(row)
+        self.y_sums.append(y.copy())
+
+    def _mesh(self, link, delta: NDArray, ddot: NDArray) -> dict[str, float]:
+        mesh, w = link.mesh, self.integ.omega
+        e, de = mesh.lste_samples(delta.size)
+        force = mesh.elastic_samples(delta) + mesh.damping * (ddot - w * de)
+        x = delta - e
+        n = link.name
+        return {
+            f"{n}.mean": float(np.mean(delta)),
+            f"{n}.msq": float(np.mean(delta * delta)),
+            f"{n}.dmax": float(np.max(delta)),
+            f"{n}.dmin": float(np.min(delta)),
+            f"{n}.fmax": float(np.max(force)),
+            f"{n}.fmin": float(np.min(force)),
+            f"{n}.fmean": float(np.mean(force)),
+            f"{n}.loss": float(np.mean(np.abs(x) <= mesh.half_backlash)),
+            f"{n}.back": float(np.any(x < -mesh.half_backlash)),
+        }
+
+    def series(self, key: str, cut: int = 0, stop: int | None = None) -> NDArray:
+        return np.array([r[key] for r in self.rows[cut:stop]])
+
+    def cut_series(self) -> list[NDArray]:
+        """The series MSER-5 is run on: each mesh's per-period mean square about the record's
+        mean and largest force, each clearance's largest displacement."""
+        out = []
+        for link in self.integ.model.links:
+            n = link.name
+            if hasattr(link, "mesh"):
+                m = self.series(f"{n}.mean")
+                out += [self.series(f"{n}.msq") - 2 * np.mean(m) * m, self.series(f"{n}.fmax")]
+            else:
+                out.append(self.series(f"{n}.rmax"))
+        return out
+
+
+def _link_velocity(y: NDArray, v0: float, a0: float, st) -> NDArray:
+    """ẏ at the steps of a period from y and the start's ẏ, ÿ: the Newmark update of the
+    HHT-α step (v' = b1 Δq + b2 v + b3 a, a' = a1 Δq - a2 v - a3 a) projected on the link
+    direction, exact for y = Pᵀ q since the update is linear."""
+    v = np.empty(y.size)
+    v[0], a = v0, a0
+    dq = np.diff(y)
+    for j in range(y.size - 1):
+        v[j + 1], a = st.b1 * dq[j] + st.b2 * v[j] + st.b3 * a, st.a1 * dq[j] - st.a2 * v[j] - st.a3 * a
+    return v
+
+
+def _free_part(ds: NDArray, R: NDArray, MR: NDArray, N: int) -> NDArray:
+    """An extended state difference without its rigid-body part (q, q', q'' each less
+    R Rᵀ M of it): a free mode's drift is neutral, not a divergence of trajectories."""
+    out = ds.copy()
+    for k in range(3):
+        part = out[k * N : (k + 1) * N]
+        part -= R @ (MR.T @ part)
+    return out
+
+
+def _wnorm(ds: NDArray, N: int, omega: float) -> float:
+    """‖(Δq, Δq'/ω)‖ of an extended state difference [m]."""
+    return math.sqrt(float(ds[:N] @ ds[:N]) + float(ds[N : 2 * N] @ ds[N : 2 * N]) / omega**2)
+
+
+#: A drift between the record's halves below this relative size is rounding, not a trend;
+#: no uncertainty is stated below it.
+DRIFT_FLOOR = 1e-9
+
+
+def _statistics(rec: _Recorder, cut: int) -> tuple[dict, dict, bool]:
+    """Every link's statistics over the periods after ``cut``, the first mesh's metrics,
+    and whether any drifts: the statistic over the record's first half and over its second
+    differ by more than 3 of their combined uncertainties (and :data:`DRIFT_FLOOR`
+    relative), a two-part stationarity test in the manner of Geweke 1992 (Bayesian
+    Statistics 4:169) that catches the slow end of a transient batch means miss. A
+    drifting statistic's uncertainty is raised to that difference, every one to at least
+    :data:`DRIFT_FLOOR` of its value."""
+    n = len(rec.rows) - cut
+    links, mesh = _statistics_of(rec, cut, None)
+    halves = _statistics_of(rec, cut, cut + n // 2), _statistics_of(rec, cut + n // 2, None)
+    thirds = [_statistics_of(rec, cut + j * n // 3, cut + (j + 1) * n // 3) for j in range(3)]
+    drift = False
+    for w, full in enumerate((links, mesh)):
+        a, b = halves[0][w], halves[1][w]
+        for k, e in full.items():
+            gap = abs(a[k].value - b[k].value)
+            floor = DRIFT_FLOOR * abs(e.value)
+            drifts = gap > 3 * math.hypot(a[k].uncertainty, b[k].uncertainty) and gap > floor
+            drift = drift or drifts
+            full[k] = Estimate(
+                e.value,
+                max(e.uncertainty, _tail(gap, [t[w][k].value for t in thirds]) if drifts else 0.0, floor),
+            )
+    return links, mesh, drift
+
+
+def _tail(gap: float, thirds: list[float]) -> float:
+    """What a drifting statistic may still move: the gap between the record's halves, or
+    more, the geometric tail d₂ r/(1 - r) of its thirds' steps d₁, d₂ (r = d₂/d₁: a
+    transient decaying exponentially, Aitken's extrapolation) when it decays that way."""
+    d1, d2 = thirds[1] - thirds[0], thirds[2] - thirds[1]
+    r = d2 / d1 if d1 != 0 else 0.0
+    return max(gap, abs(d2) * r / (1 - r)) if 0 < r < 1 else gap
+
+
+def _statistics_of(rec: _Recorder, cut: int, stop: int | None) -> tuple[dict, dict]:
+    """Every link's statistics over the periods ``cut:stop``, and the first mesh's metrics."""
+    links: dict[str, Estimate] = {}
+    mesh: dict[str, Estimate] = {}
+    for link in rec.integ.model.links:
+        n = link.name
+
+        def s(key, n=n):
+            return rec.series(f"{n}.{key}", cut, stop)
+
+        if hasattr(link, "mesh"):
+            hi, lo = record_max(s("dmax")), record_max(-s("dmin"))
+            fmax, fmin = record_max(s("fmax")), record_max(-s("fmin"))
+            W0 = float(link.mesh.static_load) if link.mesh.static_load else batch_mean(s("fmean")).value
+            m = {
+                "dte_mean": batch_mean(s("mean")),
+                "dte_rms": _rms(s("mean"), s("msq")),
+                "dte_p2p": Estimate(hi.value + lo.value, math.hypot(hi.uncertainty, lo.uncertainty)),
+                "force_max": fmax,
+                "force_min": Estimate(-fmin.value, fmin.uncertainty),
+                "dslr": Estimate(fmax.value / W0, fmax.uncertainty / abs(W0)),
+                "contact_loss_fraction": batch_mean(s("loss")),
+                "back_contact": Estimate(float(np.any(s("back") > 0)), 0.0),
+            }
+            if not mesh:
+                mesh = m
+            for k, unit in (
+                ("dte_rms", " [m]"),
+                ("force_max", " [N]"),
+                ("dslr", " [-]"),
+                ("contact_loss_fraction", " [-]"),
+                ("back_contact", ""),
+            ):
+                links[f"{n}.{k}{unit}"] = m[k]
+        else:
+            links[f"{n}.contact_fraction [-]"] = batch_mean(s("contact"))
+            links[f"{n}.force_max [N]"] = record_max(s("fmax"))
+            links[f"{n}.displacement_max [m]"] = record_max(s("rmax"))
+    return links, mesh
+
+
+def _targets_met(links: dict, rtol: float) -> bool:
+    """Every RMS within ``rtol`` relative and every fraction within ``rtol`` absolute."""
+    for key, e in links.items():
+        if "dte_rms" in key and e.uncertainty > rtol * abs(e.value):
+            return False
+        if "fraction" in key and e.uncertainty > rtol:
+            return False
+    return True
+
+
+@single_blas_thread
+def time_answer(
+    model: LinkModel,
+    omega: float,
+    *,
+    harmonics: NDArray | None = None,
+    state0: tuple | None = None,
+    periods: int = 512,
+    max_periods: int = 4096,
+    steps_per_period: int = 256,
+    alpha: float = -0.05,
+    rtol: float = 0.01,
+    H: int = 15,
+    perturbation: float = 1e-3,
+    progress: Callable[[int, int], None] | None = None,
+) -> TimeAnswer:
+    """The steady statistics of the response at ``omega`` by time integration (module docstring).
+
+    Parameters
+    ----------
+    model : LinkModel
+        The model (a single mesh too: :func:`nlgrd.nonlinear.link_model.build_link_model`).
+    omega : float
+        Base frequency [rad/s].
+    harmonics : ndarray (d, 2H'+1), optional
+        Harmonics of the link coordinates of the nearest computed orbit (the unstable
+        orbit at ``omega``, or a neighbour's) to start from; its velocities are scaled by
+        1 + ``perturbation`` to leave an unstable orbit at once.
+    state0 : tuple of ndarray, optional
+        (q, q'[, q'']) to start from instead (a previous answer's ``state``).
+    periods : int
+        Periods of the first record [-].
+    max_periods : int
+        Cap on the periods integrated (the record doubles up to it) [-].
+    steps_per_period : int
+        HHT-α steps per base period [-].
+    alpha : float
+        HHT-α parameter [-].
+    rtol : float
+        Target standard uncertainty: relative for an RMS, absolute for a fraction [-].
+    H : int
+        Harmonics of the synchronous average kept [-].
+    perturbation : float
+        Relative velocity perturbation of a start from ``harmonics`` [-].
+    progress : callable, optional
+        ``progress(done, total)`` after every period.
+
+    Returns
+    -------
+    TimeAnswer
+
+    Raises
+    ------
+    ModelError
+        ``periods`` or ``max_periods`` too small for the statistics.
+    """
+    if periods < 4 * BATCHES or max_periods < periods:
+        raise ModelError("periods", f"needs {4 * BATCHES} <= periods <= max_periods, got {periods}")
+    t0 = time.perf_counter()
+    integ = LinkIntegrator(model, omega, steps_per_period=steps_per_period, alpha=alpha)
+    N, P = integ.N, integ.P
+    if state0 is None and harmonics is not None:
+        z = np.asarray(harmonics, dtype=float)
+        q0, v0 = start_from_harmonics(model, omega, (z.shape[-1] - 1) // 2, z)
+        state0 = (q0, (1 + perturbation) * v0)
+    s = integ.start(state0)
+    rec_ = model.receptance
+    R = rigid_body_modes(rec_.model.K + rec_.K_link, rec_.model.M)
+    MR = rec_.model.M @ R
+    d0 = 1e-7 * max(_wnorm(s, N, omega), 1e-12)
+    rng = np.random.default_rng(0)
+    direction = np.zeros_like(s)
+    direction[: 2 * N] = rng.standard_normal(2 * N) * np.repeat([1.0, omega], N)
+    direction = _free_part(direction, R, MR, N)
+    s2 = s + d0 * direction / _wnorm(direction, N, omega)
+    rec, logs = _Recorder(integ), []
+    target = int(periods)
+    while True:
+        while len(rec.rows) < target:
+            vy, ay = P.T @ s[N : 2 * N], P.T @ s[2 * N : 3 * N]
+            y, s_new = integ.period(s)
+            rec.add(y, vy, ay)
+            _, s2_new = integ.period(s2)
+            ds = _free_part(s2_new - s_new, R, MR, N)
+            gap = _wnorm(ds, N, omega)
+            logs.append(math.log(max(gap, 1e-300) / d0))
+            s2 = s_new + ds * (d0 / gap) if gap > 0 else s_new + d0 * direction
+            s = s_new
+            if progress is not None:
+                progress(len(rec.rows), target)
+        cuts = [mser5(x) for x in rec.cut_series()]
+        cut = max(c for c, _ in cuts)
+        links, mesh, drift = _statistics(rec, cut)
+        lam = batch_mean(np.array(logs[max(cut, 10) :]))
+        undecided = LYAPUNOV_FLOOR < lam.value <= 3 * lam.uncertainty
+        settled = all(ok for _, ok in cuts) and _targets_met(links, rtol) and not (undecided or drift)
+        if settled or target >= max_periods:
+            break
+        target = min(2 * target, int(max_periods))
+    T = 2 * np.pi / omega
+    chaotic = lam.value > max(3 * lam.uncertainty, LYAPUNOV_FLOOR)
+    avg = np.mean(np.array(rec.y_sums[cut:]), axis=0)
+    return TimeAnswer(
+        float(omega),
+        CHAOTIC if chaotic else TIME_DOMAIN,
+        links,
+        mesh,
+        Estimate(lam.value / T, lam.uncertainty / T),
+        int(cut),
+        len(rec.rows),
+        bool(settled),
+        analyse(avg, H),
+        time.perf_counter() - t0,
+        (s[:N].copy(), s[N : 2 * N].copy(), s[2 * N : 3 * N].copy()),
+        all(ok for _, ok in cuts),
+    )
