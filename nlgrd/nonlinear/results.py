@@ -559,10 +559,8 @@ class ContinuationResult:
         return self.turning_omegas
 
     def to_frame(self):
-        """Tidy table (see :meth:`SweepResult.to_frame`) with the arc length; an orbit on the
-        curve that is known unstable says so in ``response`` ("unstable periodic",
-        "unstable period 2"): a continuation keeps its unstable orbits, but none is the
-        response there."""
+        """Tidy table (see :meth:`SweepResult.to_frame`) with the arc length; an unstable
+        orbit's ``response`` says so ("unstable periodic"): it is on the curve, not the response."""
         df = self.curve.to_frame()
         df.insert(1, "arclength [-]", self.arclength)
         unstable = df["stable"].eq(False).fillna(False).to_numpy(dtype=bool)
