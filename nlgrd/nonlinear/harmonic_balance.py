@@ -427,6 +427,9 @@ class ReducedModel:
     metrics : PointMetrics
         What a sweep writes per point in ``SweepResult.metrics``
         (:class:`~nlgrd.nonlinear.metrics.PointMetrics`; NaN by default).
+    static_force : ndarray (N,), optional
+        F₀ of the state space's equations [N]: with it and piecewise-linear laws the exact
+        flow is known (:mod:`nlgrd.nonlinear.shooting`); None where the model does not give it.
     """
 
     kappa: Callable[[float, int], ArrayLike]
@@ -441,6 +444,7 @@ class ReducedModel:
     outputs: Callable[[NDArray, float], NDArray] = field(kw_only=True)
     branch_signature: Callable[[NDArray, float], NDArray] = field(kw_only=True)
     metrics: PointMetrics = field(default_factory=PointMetrics, kw_only=True)
+    static_force: NDArray | None = field(default=None, kw_only=True, repr=False, compare=False)
 
     def __post_init__(self):
         object.__setattr__(self, "nonlinearities", tuple(self.nonlinearities))
@@ -556,4 +560,5 @@ class ReducedModel:
             outputs=metrics.outputs,
             branch_signature=metrics.signature,
             metrics=metrics,
+            static_force=F0,
         )
