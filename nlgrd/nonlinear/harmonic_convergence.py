@@ -31,6 +31,7 @@ converged answer) with a :class:`HarmonicsWarning`.
 
 from __future__ import annotations
 
+import os
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -46,8 +47,13 @@ from nlgrd.nonlinear.results import STABLE_RTOL, SweepResult, assemble_result, d
 from nlgrd.nonlinear.solvers import solve
 from nlgrd.nonlinear.sweep import sweep
 
-#: The harmonic counts tried, in order (each checked against the next).
+#: The first harmonic counts tried, in order (each checked against the next); above the
+#: last, :func:`ladder_for` climbs by 1.5 x up to what memory holds (:func:`max_harmonics`).
 LADDER = (5, 7, 9, 13, 17, 25)
+#: The share of the available memory the arrays of one harmonic-balance point may take.
+MEMORY_SHARE = 0.25
+#: Bytes assumed available where the system does not say.
+DEFAULT_MEMORY = 2**32
 #: Default output tolerance: RMS DTE and maximum mesh force within 0.5 %.
 OUTPUT_RTOL = 5e-3
 #: A value below FLOOR x its sweep maximum is compared relative to that floor: an RMS DTE
@@ -107,6 +113,97 @@ class HarmonicCheck:
     def passed(self, rtol: float) -> bool:
         """Every checked point within ``rtol`` and every jump held."""
         return self.jumps_held and self.max_error <= rtol
+
+
+def available_memory() -> int:
+    """Bytes of physical memory available now (:data:`DEFAULT_MEMORY` where unknown).
+
+    Returns
+    -------
+    int
+    """
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return DEFAULT_MEMORY
+
+
+def harmonics_memory(H: int, n_dofs: int, n_coords: int) -> float:
+    """Bytes the largest arrays of one point take at H harmonics (an estimate).
+
+    Per harmonic the receptance columns of the link coordinates, complex N x n; one dense
+    dynamic stiffness, complex N x N, factored; the harmonic-balance Jacobian of the n link
+    coordinates, real (n (2H + 1))², four copies (the Jacobian, its factor, Newton's and
+    hybr's).
+
+    Parameters
+    ----------
+    H : int
+        Number of harmonics.
+    n_dofs : int
+        DOFs N of the model's state space [-].
+    n_coords : int
+        Nonlinear (link) coordinates n [-].
+
+    Returns
+    -------
+    float
+        Bytes.
+    """
+    return 16.0 * ((H + 1) * n_dofs * n_coords + 2 * n_dofs**2) + 4 * 8.0 * (n_coords * (2 * H + 1)) ** 2
+
+
+def max_harmonics(n_dofs: int, n_coords: int, memory: float | None = None) -> int:
+    """The largest H whose :func:`harmonics_memory` fits in :data:`MEMORY_SHARE` of ``memory``.
+
+    Parameters
+    ----------
+    n_dofs : int
+        DOFs N of the model's state space [-].
+    n_coords : int
+        Nonlinear (link) coordinates n [-].
+    memory : float, optional
+        Bytes available (default :func:`available_memory`).
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
+    budget = MEMORY_SHARE * (available_memory() if memory is None else float(memory))
+    lo, hi = 1, 2
+    while harmonics_memory(hi, n_dofs, n_coords) <= budget and hi < 2**31:
+        lo, hi = hi, 2 * hi
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (mid, hi) if harmonics_memory(mid, n_dofs, n_coords) <= budget else (lo, mid)
+    return lo
+
+
+def ladder_for(model: ReducedModel, memory: float | None = None) -> tuple[int, ...]:
+    """:data:`LADDER`, then 1.5 x per rung, up to :func:`max_harmonics` of the model.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model (its state space's size and its nonlinear coordinates).
+    memory : float, optional
+        Bytes available (default :func:`available_memory`).
+
+    Returns
+    -------
+    tuple of int
+    """
+    ss = model.state_space if model.state_space is not None else None
+    n_dofs = 0 if ss is None else ss.M.shape[0]
+    n_coords = max((max(nl.coords) + 1 for nl in model.nonlinearities), default=1)
+    top = max(max_harmonics(n_dofs, n_coords, memory), LADDER[1])
+    ladder = [h for h in LADDER if h <= top]
+    while True:
+        h = int(np.ceil(1.5 * ladder[-1]))
+        if h > top:
+            return tuple(ladder)
+        ladder.append(h)
 
 
 def next_harmonics(H: int, ladder: Sequence[int] = LADDER) -> int:
@@ -395,7 +492,7 @@ def converged_sweep(
     directions: str | Sequence[str] = "both",
     *,
     rtol: float = OUTPUT_RTOL,
-    ladder: Sequence[int] = LADDER,
+    ladder: Sequence[int] | None = None,
     tol: float = 1e-10,
     stability: bool = True,
     on_rung=None,
@@ -419,8 +516,10 @@ def converged_sweep(
     rtol : float
         Tolerance of the estimated relative error of RMS DTE and maximum mesh force, in
         (0, 1).
-    ladder : sequence of int
-        Increasing harmonic counts tried, at least two.
+    ladder : sequence of int, optional
+        Increasing harmonic counts tried, at least two; default :func:`ladder_for` the
+        model (bounded by memory). Above :data:`LADDER` the climb stops where the
+        estimate no longer falls (by 10 % a rung): more harmonics do not converge it.
     tol : float
         Convergence tolerance of the solver (relative residual).
     stability : bool
@@ -447,6 +546,8 @@ def converged_sweep(
     HarmonicsWarning
         The ladder ended before the estimate met ``rtol``.
     """
+    if ladder is None:
+        ladder = ladder_for(model)
     if not ladder or any(int(h) < 1 for h in ladder) or list(ladder) != sorted(set(ladder)):
         raise ModelError("ladder", f"must be increasing positive harmonic counts, got {tuple(ladder)}")
     if not 0 < rtol < 1:
@@ -465,6 +566,9 @@ def converged_sweep(
         check = check_harmonics(model, res, H_check, tol=tol, rtol=rtol)
         history.append(check.history[0])
         if check.passed(rtol):
+            break
+        if H > LADDER[-1] and check.max_error > 0.9 * history[-2][1]:
+            _warn_exhausted(check, rtol)
             break
         if H_check != ladder[-1]:  # the next rung: lifted from the check, else swept afresh
             res = lift(model, res, check, stability)
