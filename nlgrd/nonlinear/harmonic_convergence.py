@@ -46,6 +46,7 @@ from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import STABLE_RTOL, SweepResult, assemble_result, dominant_multiplier
 from nlgrd.nonlinear.solvers import solve
 from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.verdicts import converge_verdicts
 
 #: The first harmonic counts tried, in order (each checked against the next); above the
 #: last, :func:`ladder_for` climbs by 1.5 x up to what memory holds (:func:`max_harmonics`).
@@ -574,7 +575,8 @@ def converged_sweep(
             res = lift(model, res, check, stability)
     else:
         _warn_exhausted(check, rtol)
-    return _finish(res, check, history, rtol)
+    res = _finish(res, check, history, rtol)
+    return converge_verdicts(model, res, check.solutions, ladder=ladder, tol=tol) if stability else res
 
 
 def _warn_exhausted(check: HarmonicCheck, rtol: float) -> None:

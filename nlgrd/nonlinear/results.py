@@ -209,6 +209,10 @@ class SweepResult:
     base : int
         The harmonics are of ω/base (2 when some point has period 2, N for a shaft-order
         sweep): :attr:`H_stored` = base · :attr:`H` of them (docs/conventions.md, "H").
+    verdict_converged : ndarray of bool, optional
+        The stability verdict is converged (:mod:`nlgrd.nonlinear.verdicts`); where False
+        neither ``stable`` nor the response's values are written (the ``verdict`` column
+        says "not converged"). Default True.
     """
 
     omega: NDArray
@@ -231,6 +235,7 @@ class SweepResult:
     period: NDArray | None = None
     subharmonic_amplitude: NDArray | None = None
     base: int = 1
+    verdict_converged: NDArray | None = None
 
     def __post_init__(self):
         if self.residual_kind not in RESIDUAL_COLUMNS:
@@ -247,6 +252,8 @@ class SweepResult:
             object.__setattr__(self, "dominant_multiplier", np.full(self.omega.size, np.nan + 0j))
         if self.harmonic_error is None:
             object.__setattr__(self, "harmonic_error", np.full(self.omega.size, np.nan))
+        if self.verdict_converged is None:
+            object.__setattr__(self, "verdict_converged", np.ones(self.omega.size, dtype=bool))
 
     @property
     def H(self) -> int:
@@ -321,6 +328,7 @@ class SweepResult:
             self.period[keep],
             self.subharmonic_amplitude[keep],
             self.base,
+            self.verdict_converged[keep],
         )
 
     def failures(self) -> NDArray:
@@ -395,6 +403,8 @@ class SweepResult:
             out[~(ok & known)] = pd.NA
             return out
 
+        settled = np.asarray(self.verdict_converged, dtype=bool)
+        verdict = np.where(~settled, "not converged", np.where(self.stable, "stable", "unstable"))
         iterations = pd.array(np.asarray(self.iterations), dtype="Int64")
         iterations[~ok] = pd.NA
         data = {
@@ -403,7 +413,8 @@ class SweepResult:
             "converged": ok,
             RESIDUAL_COLUMNS[self.residual_kind]: num(self.residual),
             "iterations": iterations,
-            "stable": flag(self.stable, self.stability_known),
+            "stable": flag(self.stable, self.stability_known & settled),
+            "verdict": pd.array(verdict, dtype="string"),
             "floquet_max [-]": floquet_output(num(self.floquet_max)),
             "H": pd.array(np.where(ok, self.H, 0), dtype="Int64"),
             "harmonic_error [-]": _significant(num(self.harmonic_error), 3),
@@ -415,12 +426,14 @@ class SweepResult:
             "dominant_multiplier_re [-]": floquet_output(num(self.dominant_multiplier.real), signed=True),
             "dominant_multiplier_im [-]": floquet_output(num(self.dominant_multiplier.imag), signed=True),
         }
+        data["verdict"][~ok | ~self.stability_known] = pd.NA
         data["H"][~ok] = pd.NA
         data["response"][~ok] = pd.NA
         data["period"][~ok | self.no_stable] = pd.NA
         data["subharmonic_amp [um]"][self.no_stable] = np.nan
         data["instability"][~ok | ~self.stability_known] = pd.NA
-        ok = ok & ~self.no_stable  # the metrics: of the response only
+        data["response"][~settled] = pd.NA  # not known to be the response
+        ok = ok & ~self.no_stable & settled  # the metrics: of the response only
         for name in METRIC_NAMES:
             col, scale = _UNITS[name]
             v = self.metrics[name]
