@@ -210,3 +210,61 @@ def _refresh_metrics(model: ReducedModel, result: SweepResult, no_stable: NDArra
             metrics[name][i] = value
         amps[i] = np.resize(met.dte_amplitudes, amps.shape[1])
     return replace(result, no_stable=no_stable, metrics=metrics, amplitudes=amps)
+
+
+def locate_bifurcations(model: ReducedModel, result: SweepResult, *, rtol: float = 1e-6) -> list[tuple]:
+    """Where the converged verdict changes between two consecutive points of a sweep on a
+    :func:`~nlgrd.nonlinear.shooting.shootable` model, the frequency at which max |μ| of the
+    exact orbit crosses 1 + STABLE_RTOL, by bisection (each orbit shot from the
+    harmonic-balance orbit of the stable side's point).
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model of the sweep (period 1: its base frequency is ``result.omega``).
+    result : SweepResult
+        A sweep with converged verdicts (:func:`converge_verdicts`).
+    rtol : float
+        Relative width of the final bracket [-].
+
+    Returns
+    -------
+    list of (str, str, float)
+        (direction, kind, ω [rad/s]): kind "Neimark-Sacker", "period doubling" or "fold"
+        from the dominant multiplier on the unstable side; empty when the model is not
+        shootable.
+    """
+    if not shootable(model):
+        return []
+    out = []
+    ok = result.converged & result.stability_known & result.verdict_converged
+    for d in dict.fromkeys(result.direction.tolist()):
+        idx = np.nonzero((result.direction == d) & ok)[0]
+        for i, j in zip(idx[:-1], idx[1:], strict=True):
+            if result.stable[i] == result.stable[j]:
+                continue
+            s, u = (i, j) if result.stable[i] else (j, i)
+            mu = complex(result.dominant_multiplier[u])
+            kind = (
+                "Neimark-Sacker"
+                if abs(mu.imag) > 1e-6 * abs(mu)
+                else ("period doubling" if mu.real < 0 else "fold")
+            )
+            w = _bisect(model, result.harmonics[s], float(result.omega[s]), float(result.omega[u]), rtol)
+            if w is not None:
+                out.append((d, kind, w))
+    return out
+
+
+def _bisect(model, z, w_stable, w_unstable, rtol):
+    a, b = w_stable, w_unstable
+    while abs(b - a) > rtol * abs(a):
+        mid = 0.5 * (a + b)
+        orbit = polish(model, z, mid)
+        if orbit is None:
+            return None
+        if np.max(np.abs(orbit.multipliers)) < 1 + STABLE_RTOL:
+            a = mid
+        else:
+            b = mid
+    return 0.5 * (a + b)
