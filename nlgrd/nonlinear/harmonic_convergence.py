@@ -565,6 +565,12 @@ def converged_sweep(
         if res is None:
             res = sweep(model, omegas, H, directions, tol=tol, stability=stability, **kwargs)
         check = check_harmonics(model, res, H_check, tol=tol, rtol=rtol)
+        if stability:  # the error is over the response's points: known by converged verdicts
+            settled = converge_verdicts(model, res, check.solutions, ladder=ladder, tol=tol)
+            changed = np.any(settled.stable != res.stable)
+            res = settled
+            if changed:
+                check = check_harmonics(model, res, H_check, tol=tol, rtol=rtol)
         history.append(check.history[0])
         if check.passed(rtol):
             break
@@ -575,8 +581,7 @@ def converged_sweep(
             res = lift(model, res, check, stability)
     else:
         _warn_exhausted(check, rtol)
-    res = _finish(res, check, history, rtol)
-    return converge_verdicts(model, res, check.solutions, ladder=ladder, tol=tol) if stability else res
+    return _finish(res, check, history, rtol)
 
 
 def _warn_exhausted(check: HarmonicCheck, rtol: float) -> None:
