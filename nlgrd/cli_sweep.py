@@ -540,7 +540,7 @@ def check_harmonics_memory(H: int | None, system, path) -> None:
     """
     if H is None:
         return
-    from nlgrd.nonlinear.harmonic_convergence import available_memory, max_harmonics
+    from nlgrd.nonlinear.harmonic_ladder import available_memory, max_harmonics
 
     n_coords = max(1, len(system.gear_pairs) + 2 * len(getattr(system, "bearing_clearances", ())))
     top = max_harmonics(system.dofs.n_dofs, n_coords)

@@ -27,11 +27,10 @@ from nlgrd.nonlinear.harmonic_convergence import (
     HarmonicsWarning,
     check_harmonics,
     converged_sweep,
-    harmonics_memory,
     ladder_for,
-    max_harmonics,
     next_harmonics,
 )
+from nlgrd.nonlinear.harmonic_ladder import harmonics_memory, max_harmonics
 from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import SweepResult, assemble_result
 from nlgrd.nonlinear.shooting import initial_state

@@ -31,7 +31,6 @@ converged answer) with a :class:`HarmonicsWarning`.
 
 from __future__ import annotations
 
-import os
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -42,19 +41,13 @@ from numpy.typing import ArrayLike, NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.floquet import floquet_multipliers
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.harmonic_ladder import LADDER, ladder_for
 from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import STABLE_RTOL, SweepResult, assemble_result, dominant_multiplier
 from nlgrd.nonlinear.solvers import solve
 from nlgrd.nonlinear.sweep import sweep
 from nlgrd.nonlinear.verdicts import converge_verdicts
 
-#: The first harmonic counts tried, in order (each checked against the next); above the
-#: last, :func:`ladder_for` climbs by 1.5 x up to what memory holds (:func:`max_harmonics`).
-LADDER = (5, 7, 9, 13, 17, 25)
-#: The share of the available memory the arrays of one harmonic-balance point may take.
-MEMORY_SHARE = 0.25
-#: Bytes assumed available where the system does not say.
-DEFAULT_MEMORY = 2**32
 #: Default output tolerance: RMS DTE and maximum mesh force within 0.5 %.
 OUTPUT_RTOL = 5e-3
 #: A value below FLOOR x its sweep maximum is compared relative to that floor: an RMS DTE
@@ -114,97 +107,6 @@ class HarmonicCheck:
     def passed(self, rtol: float) -> bool:
         """Every checked point within ``rtol`` and every jump held."""
         return self.jumps_held and self.max_error <= rtol
-
-
-def available_memory() -> int:
-    """Bytes of physical memory available now (:data:`DEFAULT_MEMORY` where unknown).
-
-    Returns
-    -------
-    int
-    """
-    try:
-        return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):
-        return DEFAULT_MEMORY
-
-
-def harmonics_memory(H: int, n_dofs: int, n_coords: int) -> float:
-    """Bytes the largest arrays of one point take at H harmonics (an estimate).
-
-    Per harmonic the receptance columns of the link coordinates, complex N x n; one dense
-    dynamic stiffness, complex N x N, factored; the harmonic-balance Jacobian of the n link
-    coordinates, real (n (2H + 1))², four copies (the Jacobian, its factor, Newton's and
-    hybr's).
-
-    Parameters
-    ----------
-    H : int
-        Number of harmonics.
-    n_dofs : int
-        DOFs N of the model's state space [-].
-    n_coords : int
-        Nonlinear (link) coordinates n [-].
-
-    Returns
-    -------
-    float
-        Bytes.
-    """
-    return 16.0 * ((H + 1) * n_dofs * n_coords + 2 * n_dofs**2) + 4 * 8.0 * (n_coords * (2 * H + 1)) ** 2
-
-
-def max_harmonics(n_dofs: int, n_coords: int, memory: float | None = None) -> int:
-    """The largest H whose :func:`harmonics_memory` fits in :data:`MEMORY_SHARE` of ``memory``.
-
-    Parameters
-    ----------
-    n_dofs : int
-        DOFs N of the model's state space [-].
-    n_coords : int
-        Nonlinear (link) coordinates n [-].
-    memory : float, optional
-        Bytes available (default :func:`available_memory`).
-
-    Returns
-    -------
-    int
-        At least 1.
-    """
-    budget = MEMORY_SHARE * (available_memory() if memory is None else float(memory))
-    lo, hi = 1, 2
-    while harmonics_memory(hi, n_dofs, n_coords) <= budget and hi < 2**31:
-        lo, hi = hi, 2 * hi
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        lo, hi = (mid, hi) if harmonics_memory(mid, n_dofs, n_coords) <= budget else (lo, mid)
-    return lo
-
-
-def ladder_for(model: ReducedModel, memory: float | None = None) -> tuple[int, ...]:
-    """:data:`LADDER`, then 1.5 x per rung, up to :func:`max_harmonics` of the model.
-
-    Parameters
-    ----------
-    model : ReducedModel
-        The model (its state space's size and its nonlinear coordinates).
-    memory : float, optional
-        Bytes available (default :func:`available_memory`).
-
-    Returns
-    -------
-    tuple of int
-    """
-    ss = model.state_space if model.state_space is not None else None
-    n_dofs = 0 if ss is None else ss.M.shape[0]
-    n_coords = max((max(nl.coords) + 1 for nl in model.nonlinearities), default=1)
-    top = max(max_harmonics(n_dofs, n_coords, memory), LADDER[1])
-    ladder = [h for h in LADDER if h <= top]
-    while True:
-        h = int(np.ceil(1.5 * ladder[-1]))
-        if h > top:
-            return tuple(ladder)
-        ladder.append(h)
 
 
 def next_harmonics(H: int, ladder: Sequence[int] = LADDER) -> int:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 import pandas as pd
@@ -132,6 +132,10 @@ def response_kind(result: SweepResult) -> NDArray:
     return out
 
 
+def _per_point(value) -> bool:
+    return isinstance(value, np.ndarray) and value.ndim >= 1
+
+
 def _significant(values: NDArray, digits: int) -> NDArray:
     """``values`` rounded to ``digits`` significant digits (an estimate's noise not written)."""
     v = np.asarray(values, dtype=float).copy()
@@ -210,9 +214,8 @@ class SweepResult:
         The harmonics are of ω/base (2 when some point has period 2, N for a shaft-order
         sweep): :attr:`H_stored` = base · :attr:`H` of them (docs/conventions.md, "H").
     verdict_converged : ndarray of bool, optional
-        The stability verdict is converged (:mod:`nlgrd.nonlinear.verdicts`); where False
-        neither ``stable`` nor the response's values are written (the ``verdict`` column
-        says "not converged"). Default True.
+        The stability verdict converged (:mod:`nlgrd.nonlinear.verdicts`; default True);
+        where False neither ``stable`` nor the response's values are written.
     """
 
     omega: NDArray
@@ -241,19 +244,18 @@ class SweepResult:
         if self.residual_kind not in RESIDUAL_COLUMNS:
             raise ModelError("residual_kind", f"must be one of {', '.join(RESIDUAL_COLUMNS)}")
         n = self.omega.size
-        for name, default in (("period", np.ones(n, dtype=int)), ("subharmonic_amplitude", np.zeros(n))):
+        defaults = {  # the columns a result may leave out
+            "period": np.ones(n, dtype=int),
+            "subharmonic_amplitude": np.zeros(n),
+            "branch_switch": np.zeros(n, dtype=bool),
+            "no_stable": np.zeros(n, dtype=bool),
+            "dominant_multiplier": np.full(n, np.nan + 0j),
+            "harmonic_error": np.full(n, np.nan),
+            "verdict_converged": np.ones(n, dtype=bool),
+        }
+        for name, default in defaults.items():
             if getattr(self, name) is None:
                 object.__setattr__(self, name, default)
-        if self.branch_switch is None:
-            object.__setattr__(self, "branch_switch", np.zeros(self.omega.size, dtype=bool))
-        if self.no_stable is None:
-            object.__setattr__(self, "no_stable", np.zeros(self.omega.size, dtype=bool))
-        if self.dominant_multiplier is None:
-            object.__setattr__(self, "dominant_multiplier", np.full(self.omega.size, np.nan + 0j))
-        if self.harmonic_error is None:
-            object.__setattr__(self, "harmonic_error", np.full(self.omega.size, np.nan))
-        if self.verdict_converged is None:
-            object.__setattr__(self, "verdict_converged", np.ones(self.omega.size, dtype=bool))
 
     @property
     def H(self) -> int:
@@ -307,29 +309,9 @@ class SweepResult:
     def select(self, direction: str) -> SweepResult:
         """The points of one sweep direction."""
         keep = self.direction == direction
-        return SweepResult(
-            self.omega[keep],
-            self.direction[keep],
-            self.harmonics[keep],
-            self.converged[keep],
-            self.residual[keep],
-            self.iterations[keep],
-            self.stable[keep],
-            self.floquet_max[keep],
-            {k: v[keep] for k, v in self.metrics.items()},
-            self.amplitudes[keep],
-            self.source,
-            self.branch_switch[keep],
-            self.harmonic_error[keep],
-            self.H_check,
-            self.no_stable[keep],
-            self.dominant_multiplier[keep],
-            self.residual_kind,
-            self.period[keep],
-            self.subharmonic_amplitude[keep],
-            self.base,
-            self.verdict_converged[keep],
-        )
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        rows = {name: v[keep] for name, v in values.items() if _per_point(v)}
+        return replace(self, metrics={k: v[keep] for k, v in self.metrics.items()}, **rows)
 
     def failures(self) -> NDArray:
         """Frequencies [rad/s] of the points that did not converge."""
@@ -428,11 +410,10 @@ class SweepResult:
         }
         data["verdict"][~ok | ~self.stability_known] = pd.NA
         data["H"][~ok] = pd.NA
-        data["response"][~ok] = pd.NA
+        data["response"][~ok | ~settled] = pd.NA  # unsettled: not known to be the response
         data["period"][~ok | self.no_stable] = pd.NA
         data["subharmonic_amp [um]"][self.no_stable] = np.nan
         data["instability"][~ok | ~self.stability_known] = pd.NA
-        data["response"][~settled] = pd.NA  # not known to be the response
         ok = ok & ~self.no_stable & settled  # the metrics: of the response only
         for name in METRIC_NAMES:
             col, scale = _UNITS[name]
