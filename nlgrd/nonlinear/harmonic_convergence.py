@@ -577,4 +577,8 @@ def converged_continuation(
             break
     else:
         _warn_exhausted(check, rtol)
-    return replace(res, curve=_finish(res.curve, check, history, rtol))
+    curve = _finish(res.curve, check, history, rtol)
+    if kwargs.get("stability", True):
+        settled = converge_verdicts(model, curve, check.solutions, ladder=ladder, tol=tol)
+        curve = replace(settled, no_stable=curve.no_stable)  # a curve draws its unstable parts
+    return replace(res, curve=curve)

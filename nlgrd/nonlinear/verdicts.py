@@ -81,13 +81,11 @@ def agree(a: float, b: float) -> bool:
     return bool(same and abs(a - b) <= MULTIPLIER_RTOL * max(abs(a), abs(b)))
 
 
-def same_orbit(model: ReducedModel, shot: NDArray, harmonics: NDArray) -> bool:
+def same_orbit(shot: NDArray, harmonics: NDArray) -> bool:
     """Whether a shot orbit's harmonics are those of the harmonic-balance orbit.
 
     Parameters
     ----------
-    model : ReducedModel
-        The model (unused but for the coordinates' count).
     shot, harmonics : ndarray (n_nl, 2H+1)
         Real harmonics of the nonlinear coordinates of the two orbits [m].
 
@@ -173,7 +171,7 @@ def converge_verdicts(
         doubtful = not agreed or 1 / DOUBT_BAND < fmax[i] < DOUBT_BAND
         if exact and doubtful:
             orbit = polish(model, z, w)
-            if orbit is not None and same_orbit(model, orbit_harmonics(model, orbit, w, result.H_stored), z):
+            if orbit is not None and same_orbit(orbit_harmonics(model, orbit, w, result.H_stored), z):
                 fmax[i], dom[i] = dominant_multiplier(orbit.multipliers)
             else:
                 ok[i] = False
