@@ -461,6 +461,7 @@ def converged_sweep(
         )
     history = []
     res = None
+    shot: dict = {}  # exact orbits shot for the verdicts, kept across the rungs
     for H, H_check in zip(ladder[:-1], ladder[1:], strict=True):
         if on_rung is not None:
             on_rung(H)
@@ -468,7 +469,7 @@ def converged_sweep(
             res = sweep(model, omegas, H, directions, tol=tol, stability=stability, **kwargs)
         check = check_harmonics(model, res, H_check, tol=tol, rtol=rtol)
         if stability:  # the error is over the response's points: known by converged verdicts
-            settled = converge_verdicts(model, res, check.solutions, ladder=ladder, tol=tol)
+            settled = converge_verdicts(model, res, check.solutions, ladder=ladder, tol=tol, polished=shot)
             changed = np.any(settled.stable != res.stable)
             res = settled
             if changed:

@@ -134,6 +134,7 @@ def converge_verdicts(
     *,
     ladder: Sequence[int] = (),
     tol: float = 1e-10,
+    polished: dict | None = None,
 ) -> SweepResult:
     """``result`` with every verdict checked (module docstring) and ``verdict_converged`` set.
 
@@ -150,6 +151,9 @@ def converge_verdicts(
         Harmonic counts (of the model's base) for step 3: those above H' are tried.
     tol : float
         Newton's tolerance at the higher rungs (relative residual).
+    polished : dict, optional
+        {ω: [(harmonics of an exact orbit, max |μ|, dominant μ)]}, filled and reused: the
+        exact orbit does not depend on H, so a sweep's rungs shoot each orbit once.
 
     Returns
     -------
@@ -170,11 +174,11 @@ def converge_verdicts(
         agreed = fine is not None and agree(fmax[i], fine[0])
         doubtful = not agreed or 1 / DOUBT_BAND < fmax[i] < DOUBT_BAND
         if exact and doubtful:
-            orbit = polish(model, z, w)
-            if orbit is not None and same_orbit(orbit_harmonics(model, orbit, w, result.H_stored), z):
-                fmax[i], dom[i] = dominant_multiplier(orbit.multipliers)
-            else:
+            found = _exact(model, z, w, {} if polished is None else polished)
+            if found is None:
                 ok[i] = False
+            else:
+                fmax[i], dom[i] = found
             continue
         if agreed:
             fmax[i], dom[i] = fine
@@ -191,6 +195,26 @@ def converge_verdicts(
     no_stable = np.where(changed, ~stable, result.no_stable)
     out = replace(result, floquet_max=fmax, dominant_multiplier=dom, stable=stable & ok, verdict_converged=ok)
     return _refresh_metrics(model, out, no_stable)
+
+
+#: Harmonics kept of a shot orbit for the comparison with later rungs' orbits.
+KEPT_HARMONICS = 64
+
+
+def _exact(model, z, w, polished) -> tuple[float, complex] | None:
+    """(max |μ|, dominant μ) of the exact orbit that is the HB orbit ``z``, or None."""
+    for y, fm, mu in polished.get(w, ()):
+        if same_orbit(y, z):
+            return fm, mu
+    orbit = polish(model, z, w)
+    if orbit is None:
+        return None
+    y = orbit_harmonics(model, orbit, w, KEPT_HARMONICS)
+    if not same_orbit(y, z):
+        return None
+    fm, mu = dominant_multiplier(orbit.multipliers)
+    polished.setdefault(w, []).append((y, fm, mu))
+    return fm, mu
 
 
 def _H(sol) -> int:
