@@ -396,7 +396,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--harmonics",
         type=int,
         default=None,
-        help="number of harmonics H, 1 to 50 (default: chosen so that RMS DTE and maximum mesh force, "
+        help="number of harmonics H, at least 1, at most what memory holds for the model "
+        "(default: chosen so that RMS DTE and maximum mesh force, "
         "and a clearance's force and displacement, are within 0.5 %% of the converged answer; "
         "5 is the paper's choice)",
     )

@@ -84,8 +84,8 @@ def cmd_sweep(args) -> int:
             "--rpm", "give the range as --rpm START:STOP:COUNT (pinion speed) or --hz (mesh frequency)"
         )
     option, text = ("--rpm", args.rpm) if args.rpm is not None else ("--hz", args.hz)
-    if args.harmonics is not None and not 1 <= args.harmonics <= 50:
-        raise ModelError("--harmonics", f"must be between 1 and 50, got {args.harmonics}")
+    if args.harmonics is not None and args.harmonics < 1:
+        raise ModelError("--harmonics", f"must be at least 1, got {args.harmonics}")
     if args.continuation:
         start, stop, count = parse_span(text, option)
         values = np.array([start, stop])
@@ -108,6 +108,7 @@ def cmd_sweep(args) -> int:
         _check_period_options(args, period)
         search = (search[0] if search is not None else default_search(values), (period,))
     system = load_model(args.model)
+    check_harmonics_memory(args.harmonics, system, args.model)
     from nlgrd.cli_link_sweep import link_sweep_command, needs_links
 
     if search is not None and not needs_links(system) and system.gear_pairs[0].error_period > 1:
@@ -512,3 +513,31 @@ def _continuation(args, system, trace, unit, omegas, count, quantity, out, png) 
 
 
 # ---------------------------------------------------------------------------- parser, main
+
+
+def check_harmonics_memory(H: int | None, system, path) -> None:
+    """Raise ModelError when ``--harmonics`` H exceeds what memory holds for the model
+    (:func:`nlgrd.nonlinear.harmonic_convergence.max_harmonics` of its DOFs and links).
+
+    Parameters
+    ----------
+    H : int or None
+        The ``--harmonics`` option (None: chosen, nothing to check).
+    system : RotorSystem
+        The model loaded.
+    path : str or Path
+        Its file, named in the message.
+    """
+    if H is None:
+        return
+    from nlgrd.nonlinear.harmonic_ladder import available_memory, max_harmonics
+
+    n_coords = max(1, len(system.gear_pairs) + 2 * len(getattr(system, "bearing_clearances", ())))
+    top = max_harmonics(system.dofs.n_dofs, n_coords)
+    if H > top:
+        raise ModelError(
+            "--harmonics",
+            f"{H} harmonics of a model with {system.dofs.n_dofs} DOFs and {n_coords} link coordinates "
+            f"need more memory than available ({available_memory() / 2**30:.1f} GiB); at most {top}",
+            path,
+        )

@@ -24,6 +24,7 @@ from nlgrd.nonlinear.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.harmonic_convergence import check_harmonics, with_harmonic_error
 from nlgrd.nonlinear.results import SweepResult, response_kind
 from nlgrd.nonlinear.subharmonic import amplitudes, period_of, period_sweep, spread, subharmonic_mask
+from nlgrd.nonlinear.verdicts import converge_verdicts
 
 #: The values of ``period`` a sweep takes (orbits of 3 or more periods are searched for).
 PERIODS = (1, 2, "auto")
@@ -152,7 +153,8 @@ def beyond_period_one(
     p2 = period_sweep(model2, omegas, 2 * p1.H, 2, p1, directions, tol=tol, max_iter=max_iter)
     on_base = replace(p2, omega=p2.omega / 2)  # the frequencies model2 takes
     check = check_harmonics(model2, on_base, H_check, tol=tol, jumps=False)
-    p2 = replace(with_harmonic_error(on_base, check, rtol), omega=p2.omega)
+    on_base = converge_verdicts(model2, with_harmonic_error(on_base, check, rtol), check.solutions, tol=tol)
+    p2 = replace(on_base, omega=p2.omega)
     return (period_only(p2) if period == 2 else merge_periods(p1, p2)), p2
 
 
@@ -200,11 +202,13 @@ def merge_periods(p1: SweepResult, p2: SweepResult) -> SweepResult:
     ok2 = found2 & p2.stable[rows2]
     pick2 = np.zeros(n, dtype=bool)
     for d in dict.fromkeys(p1.direction.tolist()):
-        on2 = False
+        on2 = prev2 = False
         for i in np.nonzero(p1.direction == d)[0]:
             on2 = bool(ok2[i] and (on2 or not ok1[i]))
-            # neither stable: the unstable period-2 orbit tells what grows (a torus, period 4)
-            pick2[i] = on2 or (not ok1[i] and found2[i])
+            # neither stable: the row answers with the orbit the sweep was on, the period-2
+            # one only where the point before answered with it (what grows from it: a torus,
+            # period 4); elsewhere the period-1 orbit and its own multipliers
+            pick2[i] = prev2 = on2 or bool(prev2 and not ok1[i] and found2[i])
     no_stable = np.where(pick2, ~ok2, p1.no_stable | (p1.converged & ~p1.stable))
 
     def rows(a1, a2):
@@ -237,6 +241,7 @@ def merge_periods(p1: SweepResult, p2: SweepResult) -> SweepResult:
         np.where(pick2, 2, 1),
         sub,
         2,
+        verdict_converged=rows(p1.verdict_converged, p2.verdict_converged),
     )
 
 

@@ -433,6 +433,9 @@ class ReducedModel:
         :data:`~nlgrd.nonlinear.harmonic_convergence.FLOOR` times it, so that a journal
         resting on its bearing, nanometres from the centre of a 1 mm clearance, does not
         decide H. None: zeros.
+    static_force : ndarray (N,), optional
+        F₀ of the state space's equations [N]: with it and piecewise-linear laws the exact
+        flow is known (:mod:`nlgrd.nonlinear.shooting`); None where the model does not give it.
     """
 
     kappa: Callable[[float, int], ArrayLike]
@@ -448,6 +451,7 @@ class ReducedModel:
     branch_signature: Callable[[NDArray, float], NDArray] = field(kw_only=True)
     metrics: PointMetrics = field(default_factory=PointMetrics, kw_only=True)
     output_scales: NDArray | None = field(default=None, kw_only=True)
+    static_force: NDArray | None = field(default=None, kw_only=True, repr=False, compare=False)
 
     def __post_init__(self):
         object.__setattr__(self, "nonlinearities", tuple(self.nonlinearities))
@@ -563,4 +567,5 @@ class ReducedModel:
             outputs=metrics.outputs,
             branch_signature=metrics.signature,
             metrics=metrics,
+            static_force=F0,
         )

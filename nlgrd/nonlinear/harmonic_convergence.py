@@ -41,13 +41,13 @@ from numpy.typing import ArrayLike, NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.floquet import floquet_multipliers
 from nlgrd.nonlinear.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.harmonic_ladder import LADDER, ladder_for
 from nlgrd.nonlinear.metrics import MeshMetrics
 from nlgrd.nonlinear.results import STABLE_RTOL, SweepResult, assemble_result, dominant_multiplier
 from nlgrd.nonlinear.solvers import solve
 from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.verdicts import converge_verdicts
 
-#: The harmonic counts tried, in order (each checked against the next).
-LADDER = (5, 7, 9, 13, 17, 25)
 #: Default output tolerance: RMS DTE and maximum mesh force within 0.5 %.
 OUTPUT_RTOL = 5e-3
 #: A value below FLOOR x its sweep maximum is compared relative to that floor: an RMS DTE
@@ -397,7 +397,7 @@ def converged_sweep(
     directions: str | Sequence[str] = "both",
     *,
     rtol: float = OUTPUT_RTOL,
-    ladder: Sequence[int] = LADDER,
+    ladder: Sequence[int] | None = None,
     tol: float = 1e-10,
     stability: bool = True,
     on_rung=None,
@@ -421,8 +421,10 @@ def converged_sweep(
     rtol : float
         Tolerance of the estimated relative error of RMS DTE and maximum mesh force, in
         (0, 1).
-    ladder : sequence of int
-        Increasing harmonic counts tried, at least two.
+    ladder : sequence of int, optional
+        Increasing harmonic counts tried, at least two; default :func:`ladder_for` the
+        model (bounded by memory). Above :data:`LADDER` the climb stops where the
+        estimate no longer falls (by 10 % a rung): more harmonics do not converge it.
     tol : float
         Convergence tolerance of the solver (relative residual).
     stability : bool
@@ -449,6 +451,8 @@ def converged_sweep(
     HarmonicsWarning
         The ladder ended before the estimate met ``rtol``.
     """
+    if ladder is None:
+        ladder = ladder_for(model)
     if not ladder or any(int(h) < 1 for h in ladder) or list(ladder) != sorted(set(ladder)):
         raise ModelError("ladder", f"must be increasing positive harmonic counts, got {tuple(ladder)}")
     if not 0 < rtol < 1:
@@ -459,14 +463,24 @@ def converged_sweep(
         )
     history = []
     res = None
+    shot: dict = {}  # exact orbits shot for the verdicts, kept across the rungs
     for H, H_check in zip(ladder[:-1], ladder[1:], strict=True):
         if on_rung is not None:
             on_rung(H)
         if res is None:
             res = sweep(model, omegas, H, directions, tol=tol, stability=stability, **kwargs)
         check = check_harmonics(model, res, H_check, tol=tol, rtol=rtol)
+        if stability:  # the error is over the response's points: known by converged verdicts
+            settled = converge_verdicts(model, res, check.solutions, ladder=ladder, tol=tol, polished=shot)
+            changed = np.any(settled.stable != res.stable)
+            res = settled
+            if changed:
+                check = check_harmonics(model, res, H_check, tol=tol, rtol=rtol)
         history.append(check.history[0])
         if check.passed(rtol):
+            break
+        if H > LADDER[-1] and check.max_error > 0.9 * history[-2][1]:
+            _warn_exhausted(check, rtol)
             break
         if H_check != ladder[-1]:  # the next rung: lifted from the check, else swept afresh
             res = lift(model, res, check, stability)
@@ -566,4 +580,8 @@ def converged_continuation(
             break
     else:
         _warn_exhausted(check, rtol)
-    return replace(res, curve=_finish(res.curve, check, history, rtol))
+    curve = _finish(res.curve, check, history, rtol)
+    if kwargs.get("stability", True):
+        settled = converge_verdicts(model, curve, check.solutions, ladder=ladder, tol=tol)
+        curve = replace(settled, no_stable=curve.no_stable)  # a curve draws its unstable parts
+    return replace(res, curve=curve)

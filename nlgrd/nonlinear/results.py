@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 import pandas as pd
@@ -110,6 +110,10 @@ def instability_kind(mu: NDArray, stable: NDArray) -> NDArray:
     return out
 
 
+def _per_point(value) -> bool:
+    return isinstance(value, np.ndarray) and value.ndim >= 1
+
+
 def _significant(values: NDArray, digits: int) -> NDArray:
     """``values`` rounded to ``digits`` significant digits (an estimate's noise not written)."""
     v = np.asarray(values, dtype=float).copy()
@@ -193,6 +197,9 @@ class SweepResult:
         :data:`CHAOTIC`; the metrics there are its statistics.
     uncertainty : dict of str -> ndarray, optional
         Standard uncertainty of each metric of the time-answered points (SI; NaN elsewhere).
+    verdict_converged : ndarray of bool, optional
+        The stability verdict converged (:mod:`nlgrd.nonlinear.verdicts`; default True);
+        where False neither ``stable`` nor the response's values are written.
     """
 
     omega: NDArray
@@ -217,24 +224,25 @@ class SweepResult:
     base: int = 1
     time_kind: NDArray | None = None
     uncertainty: dict | None = None
+    verdict_converged: NDArray | None = None
 
     def __post_init__(self):
         if self.residual_kind not in RESIDUAL_COLUMNS:
             raise ModelError("residual_kind", f"must be one of {', '.join(RESIDUAL_COLUMNS)}")
         n = self.omega.size
-        for name, default in (("period", np.ones(n, dtype=int)), ("subharmonic_amplitude", np.zeros(n))):
+        defaults = {  # the columns a result may leave out
+            "period": np.ones(n, dtype=int),
+            "subharmonic_amplitude": np.zeros(n),
+            "branch_switch": np.zeros(n, dtype=bool),
+            "no_stable": np.zeros(n, dtype=bool),
+            "dominant_multiplier": np.full(n, np.nan + 0j),
+            "harmonic_error": np.full(n, np.nan),
+            "time_kind": np.full(n, "", dtype=object),
+            "verdict_converged": np.ones(n, dtype=bool),
+        }
+        for name, default in defaults.items():
             if getattr(self, name) is None:
                 object.__setattr__(self, name, default)
-        if self.branch_switch is None:
-            object.__setattr__(self, "branch_switch", np.zeros(self.omega.size, dtype=bool))
-        if self.no_stable is None:
-            object.__setattr__(self, "no_stable", np.zeros(self.omega.size, dtype=bool))
-        if self.dominant_multiplier is None:
-            object.__setattr__(self, "dominant_multiplier", np.full(self.omega.size, np.nan + 0j))
-        if self.harmonic_error is None:
-            object.__setattr__(self, "harmonic_error", np.full(self.omega.size, np.nan))
-        if self.time_kind is None:
-            object.__setattr__(self, "time_kind", np.full(n, "", dtype=object))
 
     @property
     def time_answered(self) -> NDArray:
@@ -293,30 +301,12 @@ class SweepResult:
     def select(self, direction: str) -> SweepResult:
         """The points of one sweep direction."""
         keep = self.direction == direction
-        return SweepResult(
-            self.omega[keep],
-            self.direction[keep],
-            self.harmonics[keep],
-            self.converged[keep],
-            self.residual[keep],
-            self.iterations[keep],
-            self.stable[keep],
-            self.floquet_max[keep],
-            {k: v[keep] for k, v in self.metrics.items()},
-            self.amplitudes[keep],
-            self.source,
-            self.branch_switch[keep],
-            self.harmonic_error[keep],
-            self.H_check,
-            self.no_stable[keep],
-            self.dominant_multiplier[keep],
-            self.residual_kind,
-            self.period[keep],
-            self.subharmonic_amplitude[keep],
-            self.base,
-            self.time_kind[keep],
-            None if self.uncertainty is None else {k: v[keep] for k, v in self.uncertainty.items()},
-        )
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        rows = {name: v[keep] for name, v in values.items() if _per_point(v)}
+        per_point = {"metrics": {k: v[keep] for k, v in self.metrics.items()}}
+        if self.uncertainty is not None:
+            per_point["uncertainty"] = {k: v[keep] for k, v in self.uncertainty.items()}
+        return replace(self, **per_point, **rows)
 
     def failures(self) -> NDArray:
         """Frequencies [rad/s] of the points that did not converge."""
@@ -390,6 +380,8 @@ class SweepResult:
             out[~(ok & known)] = pd.NA
             return out
 
+        settled = np.asarray(self.verdict_converged, dtype=bool)
+        verdict = np.where(~settled, "not converged", np.where(self.stable, "stable", "unstable"))
         iterations = pd.array(np.asarray(self.iterations), dtype="Int64")
         iterations[~ok] = pd.NA
         data = {
@@ -398,7 +390,8 @@ class SweepResult:
             "converged": ok,
             RESIDUAL_COLUMNS[self.residual_kind]: num(self.residual),
             "iterations": iterations,
-            "stable": flag(self.stable, self.stability_known),
+            "stable": flag(self.stable, self.stability_known & settled),
+            "verdict": pd.array(verdict, dtype="string"),
             "floquet_max [-]": floquet_output(num(self.floquet_max)),
             "H": pd.array(np.where(ok, self.H, 0), dtype="Int64"),
             "harmonic_error [-]": _significant(num(self.harmonic_error), 3),
@@ -410,13 +403,14 @@ class SweepResult:
             "dominant_multiplier_re [-]": floquet_output(num(self.dominant_multiplier.real), signed=True),
             "dominant_multiplier_im [-]": floquet_output(num(self.dominant_multiplier.imag), signed=True),
         }
+        timed = self.time_answered
+        data["verdict"][~ok | ~self.stability_known] = pd.NA
         data["H"][~ok] = pd.NA
-        data["response"][~ok] = pd.NA
+        data["response"][~ok | (~settled & ~timed)] = pd.NA  # unsettled: not known to be the response
         data["period"][~ok | self.no_stable] = pd.NA
         data["subharmonic_amp [um]"][self.no_stable] = np.nan
         data["instability"][~ok | ~self.stability_known] = pd.NA
-        timed = self.time_answered
-        ok = ok & (~self.no_stable | timed)  # the metrics: of the response only
+        ok = ok & ((~self.no_stable & settled) | timed)  # the metrics: of the response only
         for name in METRIC_NAMES:
             col, scale = _UNITS[name]
             v = self.metrics[name]

@@ -32,9 +32,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.force_laws import BacklashMesh, ContactStop, ParametricMesh
-from nlgrd.nonlinear.harmonics import n_harmonics, real_to_complex
+from nlgrd.nonlinear.harmonics import analyse, n_harmonics, real_to_complex
 
 if TYPE_CHECKING:  # pragma: no cover
+    from nlgrd.nonlinear.harmonic_balance import ReducedModel
     from nlgrd.nonlinear.state_space import LinearStateSpace
 
 #: Contact changes are located to this fraction of the period.
@@ -205,9 +206,16 @@ class _Flow:
 
     def period(self, s: NDArray) -> tuple[NDArray, NDArray, NDArray]:
         """s(T), Φ and the contact-change times from s(0) = s."""
-        t, sigma, Phi, events = 0.0, self.state_at(0.0, s), np.eye(s.size), []
-        while t < self.T * (1 - 1e-15):
-            step = min(self.dt, self.T - t)
+        s, Phi, events, _ = self.run(s, 0.0, self.T)
+        return s, Phi, events
+
+    def run(self, s: NDArray, t0: float, t1: float, sigma: tuple | None = None):
+        """s(t1), ∂s(t1)/∂s(t0), the contact-change times and the contact state at t1."""
+        t = t0
+        sigma = self.state_at(t0, s) if sigma is None else sigma
+        Phi, events = np.eye(s.size), []
+        while t < t1 - 1e-15 * self.T:
+            step = min(self.dt, t1 - t)
             sn, E = self.at(sigma, t, s, step)
             m0, m1 = self.margins(sigma, t, s), self.margins(sigma, t + step, sn)
             hit = np.nonzero(m1 < 0)[0]
@@ -235,7 +243,18 @@ class _Flow:
                 continue
             Phi = E @ Phi
             s, t = sn, t + step
-        return s, Phi, np.array(events)
+        return s, Phi, np.array(events), sigma
+
+    def samples(self, s: NDArray, n: int) -> NDArray:
+        """The nonlinear coordinates y = Wᵀ q at θ_j = 2πj/n along the orbit from s(0) = s, (n_nl, n)."""
+        out = np.empty((self.ss.W.shape[1], n))
+        sigma, t = None, 0.0
+        for j in range(n):
+            if j:
+                s, _, _, sigma = self.run(s, t, j * self.T / n, sigma)
+                t = j * self.T / n
+            out[:, j] = self.ss.W.T @ s[: self.N]
+        return out
 
     def _locate(self, sigma, t, s, step, hit) -> tuple[float, int]:
         """The earliest zero in (0, step] of the margins ``hit``, by bracketed Newton."""
@@ -385,3 +404,108 @@ def shoot_orbit(
             break
         s = s - np.linalg.solve(Phi - np.eye(2 * N), r)
     return ShootingOrbit(s, np.linalg.eigvals(Phi), Phi, omega * events, err, it, bool(err <= tol))
+
+
+def shootable(model: ReducedModel) -> bool:
+    """Whether the exact flow of ``model`` is known: its static force is given and every law
+    is a backlash or contact-stop law of constant stiffness.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The reduced model.
+
+    Returns
+    -------
+    bool
+    """
+    return (
+        model.static_force is not None
+        and bool(model.nonlinearities)
+        and all(
+            isinstance(nl, BacklashMesh) and not isinstance(nl, ParametricMesh) for nl in model.nonlinearities
+        )
+    )
+
+
+def polish(model: ReducedModel, harmonics: ArrayLike, omega: float) -> ShootingOrbit | None:
+    """:func:`shoot_orbit` on ``model`` from a harmonic-balance orbit; None where the model is
+    not :func:`shootable`, its state space is singular or Newton did not converge.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The reduced model (its ``linear_state_space`` and ``static_force``).
+    harmonics : array_like (n_nl, 2H+1)
+        Real harmonics of the nonlinear coordinates [m].
+    omega : float
+        Base frequency ω [rad/s].
+
+    Returns
+    -------
+    ShootingOrbit or None
+    """
+    if not shootable(model):
+        return None
+    ss = model.linear_state_space(omega)
+    if ss is None:
+        return None
+    try:
+        orbit = shoot_orbit(ss, model.nonlinearities, harmonics, omega, model.static_force)
+    except (ModelError, np.linalg.LinAlgError):
+        return None
+    return orbit if orbit.converged else None
+
+
+def orbit_harmonics(model: ReducedModel, orbit: ShootingOrbit, omega: float, H: int) -> NDArray:
+    """The harmonics 0..H of the nonlinear coordinates along a shot orbit (sampled on the exact
+    flow at max(8H, 256) angles).
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model it was shot on.
+    orbit : ShootingOrbit
+        From :func:`polish` or :func:`shoot_orbit`.
+    omega : float
+        Base frequency ω [rad/s].
+    H : int
+        Number of harmonics.
+
+    Returns
+    -------
+    ndarray (n_nl, 2H+1)
+        Real harmonics [m].
+    """
+    ss = model.linear_state_space(omega)
+    N = ss.M.shape[0]
+    F0 = np.zeros(N) if model.static_force is None else np.asarray(model.static_force, dtype=float)
+    flow = _Flow(ss, _laws(model.nonlinearities), F0, omega, 256)
+    return analyse(flow.samples(orbit.state, max(8 * H, 256)), H)
+
+
+def shooting_start(model: ReducedModel, omega: float, H: int) -> NDArray | None:
+    """A start for Newton where the linear one fails: the exact orbit shot from the linear
+    response (a contact stop without preload: its full-contact start sits at the stop, where
+    the harmonic-balance Newton does not converge), as H harmonics.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The reduced model.
+    omega : float
+        Base frequency ω [rad/s].
+    H : int
+        Number of harmonics.
+
+    Returns
+    -------
+    ndarray (n_nl, 2H+1) or None
+        Real harmonics [m]; None where the model is not :func:`shootable` or shooting failed.
+    """
+    if not shootable(model):
+        return None
+    problem = model.at(omega, H)
+    z = problem.linear_solution().reshape(problem.n_coords, -1)
+    orbit = polish(model, z, omega)
+    return None if orbit is None else orbit_harmonics(model, orbit, omega, H)

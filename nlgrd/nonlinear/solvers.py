@@ -57,11 +57,19 @@ def _newton(
         step = 1.0
         while True:
             zt = z + step * dz
-            Rt, Jt, st = problem.residual_jacobian(zt)
-            nt = np.linalg.norm(Rt)
+            try:  # a step so long that the iterate overflows is a failed step
+                Rt, Jt, st = problem.residual_jacobian(zt)
+                nt = np.linalg.norm(Rt)
+            except (np.linalg.LinAlgError, FloatingPointError):
+                Rt, Jt, st, nt = R, J, scale, np.inf
+            if not np.isfinite(nt) and step < 1 / 64:
+                break
             if nt <= (1 - 1e-4 * step) * nrm or step < 1 / 64:
                 break
             step /= 2
+        if not np.isfinite(nt):
+            msg = "the Newton step overflows"
+            break
         stalled = stalled + 1 if nt > (1 - 1e-4 * step) * nrm else 0
         z, R, J, scale, nrm = zt, Rt, Jt, st, nt
         history.append(nrm)

@@ -27,6 +27,7 @@ from nlgrd.nonlinear.results import (
     dominant_multiplier,
     instability_kind,
 )
+from nlgrd.nonlinear.shooting import shooting_start
 from nlgrd.nonlinear.solvers import solve
 from nlgrd.threads import single_blas_thread
 
@@ -318,6 +319,8 @@ def _sweep_pass(
                 sol, switched = landing.follow_branch(
                     model, problem, sol, z, last_w, float(w), H, method, tol, max_iter, stability, others()
                 )
+            if not sol.converged and z is None and (zs := shooting_start(model, float(w), H)) is not None:
+                sol = solve(problem, zs, method=method, tol=tol, max_iter=max_iter, fallback=False)
             if not sol.converged and z is None and jump != "none":
                 sol = landing.approach(model, problem, order, k, H, method, tol, max_iter, stability) or sol
             if not sol.converged and jump == "restart" and z is not None:
