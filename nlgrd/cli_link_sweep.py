@@ -313,7 +313,7 @@ class LinkOrbits:
     def result(self, branch):
         """``branch`` (one period) with every link's outputs where it is the response: a
         :class:`~nlgrd.nonlinear.link_results.LinkSweepResult`."""
-        from nlgrd.nonlinear.link_results import LinkSweepResult
+        from nlgrd.nonlinear.link_results import LinkSweepResult, bearing_columns
 
         nu = int(branch.period[0]) if len(branch) else 1
         usable = branch.converged & ~np.asarray(branch.no_stable, dtype=bool)
@@ -322,7 +322,7 @@ class LinkOrbits:
             self.values(branch.harmonics[i], float(branch.omega[i]), nu) if usable[i] else blank
             for i in range(len(branch))
         ]
-        return LinkSweepResult(branch, pd.DataFrame(rows, columns=self.outputs))
+        return LinkSweepResult(branch, pd.DataFrame(rows, columns=self.outputs), bearing_columns(self.model))
 
     def frame(self, branch) -> pd.DataFrame:
         f = self.result(branch).to_frame()

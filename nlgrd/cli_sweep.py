@@ -517,7 +517,7 @@ def _continuation(args, system, trace, unit, omegas, count, quantity, out, png) 
 
 def check_harmonics_memory(H: int | None, system, path) -> None:
     """Raise ModelError when ``--harmonics`` H exceeds what memory holds for the model
-    (:func:`nlgrd.nonlinear.harmonic_convergence.max_harmonics` of its DOFs and links).
+    (:func:`nlgrd.nonlinear.harmonic_ladder.max_harmonics` of its DOFs and links).
 
     Parameters
     ----------

@@ -377,7 +377,12 @@ OPTION_CASES = {
     "count fractional": (["sweep", KUBO, "--rpm", "1000:2000:2.5"], "--rpm", "COUNT"),
     "no range": (["sweep", KUBO], "--rpm", "--hz"),
     "rpm and hz": (["sweep", KUBO, "--rpm", "1000:2000:3", "--hz", "400:800:3"], "--rpm", "--hz"),
-    "harmonics 51": (["sweep", KUBO, "--rpm", "4000:5000:3", "--harmonics", "51"], "--harmonics", "1 and 50"),
+    "harmonics 0": (["sweep", KUBO, "--rpm", "4000:5000:3", "--harmonics", "0"], "--harmonics", "at least 1"),
+    "harmonics beyond memory": (
+        ["sweep", KUBO, "--rpm", "4000:5000:3", "--harmonics", "100000000"],
+        "--harmonics",
+        "more memory than available",
+    ),
     "harmonics a word": (
         ["sweep", KUBO, "--rpm", "4000:5000:3", "--harmonics", "many"],
         "--harmonics",

@@ -430,7 +430,8 @@ def test_kubo_every_speed_is_answered_and_the_bifurcations_listed(outputs):
     fe = read(out, "dslr_fe.csv")
     kinds = {"periodic", "period 2", "quasi-periodic", "no stable mesh-periodic response"}
     ok = fe["converged"].astype(bool)
-    assert fe.loc[ok, "response"].isin(kinds).all()
+    unsettled = fe["response"] == "stability not converged"  # marked; no change is told there
+    assert fe.loc[ok & ~unsettled, "response"].isin(kinds).all()
     assert fe.loc[~ok, "response"].isna().all()
     assert (fe.loc[fe["direction"] == "down", "response"] != "periodic").sum() >= 1  # multipliers > 1 there
     two = fe[fe["response"] == "period 2"]
@@ -445,7 +446,7 @@ def test_kubo_every_speed_is_answered_and_the_bifurcations_listed(outputs):
     assert quasi["dslr [-]"].isna().all()  # not drawn or written as a response
     expected = []
     for d in ("up", "down"):
-        part = fe[(fe["direction"] == d) & ok]
+        part = fe[(fe["direction"] == d) & ok & ~unsettled]
         r = part["response"].tolist()
         expected += [(d, a, b) for a, b in zip(r[:-1], r[1:], strict=True) if a != b]
     bif = read(out, "bifurcations_fe.csv")

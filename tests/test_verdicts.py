@@ -105,7 +105,8 @@ def test_a_verdict_not_converged_is_written_as_such():
     df = out.to_frame()
     assert list(df["verdict"]) == ["stable", "not converged"]
     assert df["stable"].iloc[0] and df["stable"].isna().iloc[1]
-    assert df["response"].isna().iloc[1] and np.isnan(df["dte_rms [um]"].iloc[1])
+    assert df["response"].iloc[1] == "stability not converged" and np.isnan(df["dte_rms [um]"].iloc[1])
+    assert df["period"].isna().iloc[1]  # not an answer: no period either
     assert df["dte_rms [um]"].iloc[0] == pytest.approx(1.0)
 
 

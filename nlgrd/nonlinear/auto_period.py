@@ -270,7 +270,8 @@ def transitions(result: SweepResult) -> list[Transition]:
     kinds = response_kind(result)
     out = []
     for d in dict.fromkeys(result.direction.tolist()):
-        idx = np.nonzero((result.direction == d) & result.converged)[0]
+        # a point whose stability verdict did not converge tells no change: skipped
+        idx = np.nonzero((result.direction == d) & result.converged & result.verdict_converged)[0]
         for i, j in zip(idx[:-1], idx[1:], strict=True):
             if kinds[i] == kinds[j]:
                 continue

@@ -36,6 +36,7 @@ from nlgrd.nonlinear.link_reduction import LinkReceptance
 from nlgrd.nonlinear.link_results import (  # re-exported: the tables live there
     LinkContinuationResult,
     LinkSweepResult,
+    bearing_columns,
     link_rows,
     metric_names,
     output_names,
@@ -425,7 +426,7 @@ def link_sweep(
             (two, res.harmonics[i], res.omega[i] / 2) if on_two else (model, p1.harmonics[i], res.omega[i])
         )
         rows.append(point_outputs(m, z, float(w)))
-    return LinkSweepResult(res, pd.DataFrame(rows, columns=list(blank)))
+    return LinkSweepResult(res, pd.DataFrame(rows, columns=list(blank)), bearing_columns(model))
 
 
 def link_continuation(

@@ -19,6 +19,7 @@ from nlgrd.nonlinear.results import ContinuationResult, SweepResult
 __all__ = [
     "LinkContinuationResult",
     "LinkSweepResult",
+    "bearing_columns",
     "link_rows",
     "metric_names",
     "output_names",
@@ -57,12 +58,15 @@ class LinkSweepResult:
         The points (harmonics of all link coordinates, convergence, stability).
     links : pandas.DataFrame
         One row per point: ``<link>.<quantity>`` columns, over the point's whole period
-        (2T for a period-2 point); NaN where the point did not converge or has no stable
-        periodic response.
+        (2T for a period-2 point), then every linear bearing's ``<bearing>.<quantity>``;
+        NaN where the point did not converge or has no stable periodic response.
+    bearings : tuple of str
+        Which of those columns are the linear bearings' (recovered, not a link's own).
     """
 
     result: SweepResult
     links: pd.DataFrame
+    bearings: tuple = ()
 
     def to_frame(self) -> pd.DataFrame:
         """The sweep's table (frequency column ``base_frequency [Hz]``) with the link columns.
@@ -80,7 +84,8 @@ class LinkSweepResult:
         Parameters
         ----------
         quantities : str or sequence of str, optional
-            ``<link>.<quantity>`` columns; default every column.
+            ``<link>.<quantity>`` columns; default every link's (the linear bearings follow
+            them: a bearing whose force changes smoothly by a third is no jump).
         rtol, ratio : float
             As :func:`nlgrd.nonlinear.jumps.find_jumps` [-].
 
@@ -89,7 +94,7 @@ class LinkSweepResult:
         list of Jump
         """
         if quantities is None:
-            quantities = list(self.links.columns)
+            quantities = [c for c in self.links.columns if c not in self.bearings]
         qs = [quantities] if isinstance(quantities, str) else list(quantities)
         for q in qs:
             if q not in self.links.columns:
@@ -127,8 +132,22 @@ def output_names(model) -> list[str]:
     -------
     list of str
     """
-    links = [f"{lk.name}.{k}" for lk in model.links for k in metric_names(lk)]
-    return links + [f"{b}.{q}" for b in bearing_names(model.system) for q in BEARING_OUTPUTS]
+    return [f"{lk.name}.{k}" for lk in model.links for k in metric_names(lk)] + list(bearing_columns(model))
+
+
+def bearing_columns(model) -> tuple[str, ...]:
+    """The linear bearings' columns among :func:`output_names`.
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.link_model.LinkModel
+        The model.
+
+    Returns
+    -------
+    tuple of str
+    """
+    return tuple(f"{b}.{q}" for b in bearing_names(model.system) for q in BEARING_OUTPUTS)
 
 
 def point_outputs(model, harmonics: NDArray, omega: float) -> dict[str, float]:

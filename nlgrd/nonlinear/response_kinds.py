@@ -19,12 +19,16 @@ QUASI_PERIODIC = "quasi-periodic"
 #: exponent is positive.
 TIME_DOMAIN = "time domain"
 CHAOTIC = "chaotic"
+#: A converged orbit whose stability verdict did not converge (:mod:`nlgrd.nonlinear.verdicts`):
+#: neither stable nor unstable, so not the response; its values are not written.
+STABILITY_NOT_CONVERGED = "stability not converged"
 
 
 def response_kind(result) -> NDArray:
     """Per point: "periodic" (the mesh period), "period ν", "quasi-periodic" (lost to a
-    complex pair, ``secondary_frequency`` known) or :data:`NO_STABLE`; where a time
-    integration answered (``time_kind``), :data:`TIME_DOMAIN` or :data:`CHAOTIC`.
+    complex pair, ``secondary_frequency`` known), :data:`NO_STABLE` or
+    :data:`STABILITY_NOT_CONVERGED`; where a time integration answered (``time_kind``),
+    :data:`TIME_DOMAIN` or :data:`CHAOTIC`.
 
     Parameters
     ----------
@@ -39,6 +43,7 @@ def response_kind(result) -> NDArray:
     out = np.array(["periodic" if p == 1 else f"period {p}" for p in period], dtype=object).reshape(-1)
     out[result.no_stable] = NO_STABLE
     out[result.no_stable & np.isfinite(result.secondary_frequency)] = QUASI_PERIODIC
+    out[~np.asarray(result.verdict_converged, dtype=bool)] = STABILITY_NOT_CONVERGED
     timed = result.time_answered
     out[timed] = np.asarray(result.time_kind, dtype=object)[timed]
     return out

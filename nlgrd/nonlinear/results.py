@@ -406,9 +406,9 @@ class SweepResult:
         timed = self.time_answered
         data["verdict"][~ok | ~self.stability_known] = pd.NA
         data["H"][~ok] = pd.NA
-        data["response"][~ok | (~settled & ~timed)] = pd.NA  # unsettled: not known to be the response
-        data["period"][~ok | self.no_stable] = pd.NA
-        data["subharmonic_amp [um]"][self.no_stable] = np.nan
+        data["response"][~ok] = pd.NA
+        data["period"][~ok | self.no_stable | ~settled] = pd.NA
+        data["subharmonic_amp [um]"][self.no_stable | ~settled] = np.nan
         data["instability"][~ok | ~self.stability_known] = pd.NA
         ok = ok & ((~self.no_stable & settled) | timed)  # the metrics: of the response only
         for name in METRIC_NAMES:

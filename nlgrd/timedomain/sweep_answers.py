@@ -157,5 +157,5 @@ def with_time_answers(
         return dc.replace(result, mesh=res)
     if isinstance(result, LinkSweepResult):
         res, answers = answer_gaps(model, result.result, progress=progress, **options)
-        return LinkSweepResult(res, _link_frame(result.links, answers))
+        return LinkSweepResult(res, _link_frame(result.links, answers), result.bearings)
     return answer_gaps(model, result, progress=progress, **options)[0]
