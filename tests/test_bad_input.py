@@ -460,6 +460,10 @@ STUDY_CASES = {
     "rpm and hz": (("rpm = [6000.0, 12000.0, 7]", "rpm = [6000.0, 12000.0, 7]\nhz = [1, 2, 3]"), "analysis"),
     "harmonics 0": (("harmonics = 5", "harmonics = 0"), "analysis.harmonics"),
     "stability a word": (("stability = false", 'stability = "no"'), "analysis.stability"),
+    "time_domain a word": (
+        ("stability = false", 'stability = false\ntime_domain = "no"'),
+        "analysis.time_domain",
+    ),
     "analysis key misspelt": (("harmonics = 5", "harmonic = 5"), "analysis.harmonic"),
     "tolerance negative": (("harmonics = 5", "tolerance = -0.01"), "analysis.tolerance"),
     "model missing": ((f'model = "{KUBO.as_posix()}"', 'model = "no_such_model.toml"'), "model"),

@@ -13,6 +13,8 @@ file names the model, the sweep every task runs, and the parameter axes::
     harmonics = 9                   # left out: chosen by the error estimate (tolerance)
     tolerance = 0.005               # output tolerance of that estimate [-]
     stability = true                # Floquet stability (on by default)
+    time_domain = true              # points with no stable periodic orbit answered by time
+                                    # integration (needs stability; on by default)
 
     [[axes]]                        # one parameter axis
     key = "gear_pairs[0].geometry.backlash"
@@ -99,6 +101,9 @@ class Analysis:
         Output tolerance of that estimate [-].
     stability : bool
         Floquet stability of every point.
+    time_domain : bool
+        Points without a stable periodic orbit answered by time integration
+        (:func:`nlgrd.timedomain.sweep_answers.with_time_answers`; needs ``stability``).
     """
 
     unit: str
@@ -109,6 +114,7 @@ class Analysis:
     harmonics: int | None = None
     tolerance: float = 0.005
     stability: bool = True
+    time_domain: bool = True
 
     def values(self) -> np.ndarray:
         """The swept speeds [rpm] or frequencies [Hz]."""
@@ -279,7 +285,7 @@ def _table(data: dict, key: str, allowed: set[str], w: _Where, required: set[str
 
 
 def _analysis(data: dict, w: _Where) -> Analysis:
-    allowed = {"rpm", "hz", "direction", "harmonics", "tolerance", "stability"}
+    allowed = {"rpm", "hz", "direction", "harmonics", "tolerance", "stability", "time_domain"}
     t = _table(data, "analysis", allowed, w)
     if ("rpm" in t) == ("hz" in t):
         raise w.error("analysis.rpm", "give the range as rpm = [START, STOP, COUNT] or hz = [...]")
@@ -303,7 +309,10 @@ def _analysis(data: dict, w: _Where) -> Analysis:
     stability = t.get("stability", True)
     if not isinstance(stability, bool):
         raise w.error("analysis.stability", f"must be true or false, got {stability!r}")
-    return Analysis(unit, start, stop, count, direction, harmonics, tolerance, stability)
+    time_domain = t.get("time_domain", True)
+    if not isinstance(time_domain, bool):
+        raise w.error("analysis.time_domain", f"must be true or false, got {time_domain!r}")
+    return Analysis(unit, start, stop, count, direction, harmonics, tolerance, stability, time_domain)
 
 
 def _check_speeds(system, analysis: Analysis, w: _Where) -> None:

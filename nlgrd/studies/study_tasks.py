@@ -211,6 +211,7 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
             period="auto",
             **options,
         )
+        res = _time_answers(res, model, analysis)
         frame = res.to_frame()
         x_col = "shaft_speed [rpm]" if rpm else "base_frequency [Hz]"
         if rpm:
@@ -231,6 +232,8 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
         harmonic_rtol=analysis["tolerance"],
         **options,
     )
+    if gp.error_period == 1:  # a shaft-order sweep's base is ω/N: its gaps stay gaps
+        res = _time_answers(res, None, analysis, system)
     x_col = "pinion_speed [rpm]" if rpm else "mesh_frequency [Hz]"
     columns = SummaryColumns(
         dslr=["dslr [-]"],
@@ -239,6 +242,19 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
         bearing_force=[f"{name} force_max [N]" for name in res.bearing_names],
     )
     return res.to_frame(), res.jumps(), x_col, per_rad, columns
+
+
+def _time_answers(res, model, analysis: dict, system=None):
+    """``res`` with its points without a stable periodic orbit answered by time integration
+    (:func:`nlgrd.timedomain.sweep_answers.with_time_answers`, as ``nlgrd sweep`` does),
+    when the analysis has stability and ``time_domain``; ``model`` the link model (None:
+    built from ``system``)."""
+    if not (analysis["stability"] and analysis.get("time_domain", True)):
+        return res
+    from nlgrd.nonlinear.link_model import build_link_model
+    from nlgrd.timedomain.sweep_answers import with_time_answers
+
+    return with_time_answers(res, model if model is not None else build_link_model(system))
 
 
 def _peak(frame: pd.DataFrame, columns: list, scales: list | None = None) -> float:
