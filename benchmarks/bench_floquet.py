@@ -4,11 +4,11 @@
 Run from the repository root::
 
     .venv/bin/python benchmarks/bench_floquet.py [--stage-points 3]
-    git show <commit>:nlgrd/nonlinear/floquet.py > /tmp/floquet_before.py
+    git show <commit>:nlgrd/nonlinear/stability/floquet.py > /tmp/floquet_before.py
     .venv/bin/python benchmarks/bench_floquet.py --before /tmp/floquet_before.py --models 3
 
 ``--before FILE``: the same sweeps side by side in this process with the
-``floquet_multipliers`` of another version of ``nlgrd/nonlinear/floquet.py`` (before,
+``floquet_multipliers`` of another version of ``nlgrd/nonlinear/stability/floquet.py`` (before,
 after, before, after; the best of two each; the idler on its stable points only), with
 the verdicts and dominant multipliers of both compared.
 
@@ -35,10 +35,10 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-import nlgrd.nonlinear.floquet as floquet
+import nlgrd.nonlinear.stability.floquet as floquet
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.link_model import build_link_model, link_sweep
-from nlgrd.nonlinear.links import BearingClearance
+from nlgrd.nonlinear.links.contract import BearingClearance
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 
 MODELS = Path(__file__).resolve().parents[1] / "data" / "models"
 _SPENT = {"t": 0.0, "n": 0}

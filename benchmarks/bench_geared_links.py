@@ -7,8 +7,8 @@ Run from the repository root (``--evaluations``: only the per-evaluation timing)
 
 Up sweeps with Floquet stability, one BLAS thread, fixed H, the same grid for the two
 paths of the single mesh (data/models/two_shaft.toml, 132 DOFs, H = 9, mesh frequency
-1000-1700 Hz, 15 points): the mesh receptance (`nlgrd.nonlinear.geared.geared_sweep`)
-and the general link reduction (`nlgrd.nonlinear.link_model.link_sweep`) side by side;
+1000-1700 Hz, 15 points): the mesh receptance (`nlgrd.nonlinear.models.geared.geared_sweep`)
+and the general link reduction (`nlgrd.nonlinear.models.link_model.link_sweep`) side by side;
 then two_shaft with the pinion's free-end bearing replaced by a 20 µm radial clearance
 with Hertzian contact (2 links, 3 coordinates), the idler train (2 meshes, 198 DOFs) and
 the two-stage reduction (2 meshes, base = 5 x the input speed, H = 45), each on its own
@@ -28,9 +28,9 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import geared_sweep
-from nlgrd.nonlinear.link_model import build_link_model, link_sweep
-from nlgrd.nonlinear.links import BearingClearance
+from nlgrd.nonlinear.links.contract import BearingClearance
+from nlgrd.nonlinear.models.geared import geared_sweep
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 
 MODELS = Path(__file__).resolve().parents[1] / "data" / "models"
 
@@ -44,7 +44,7 @@ def _timed(label: str, run, n: int) -> None:
 
 def evaluations() -> None:
     """Per evaluation of κ_k, F_k and their ω-derivatives, pole-residue against direct LU."""
-    from nlgrd.nonlinear.link_reduction import LinkReceptance
+    from nlgrd.nonlinear.reduction.link_reduction import LinkReceptance
 
     for name, H in (("idler_train", 9), ("two_stage", 45)):
         system = load_model(MODELS / f"{name}.toml")

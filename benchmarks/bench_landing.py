@@ -7,7 +7,7 @@ Run from the repository root::
 
 idler_train.toml, up sweep (``link_sweep``, H = 9, 15 mesh frequencies 1000-1700 Hz, one
 BLAS thread), warmed up on 2 points, run twice side by side in one process: with
-``jump_to_branch``'s ceiling :data:`~nlgrd.nonlinear.arclength.LANDING_EVALUATIONS`
+``jump_to_branch``'s ceiling :data:`~nlgrd.nonlinear.tracing.arclength.LANDING_EVALUATIONS`
 (the default) and without it (``max_evaluations=None``, the search before issue 34).
 Prints the time per point, the corrector evaluations of each search, and whether every
 point's answer (convergence, stability, no-stable flag, branch switch, harmonics to
@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-import nlgrd.nonlinear.arclength as arclength
+import nlgrd.nonlinear.tracing.arclength as arclength
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 
 IDLER = Path(__file__).resolve().parents[1] / "data" / "models" / "idler_train.toml"
 _EVALS = {"n": 0}

@@ -28,8 +28,8 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 import test_bearing_clearance as jeff  # noqa: E402
 
-from nlgrd.nonlinear.link_model import Unbalance, build_link_model, link_sweep  # noqa: E402
-from nlgrd.nonlinear.links import BearingClearance  # noqa: E402
+from nlgrd.nonlinear.links.contract import BearingClearance  # noqa: E402
+from nlgrd.nonlinear.models.link_model import Unbalance, build_link_model, link_sweep  # noqa: E402
 
 
 def models():

@@ -62,16 +62,17 @@ import scipy
 import scipy.linalg  # noqa: F401  (loads scipy's OpenBLAS so that its threads can be set)
 import scipy.sparse.linalg  # noqa: F401
 
-import nlgrd.nonlinear.floquet as nl_floquet
-import nlgrd.nonlinear.geared as nl_geared
-import nlgrd.nonlinear.harmonic_balance as nl_hb
-import nlgrd.nonlinear.landing as nl_landing
-import nlgrd.nonlinear.metrics as nl_metrics
-import nlgrd.nonlinear.receptance as nl_receptance
-import nlgrd.nonlinear.sweep as nl_sweep
+import nlgrd.nonlinear.hb.harmonic_balance as nl_hb
+import nlgrd.nonlinear.models.geared as nl_geared
+import nlgrd.nonlinear.reduction.receptance as nl_receptance
+import nlgrd.nonlinear.reduction.state_space as nl_state_space
+import nlgrd.nonlinear.results.metrics as nl_metrics
+import nlgrd.nonlinear.stability.floquet as nl_floquet
+import nlgrd.nonlinear.tracing.landing as nl_landing
+import nlgrd.nonlinear.tracing.sweep as nl_sweep
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode, geared_sweep
-from nlgrd.nonlinear.state_space import LinearStateSpace
+from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
 from nlgrd.rotor.system import refined
 from nlgrd.timedomain.geared import time_response
 
@@ -510,7 +511,7 @@ def floquet_side_by_side(model, result, cfg) -> None:
     m = result.mesh
     nl = model.reduced.nonlinearities
     top = model.max_mesh_frequency
-    shared = nl_floquet.FloquetCache(maxsize=4096)
+    shared = nl_state_space.FloquetCache(maxsize=4096)
     fm = nl_floquet.floquet_multipliers
     model.reduced.linear_state_space(float(m.omega[0]))  # the one-off stability basis
     rec = defaultdict(list)

@@ -24,8 +24,8 @@ from threadpoolctl import threadpool_limits
 
 from nlgrd.gear.modifications import GearErrors
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import build_geared_model, geared_sweep
-from nlgrd.nonlinear.shaft_orders import shaft_order_model, shaft_order_sweep
+from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
+from nlgrd.nonlinear.models.shaft_orders import shaft_order_model, shaft_order_sweep
 
 MODELS = Path(__file__).resolve().parents[1] / "data" / "models"
 

@@ -2,7 +2,7 @@
 full FE model (HHT-α, :func:`nlgrd.timedomain.geared.time_response`, 512 steps per mesh
 period) at constant speed in the quasi-periodic band 13 750-14 000 rpm (the up sweep,
 H = 13; tests/test_beyond_period_one.py), against the torus of
-:func:`nlgrd.nonlinear.torus_sweep.torus_sweep`.
+:func:`nlgrd.nonlinear.tracing.torus_sweep.torus_sweep`.
 
 Each run starts on the unstable periodic orbit, integrates ``TRANSIENT`` mesh periods
 (discarded), then ``BLOCKS`` blocks of ``SPACING`` periods. The last period of each block
@@ -28,8 +28,8 @@ import numpy as np
 import pandas as pd
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import build_geared_model, geared_sweep
-from nlgrd.nonlinear.torus_sweep import torus_sweep
+from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
+from nlgrd.nonlinear.tracing.torus_sweep import torus_sweep
 from nlgrd.timedomain.geared import start_from_harmonics, time_response
 
 ROOT = Path(__file__).resolve().parent.parent

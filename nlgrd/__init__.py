@@ -9,7 +9,7 @@ Reference: Maliha, Doğruer & Özgüven (2004), J. Mech. Des. 126:534-541.
 from nlgrd.analyses import campbell, continuation, load, modes, search_orbits, sweep, time_sweep
 from nlgrd.errors import ModelError
 from nlgrd.gear.mesh import GearMesh
-from nlgrd.nonlinear.links import BearingClearance, GearMeshLink
+from nlgrd.nonlinear.links.contract import BearingClearance, GearMeshLink
 from nlgrd.rotor.assembly import LinearModel, assemble
 from nlgrd.rotor.bearing import Bearing
 from nlgrd.rotor.coupling import Coupling

@@ -5,7 +5,7 @@ without bearing clearances and unbalance.
 
 Speeds are given once, in the unit the user has: ``rpm`` (the reference shaft, speed
 ratio 1) or ``hz`` (the base frequency of the model's frequency plan: the mesh frequency
-for one mesh, :class:`~nlgrd.nonlinear.frequency_plan.FrequencyPlan`). Each function
+for one mesh, :class:`~nlgrd.nonlinear.links.frequency_plan.FrequencyPlan`). Each function
 builds the reduced model (:func:`model`) and calls the library's own analysis; the
 result is the library's result object, with ``to_frame()``.
 """
@@ -95,7 +95,7 @@ def campbell(system: RotorSystem, rpm: ArrayLike, n_modes: int = 10, orders: dic
 def _single_mesh(system: RotorSystem) -> bool:
     """One gear pair whose excitation repeats every mesh cycle, and nothing else nonlinear:
     the mesh-coordinate reduction serves it (its base is the mesh frequency)."""
-    from nlgrd.nonlinear.link_model import needs_links
+    from nlgrd.nonlinear.models.link_model import needs_links
 
     return not needs_links(system) and system.gear_pairs[0].error_period == 1
 
@@ -104,9 +104,9 @@ def model(system: RotorSystem, top: float, H: int):
     """The reduced harmonic-balance model of ``system`` for base frequencies up to ``top``.
 
     One gear pair alone is reduced onto its mesh coordinate
-    (:func:`nlgrd.nonlinear.geared.build_geared_model`); any other set of meshes,
+    (:func:`nlgrd.nonlinear.models.geared.build_geared_model`); any other set of meshes,
     clearances and unbalance onto all link coordinates
-    (:func:`nlgrd.nonlinear.link_model.build_link_model`). The two agree to 1e-9 on one
+    (:func:`nlgrd.nonlinear.models.link_model.build_link_model`). The two agree to 1e-9 on one
     mesh (tests/test_engine_equivalence.py).
 
     Parameters
@@ -123,16 +123,16 @@ def model(system: RotorSystem, top: float, H: int):
     GearedModel or LinkModel
     """
     if _single_mesh(system):
-        from nlgrd.nonlinear.geared import build_geared_model
+        from nlgrd.nonlinear.models.geared import build_geared_model
 
         return build_geared_model(system, float(top), H=H)
-    from nlgrd.nonlinear.link_model import build_link_model
+    from nlgrd.nonlinear.models.link_model import build_link_model
 
     return build_link_model(system)
 
 
 def _speed_per_base(system: RotorSystem) -> float:
-    from nlgrd.nonlinear.frequency_plan import FrequencyPlan
+    from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
 
     return FrequencyPlan.of_model(system).speed_per_base
 
@@ -151,7 +151,7 @@ def _omegas(system: RotorSystem, rpm, hz, name: str = "rpm") -> NDArray:
 
 
 def _ladder_top(system: RotorSystem, H: int | None) -> int:
-    from nlgrd.nonlinear.harmonic_convergence import LADDER
+    from nlgrd.nonlinear.tracing.harmonic_convergence import LADDER
 
     return int(H) if H is not None else LADDER[-1]
 
@@ -195,7 +195,7 @@ def sweep(
     time_options : dict, optional
         Options of :func:`nlgrd.timedomain.time_answer.time_answer` (``max_periods``, ...).
     **options
-        Further options of :func:`nlgrd.nonlinear.sweep.sweep` (``tol``, ``jump``, ...).
+        Further options of :func:`nlgrd.nonlinear.tracing.sweep.sweep` (``tol``, ``jump``, ...).
 
     Returns
     -------
@@ -206,15 +206,15 @@ def sweep(
     m = model(system, float(omegas.max()), _ladder_top(system, H))
     common = dict(directions=directions, stability=stability, progress=progress, period=period)
     if _single_mesh(system):
-        from nlgrd.nonlinear.geared import geared_sweep
+        from nlgrd.nonlinear.models.geared import geared_sweep
 
         res = geared_sweep(system, omegas, H=H, model=m, **common, **options)
     else:
-        from nlgrd.nonlinear.link_model import link_sweep
+        from nlgrd.nonlinear.models.link_model import link_sweep
 
         res = link_sweep(m, omegas, H, **common, **options)
     if time_domain and period == "auto" and stability:
-        from nlgrd.nonlinear.link_model import build_link_model
+        from nlgrd.nonlinear.models.link_model import build_link_model
         from nlgrd.timedomain.sweep_answers import with_time_answers
 
         links = m if not _single_mesh(system) else build_link_model(system)
@@ -244,7 +244,7 @@ def continuation(
     stability : bool
         Floquet stability of each point.
     **options
-        Further options of :func:`nlgrd.nonlinear.continuation.continuation`.
+        Further options of :func:`nlgrd.nonlinear.tracing.continuation.continuation`.
 
     Returns
     -------
@@ -257,10 +257,10 @@ def continuation(
     w0, w1 = (float(w) for w in ends)
     m = model(system, max(w0, w1), _ladder_top(system, H))
     if _single_mesh(system):
-        from nlgrd.nonlinear.geared import geared_continuation
+        from nlgrd.nonlinear.models.geared import geared_continuation
 
         return geared_continuation(system, w0, w1, H, model=m, stability=stability, **options)
-    from nlgrd.nonlinear.link_model import link_continuation
+    from nlgrd.nonlinear.models.link_model import link_continuation
 
     return link_continuation(m, w0, w1, H, stability=stability, **options)
 
@@ -288,22 +288,22 @@ def search_orbits(
     H : int
         Harmonics of the base per orbit (ν H of ω/ν for period ν) [-].
     **options
-        Further options of :func:`nlgrd.nonlinear.orbit_search.search_orbits`.
+        Further options of :func:`nlgrd.nonlinear.tracing.orbit_search.search_orbits`.
 
     Returns
     -------
     list of FoundOrbit
     """
-    from nlgrd.nonlinear.orbit_search import search_orbits as search
+    from nlgrd.nonlinear.tracing.orbit_search import search_orbits as search
 
     omega = float(_omegas(system, rpm, hz)[0])
     m = model(system, omega, int(H))
     if _single_mesh(system):
-        from nlgrd.nonlinear.orbit_search import geared_model_of
+        from nlgrd.nonlinear.models.geared import geared_model_of
 
         model_of = geared_model_of(m)
     else:
-        from nlgrd.nonlinear.link_model import period_model
+        from nlgrd.nonlinear.models.link_model import period_model
 
         def model_of(nu: int):
             return m.reduced if nu == 1 else period_model(m, nu).reduced

@@ -1,5 +1,5 @@
 """``nlgrd sweep`` of a model with several gear meshes, bearing clearances or unbalance: a link sweep
-(:func:`nlgrd.nonlinear.link_model.link_sweep`), every link's outputs in columns
+(:func:`nlgrd.nonlinear.models.link_model.link_sweep`), every link's outputs in columns
 ``<link>.<quantity>``, each point's period, ω/2 content and bifurcations as on the one-mesh
 path (``--period``), and a figure of one of them."""
 
@@ -13,7 +13,7 @@ import pandas as pd
 
 from nlgrd.errors import ModelError
 from nlgrd.io.command_line import Outputs, harmonics_line, snap_to_grid
-from nlgrd.nonlinear.link_model import needs_links
+from nlgrd.nonlinear.models.link_model import needs_links
 
 __all__ = [
     "LinkOrbits",
@@ -42,8 +42,8 @@ def link_quantity(text: str | None, model) -> tuple[str, str]:
     (str, str)
         The column ``<link>.<quantity> [unit]`` and its label.
     """
-    from nlgrd.nonlinear.link_results import output_names
-    from nlgrd.nonlinear.links import GearMeshLink
+    from nlgrd.nonlinear.links.contract import GearMeshLink
+    from nlgrd.nonlinear.results.link_results import output_names
 
     keys: dict[str, list[str]] = {}  # every link's and linear bearing's outputs, by name
     for column in output_names(model):
@@ -98,7 +98,7 @@ def time_answers(args, system, res, period, model=None):
     if args.time_periods < 80:
         raise ModelError("--time-periods", f"must be at least 80, got {args.time_periods}")
     from nlgrd.io.command_line import ProgressBar
-    from nlgrd.nonlinear.link_model import build_link_model
+    from nlgrd.nonlinear.models.link_model import build_link_model
     from nlgrd.timedomain.sweep_answers import with_time_answers
 
     cap = int(args.time_periods)
@@ -120,7 +120,7 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
         The options of ``nlgrd sweep``.
     system : RotorSystem
         The model (several meshes, a bearing clearance or an unbalance, which
-        :func:`~nlgrd.nonlinear.link_model.build_link_model` takes from it).
+        :func:`~nlgrd.nonlinear.models.link_model.build_link_model` takes from it).
     values : ndarray
         The range: shaft speeds [rpm] (``--rpm``) or base frequencies [Hz] (``--hz``).
     out, png : Path
@@ -138,7 +138,7 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
     """
     from nlgrd.cli_orbits import none_of, parse_period
     from nlgrd.io.command_line import ProgressBar, pyplot
-    from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+    from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 
     model = build_link_model(system)
     plan = model.receptance.plan
@@ -224,10 +224,10 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
 
 def _periods(r, unit: tuple[float, str]) -> None:
     """Print the period-2 points, the quasi-periodic ones and the bifurcations along each
-    sweep (:func:`nlgrd.nonlinear.auto_period.transitions`), in the range's unit."""
+    sweep (:func:`nlgrd.nonlinear.tracing.auto_period.transitions`), in the range's unit."""
     import numpy as np
 
-    from nlgrd.nonlinear.auto_period import transitions
+    from nlgrd.nonlinear.tracing.auto_period import transitions
 
     scale, name = unit
 
@@ -257,7 +257,7 @@ def _periods(r, unit: tuple[float, str]) -> None:
 class LinkOrbits:
     """What :func:`nlgrd.cli_orbits.search_and_follow` writes of a link model's orbits: the
     base frequency, the reference shaft speed and every link's outputs over the orbit's
-    whole period (as :func:`~nlgrd.nonlinear.link_model.link_sweep`'s columns).
+    whole period (as :func:`~nlgrd.nonlinear.models.link_model.link_sweep`'s columns).
 
     Parameters
     ----------
@@ -268,7 +268,7 @@ class LinkOrbits:
     """
 
     def __init__(self, model, column: str):
-        from nlgrd.nonlinear.link_results import output_names
+        from nlgrd.nonlinear.results.link_results import output_names
 
         self.model, self.column = model, column
         self.per_base = model.receptance.plan.speed_per_base * 60  # [rpm per Hz of the base]
@@ -287,15 +287,15 @@ class LinkOrbits:
         )
 
     def period(self, nu: int):
-        """The period-ν model (:func:`~nlgrd.nonlinear.link_model.period_model`)."""
-        from nlgrd.nonlinear.link_model import period_model
+        """The period-ν model (:func:`~nlgrd.nonlinear.models.link_model.period_model`)."""
+        from nlgrd.nonlinear.models.link_model import period_model
 
         return period_model(self.model, nu)
 
     def values(self, harmonics, omega: float, nu: int) -> dict:
         """Every link's and bearing's outputs of an orbit of ν base periods at the base
         frequency ω [rad/s]."""
-        from nlgrd.nonlinear.link_results import point_outputs
+        from nlgrd.nonlinear.results.link_results import point_outputs
 
         return point_outputs(self.period(nu), harmonics, omega / nu)
 
@@ -312,8 +312,8 @@ class LinkOrbits:
 
     def result(self, branch):
         """``branch`` (one period) with every link's outputs where it is the response: a
-        :class:`~nlgrd.nonlinear.link_results.LinkSweepResult`."""
-        from nlgrd.nonlinear.link_results import LinkSweepResult, bearing_columns
+        :class:`~nlgrd.nonlinear.results.link_results.LinkSweepResult`."""
+        from nlgrd.nonlinear.results.link_results import LinkSweepResult, bearing_columns
 
         nu = int(branch.period[0]) if len(branch) else 1
         usable = branch.converged & ~np.asarray(branch.no_stable, dtype=bool)
@@ -427,8 +427,8 @@ def link_period_response(model, omegas, at, nu: int, H: int | None, directions: 
     import dataclasses as dc
 
     from nlgrd.cli_orbits import PERIOD_HARMONICS, merge_branches, on_followed_branch, search_and_follow
-    from nlgrd.nonlinear.harmonic_convergence import check_harmonics, next_harmonics
-    from nlgrd.nonlinear.orbit_search import N_STARTS
+    from nlgrd.nonlinear.tracing.harmonic_convergence import check_harmonics, next_harmonics
+    from nlgrd.nonlinear.tracing.orbit_search import N_STARTS
 
     H = H or PERIOD_HARMONICS
     view, top = LinkOrbits(model, column), float(np.max(omegas))

@@ -1,6 +1,6 @@
 """``nlgrd sweep --search-at`` and ``--period N``: orbits the sweep does not reach, searched
-for at chosen speeds (:func:`nlgrd.nonlinear.orbit_search.search_orbits`) and followed over
-the sweep's grid (:func:`~nlgrd.nonlinear.orbit_search.follow_orbit`).
+for at chosen speeds (:func:`nlgrd.nonlinear.tracing.orbit_search.search_orbits`) and followed over
+the sweep's grid (:func:`~nlgrd.nonlinear.tracing.orbit_search.follow_orbit`).
 
 ``--search-at``: outputs beside the sweep's CSV, ``<out>_orbits.csv`` (every orbit found, one
 row each, with whether the sweep has it) and ``<out>_branches.csv`` (the branch of each stable
@@ -119,7 +119,7 @@ def search_command(model, res, omegas, at, periods, unit) -> tuple[pd.DataFrame,
         The orbits found, and the followed branches (columns of
         :meth:`SweepResult.to_frame` with "branch" and the pinion speed).
     """
-    from nlgrd.nonlinear.orbit_search import geared_model_of
+    from nlgrd.nonlinear.models.geared import geared_model_of
 
     H = res.mesh.H
 
@@ -191,7 +191,8 @@ def search_and_follow(model_of, omegas, at, periods, H, unit, known, words, view
     Parameters
     ----------
     model_of : callable
-        ``model_of(nu)``: the period-ν reduced model (:func:`~nlgrd.nonlinear.orbit_search.search_orbits`).
+        ``model_of(nu)``: the period-ν reduced model
+        (:func:`~nlgrd.nonlinear.tracing.orbit_search.search_orbits`).
     omegas : ndarray
         The grid over which orbits are followed [rad/s].
     at : ndarray
@@ -217,7 +218,7 @@ def search_and_follow(model_of, omegas, at, periods, H, unit, known, words, view
     (DataFrame, DataFrame, list)
         The orbits found, the followed branches, and (label, result) per branch.
     """
-    from nlgrd.nonlinear.orbit_search import follow_orbit, search_orbits
+    from nlgrd.nonlinear.tracing.orbit_search import follow_orbit, search_orbits
 
     rows, frames, followed = [], [], []
     for value in at:
@@ -347,7 +348,7 @@ def on_followed_branch(nu: int):
     callable
         ``known(orbit, omega, followed)`` for :func:`search_and_follow`.
     """
-    from nlgrd.nonlinear.orbit_search import same_motion
+    from nlgrd.nonlinear.tracing.orbit_search import same_motion
 
     def on_branch(o, w: float, followed) -> bool:
         return any(
@@ -386,9 +387,9 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
         The response (None when no period-ν orbit was found), the orbits found and the
         followed branches (as :func:`search_command`'s).
     """
-    from nlgrd.nonlinear.bearing_loads import bearing_names, bearing_response
-    from nlgrd.nonlinear.geared import GearedSweepResult, build_geared_model
-    from nlgrd.nonlinear.harmonic_convergence import check_harmonics, next_harmonics
+    from nlgrd.nonlinear.models.geared import GearedSweepResult, build_geared_model
+    from nlgrd.nonlinear.results.bearing_loads import bearing_names, bearing_response
+    from nlgrd.nonlinear.tracing.harmonic_convergence import check_harmonics, next_harmonics
 
     orbits, frames, followed = search_and_follow(
         lambda _: model.reduced,
@@ -431,7 +432,7 @@ def merge_branches(branches: list, omegas, directions: str = "both"):
     Parameters
     ----------
     branches : list of SweepResult
-        From :func:`~nlgrd.nonlinear.orbit_search.follow_orbit`, one period, one H.
+        From :func:`~nlgrd.nonlinear.tracing.orbit_search.follow_orbit`, one period, one H.
     omegas : array_like
         The grid [rad/s].
     directions : {"both", "up", "down"}

@@ -76,8 +76,8 @@ def cmd_sweep(args) -> int:
     import numpy as np
 
     from nlgrd.io.model_file import load_model
-    from nlgrd.nonlinear.geared import build_geared_model
-    from nlgrd.nonlinear.harmonic_convergence import LADDER
+    from nlgrd.nonlinear.models.geared import build_geared_model
+    from nlgrd.nonlinear.tracing.harmonic_convergence import LADDER
 
     if (args.rpm is None) == (args.hz is None):
         raise ModelError(
@@ -141,7 +141,7 @@ def cmd_sweep(args) -> int:
     omegas = unit.omega(values)
     check_speed_range(system, float(max(values)), args.rpm is not None, option, repr(text))
     pyplot()
-    from nlgrd.nonlinear.auto_period import transitions
+    from nlgrd.nonlinear.tracing.auto_period import transitions
 
     if gp.error_period > 1:  # teeth that differ: the revolution's shaft orders and sidebands
         if args.continuation or period not in ("auto", gp.error_period):
@@ -155,7 +155,7 @@ def cmd_sweep(args) -> int:
         return _period_command(args, system, omegas, unit, quantity, out, png, search)
     model = build_geared_model(system, float(omegas.max()), H=args.harmonics or LADDER[-1])
     if args.continuation:
-        from nlgrd.nonlinear.geared import geared_continuation
+        from nlgrd.nonlinear.models.geared import geared_continuation
 
         def trace(begin, end, **kwargs):
             res = geared_continuation(
@@ -164,7 +164,7 @@ def cmd_sweep(args) -> int:
             return res, res.to_frame()
 
         return _continuation(args, system, trace, unit, omegas, count, quantity, out, png)
-    from nlgrd.nonlinear.geared import geared_sweep
+    from nlgrd.nonlinear.models.geared import geared_sweep
 
     res = geared_sweep(
         system,
@@ -211,9 +211,9 @@ def _period_command(args, system, omegas, unit, quantity, out, png, search) -> i
     import numpy as np
 
     from nlgrd.cli_orbits import PERIOD_HARMONICS, period_search
-    from nlgrd.nonlinear.geared import build_geared_model
-    from nlgrd.nonlinear.harmonic_convergence import OUTPUT_RTOL
-    from nlgrd.nonlinear.orbit_search import N_STARTS
+    from nlgrd.nonlinear.models.geared import build_geared_model
+    from nlgrd.nonlinear.tracing.harmonic_convergence import OUTPUT_RTOL
+    from nlgrd.nonlinear.tracing.orbit_search import N_STARTS
 
     at, (nu,) = search
     H = args.harmonics or PERIOD_HARMONICS
@@ -290,14 +290,14 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from nlgrd.nonlinear.auto_period import transitions
-    from nlgrd.nonlinear.shaft_orders import (
+    from nlgrd.nonlinear.models.shaft_orders import (
         SHAFT_ORDER_LADDER,
         bearing_force_spectrum,
         dte_spectrum,
         shaft_order_model,
         shaft_order_sweep,
     )
+    from nlgrd.nonlinear.tracing.auto_period import transitions
     from nlgrd.plotting.nonlinear import plot_spectrum
 
     model = shaft_order_model(system, float(omegas.max()), args.harmonics or SHAFT_ORDER_LADDER[-1])
@@ -410,7 +410,7 @@ def _link_continuation(args, system, values, count, out, png) -> int:
     import dataclasses
 
     from nlgrd.cli_link_sweep import link_quantity
-    from nlgrd.nonlinear.link_model import build_link_model, link_continuation
+    from nlgrd.nonlinear.models.link_model import build_link_model, link_continuation
 
     model = build_link_model(system)
     plan = model.receptance.plan
@@ -438,7 +438,7 @@ def _continuation(args, system, trace, unit, omegas, count, quantity, out, png) 
 
     import pandas as pd
 
-    from nlgrd.nonlinear.continuation import continuation
+    from nlgrd.nonlinear.tracing.continuation import continuation
     from nlgrd.plotting.nonlinear import plot_continuation
 
     lo, hi = float(omegas.min()), float(omegas.max())
@@ -517,7 +517,7 @@ def _continuation(args, system, trace, unit, omegas, count, quantity, out, png) 
 
 def check_harmonics_memory(H: int | None, system, path) -> None:
     """Raise ModelError when ``--harmonics`` H exceeds what memory holds for the model
-    (:func:`nlgrd.nonlinear.harmonic_ladder.max_harmonics` of its DOFs and links).
+    (:func:`nlgrd.nonlinear.tracing.harmonic_ladder.max_harmonics` of its DOFs and links).
 
     Parameters
     ----------
@@ -530,7 +530,7 @@ def check_harmonics_memory(H: int | None, system, path) -> None:
     """
     if H is None:
         return
-    from nlgrd.nonlinear.harmonic_ladder import available_memory, max_harmonics
+    from nlgrd.nonlinear.tracing.harmonic_ladder import available_memory, max_harmonics
 
     n_coords = max(1, len(system.gear_pairs) + 2 * len(getattr(system, "bearing_clearances", ())))
     top = max_harmonics(system.dofs.n_dofs, n_coords)

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.link_model import link_sweep
+from nlgrd.nonlinear.models.link_model import link_sweep
 from nlgrd.timedomain.links import link_time_response, start_from_harmonics
 
 MODELS = Path(__file__).resolve().parents[1] / "data" / "models"

@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import nlgrd.nonlinear.geared
+import nlgrd.nonlinear.models.geared
 import nlgrd.rotor.modal
 from nlgrd.cli import main
 
@@ -108,7 +108,7 @@ def no_computation(monkeypatch):
         raise AssertionError("computation started before the input was checked")
 
     for name in ("build_geared_model", "geared_sweep", "geared_continuation"):
-        monkeypatch.setattr(nlgrd.nonlinear.geared, name, forbidden)
+        monkeypatch.setattr(nlgrd.nonlinear.models.geared, name, forbidden)
     for name in ("modal_analysis", "campbell"):
         monkeypatch.setattr(nlgrd.rotor.modal, name, forbidden)
 
@@ -712,14 +712,14 @@ def test_speeds_written_as_given_after_their_round_trip():
 def test_a_sweep_whose_every_point_fails_exits_1(tmp_path, capsys, monkeypatch):
     """A run in which no point converged is a failure (exit 1, one error line), not a
     success: the real sweep is run on two points and its points marked not converged."""
-    real = nlgrd.nonlinear.geared.geared_sweep
+    real = nlgrd.nonlinear.models.geared.geared_sweep
 
     def failing(*args, **kwargs):
         res = real(*args, **kwargs)
         res.mesh.converged[:] = False
         return res
 
-    monkeypatch.setattr(nlgrd.nonlinear.geared, "geared_sweep", failing)
+    monkeypatch.setattr(nlgrd.nonlinear.models.geared, "geared_sweep", failing)
     out = tmp_path / "s.csv"
     argv = ["sweep", KUBO, "--rpm", "6000:7000:2", "--harmonics", "3", "--no-stability", "--direction", "up"]
     rc, stdout, err = run(capsys, *argv, "--out", out)

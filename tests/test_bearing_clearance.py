@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.clearance import RadialClearanceLaw
-from nlgrd.nonlinear.harmonics import real_to_complex, sample
-from nlgrd.nonlinear.link_model import Unbalance, build_link_model, link_sweep
-from nlgrd.nonlinear.links import BearingClearance
+from nlgrd.nonlinear.fourier.harmonics import real_to_complex, sample
+from nlgrd.nonlinear.laws.clearance import RadialClearanceLaw
+from nlgrd.nonlinear.links.contract import BearingClearance
+from nlgrd.nonlinear.models.link_model import Unbalance, build_link_model, link_sweep
 from nlgrd.rotor.bearing import Bearing
 from nlgrd.rotor.disk import Disk
 from nlgrd.rotor.frequency_response import frequency_response
@@ -208,10 +208,10 @@ def test_link_reduction_of_a_gear_mesh_equals_the_mesh_receptance():
     from pathlib import Path
 
     from nlgrd.io.model_file import load_model
-    from nlgrd.nonlinear.frequency_plan import FrequencyPlan
-    from nlgrd.nonlinear.link_reduction import LinkReceptance
-    from nlgrd.nonlinear.links import GearMeshLink
-    from nlgrd.nonlinear.receptance import MeshReceptance
+    from nlgrd.nonlinear.links.contract import GearMeshLink
+    from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
+    from nlgrd.nonlinear.reduction.link_reduction import LinkReceptance
+    from nlgrd.nonlinear.reduction.receptance import MeshReceptance
 
     system = load_model(Path(__file__).resolve().parents[1] / "data" / "models" / "two_shaft.toml")
     mr = MeshReceptance(system, method="direct")

@@ -27,10 +27,10 @@ import numpy as np
 import pytest
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.auto_period import transitions
-from nlgrd.nonlinear.geared import build_geared_model, geared_sweep
-from nlgrd.nonlinear.metrics import NO_STABLE
-from nlgrd.nonlinear.results import QUASI_PERIODIC
+from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
+from nlgrd.nonlinear.results.metrics import NO_STABLE
+from nlgrd.nonlinear.results.sweep_results import QUASI_PERIODIC
+from nlgrd.nonlinear.tracing.auto_period import transitions
 from nlgrd.timedomain.geared import start_from_harmonics, time_response
 
 KUBO = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"

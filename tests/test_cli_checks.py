@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import nlgrd.nonlinear.geared
+import nlgrd.nonlinear.models.geared
 import nlgrd.rotor.modal
 from nlgrd.cli import main
 from nlgrd.errors import ModelError
@@ -52,7 +52,7 @@ def no_computation(monkeypatch):
         raise AssertionError("computation started before the options were checked")
 
     for name in ("build_geared_model", "geared_sweep", "geared_continuation"):
-        monkeypatch.setattr(nlgrd.nonlinear.geared, name, forbidden)
+        monkeypatch.setattr(nlgrd.nonlinear.models.geared, name, forbidden)
     for name in ("modal_analysis", "campbell"):
         monkeypatch.setattr(nlgrd.rotor.modal, name, forbidden)
 
@@ -68,7 +68,7 @@ def test_interrupted_sweep_keeps_the_previous_outputs(tmp_path, capsys, monkeypa
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(nlgrd.nonlinear.geared, "geared_sweep", interrupted)
+    monkeypatch.setattr(nlgrd.nonlinear.models.geared, "geared_sweep", interrupted)
     rc, _, err = run(capsys, "sweep", KUBO, "--hz", "3000:4000:3", "--out", out)
     assert rc == 130 and "interrupted" in one_line(err)
     assert out.read_text() == "previous\n" and png.read_bytes() == b"previous png"

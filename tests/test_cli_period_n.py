@@ -30,9 +30,9 @@ import pytest
 from nlgrd.cli import main
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import geared_sweep
-from nlgrd.nonlinear.sdof import SDOFGearPair
-from nlgrd.nonlinear.subharmonic import amplitudes
+from nlgrd.nonlinear.fourier.periods import amplitudes
+from nlgrd.nonlinear.models.geared import geared_sweep
+from nlgrd.nonlinear.models.sdof import SDOFGearPair
 from nlgrd.rotor.modal import modal_analysis
 from nlgrd.timedomain.sdof import integrate
 

@@ -5,14 +5,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nlgrd.nonlinear.continuation import continuation
-from nlgrd.nonlinear.floquet import floquet_multipliers
-from nlgrd.nonlinear.force_laws import BacklashMesh
-from nlgrd.nonlinear.harmonic_balance import ReducedModel
-from nlgrd.nonlinear.metrics import metrics_from_harmonics
-from nlgrd.nonlinear.sdof import SDOFGearPair
-from nlgrd.nonlinear.solvers import solve
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.hb.solvers import solve
+from nlgrd.nonlinear.laws.force_laws import BacklashMesh
+from nlgrd.nonlinear.models.sdof import SDOFGearPair
+from nlgrd.nonlinear.results.metrics import metrics_from_harmonics
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.tracing.continuation import continuation
+from nlgrd.nonlinear.tracing.sweep import sweep
 from nlgrd.timedomain.integrator import integrate_fe, static_solution
 
 LSTE = np.array([0.0, 1.24e-6, 0.0, 0.50e-6, 0.30e-6, 0.10e-6, -0.05e-6])
@@ -181,7 +181,7 @@ def test_plots_return_axes():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from nlgrd.nonlinear.metrics import time_history
+    from nlgrd.nonlinear.results.metrics import time_history
 
     rm = MAIN.reduced_model()
     sw = sweep(rm, np.linspace(0.85, 1.0, 7) * WN, 3)

@@ -13,8 +13,8 @@ with the dense samples to the samples' resolution (one sample per crossing,
 import numpy as np
 import pytest
 
-from nlgrd.nonlinear import describing_functions as dfm
-from nlgrd.nonlinear.harmonics import sample
+from nlgrd.nonlinear.fourier.harmonics import sample
+from nlgrd.nonlinear.laws import describing_functions as dfm
 
 
 def test_near_tangency_of_a_long_series_is_certified_on_the_refined_grid(monkeypatch):

@@ -4,7 +4,15 @@ import numpy as np
 import pytest
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.describing_functions import (
+from nlgrd.nonlinear.fourier.harmonics import (
+    analyse,
+    complex_to_real,
+    differentiate,
+    evaluate,
+    real_to_complex,
+    sample,
+)
+from nlgrd.nonlinear.laws.describing_functions import (
     aft_convergence,
     contact_intervals,
     deadzone,
@@ -13,15 +21,7 @@ from nlgrd.nonlinear.describing_functions import (
     fourier_exact,
     one_sided_describing_function,
 )
-from nlgrd.nonlinear.force_laws import AFTNonlinearity, BacklashMesh
-from nlgrd.nonlinear.harmonics import (
-    analyse,
-    complex_to_real,
-    differentiate,
-    evaluate,
-    real_to_complex,
-    sample,
-)
+from nlgrd.nonlinear.laws.force_laws import AFTNonlinearity, BacklashMesh
 
 
 def _random_signal(rng, H, scale=1.0, mean=0.0):

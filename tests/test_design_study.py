@@ -74,7 +74,7 @@ def test_best_relief_moves_up_with_load_and_relief_helps_at_high_load(design):
 def test_one_map_cell_equals_a_direct_sweep_of_the_same_model(design):
     from nlgrd.gear.modifications import ProfileModification
     from nlgrd.io.model_file import load_model
-    from nlgrd.nonlinear.geared import geared_sweep
+    from nlgrd.nonlinear.models.geared import geared_sweep
 
     summary = pd.read_csv(design / "relief_load_summary.csv")
     row = summary[(summary["gear_pairs[0].modifications.shape [-]"] == "parabolic")].iloc[-1]

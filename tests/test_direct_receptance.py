@@ -1,5 +1,5 @@
 """The direct receptances by banded LU of the mesh-free dynamic stiffness and the
-Sherman-Morrison-Woodbury identity (nlgrd.nonlinear.direct_receptance).
+Sherman-Morrison-Woodbury identity (nlgrd.nonlinear.reduction.direct_receptance).
 
 Independent reference: dense solves (numpy/LAPACK ``gesv``) of the whole dynamic
 stiffness Z_k with the mesh damping in it, assembled by the model; and central finite
@@ -17,8 +17,8 @@ import pytest
 import scipy.linalg as sla
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear import direct_receptance as dr
-from nlgrd.nonlinear.receptance import MeshReceptance
+from nlgrd.nonlinear.reduction import direct_receptance as dr
+from nlgrd.nonlinear.reduction.receptance import MeshReceptance
 
 MODELS = Path(__file__).resolve().parents[1] / "data" / "models"
 

@@ -45,8 +45,12 @@ def stale(paths) -> list[str]:
 
 
 def test_resolver_rejects_a_stale_name():
-    assert resolves("nlgrd.nonlinear.sweep.sweep") and resolves("nlgrd.nonlinear.results.SweepResult.omega")
-    assert not resolves("nlgrd.nonlinear.sweep.no_such_function") and not resolves("nlgrd.no_such_analysis")
+    assert resolves("nlgrd.nonlinear.tracing.sweep.sweep") and resolves(
+        "nlgrd.nonlinear.results.sweep_results.SweepResult.omega"
+    )
+    assert not resolves("nlgrd.nonlinear.tracing.sweep.no_such_function") and not resolves(
+        "nlgrd.no_such_analysis"
+    )
 
 
 @pytest.mark.parametrize("kind", ["docs", "sources"])

@@ -39,10 +39,10 @@ import pytest
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import model_from_file_data
-from nlgrd.nonlinear.bearing_loads import bearing_harmonics
-from nlgrd.nonlinear.geared import build_geared_model, geared_sweep
-from nlgrd.nonlinear.harmonics import complex_to_real, real_to_complex
-from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+from nlgrd.nonlinear.fourier.harmonics import complex_to_real, real_to_complex
+from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
+from nlgrd.nonlinear.results.bearing_loads import bearing_harmonics
 
 ROOT = Path(__file__).resolve().parents[1]
 FILES = {

@@ -1,4 +1,5 @@
-"""Floquet stability (:mod:`nlgrd.nonlinear.floquet`): the fast default against the reference monodromy.
+"""Floquet stability (:mod:`nlgrd.nonlinear.stability.floquet`): the fast default against the reference
+monodromy.
 
 The reference is ``method="expm"``, the library's method before issue 10: scipy's
 ``expm`` of the unscaled state matrix per contact interval and every eigenvalue of the
@@ -32,15 +33,15 @@ import pytest
 import scipy.linalg as sla
 from threadpoolctl import threadpool_limits
 
-import nlgrd.nonlinear.floquet as fl
-import nlgrd.nonlinear.harmonic_balance as hb
-import nlgrd.nonlinear.linear_algebra as la
-import nlgrd.nonlinear.solvers as hb_solvers
-import nlgrd.nonlinear.state_space as hb_state_space
+import nlgrd.nonlinear.hb.harmonic_balance as hb
+import nlgrd.nonlinear.hb.solvers as hb_solvers
+import nlgrd.nonlinear.reduction.linear_algebra as la
+import nlgrd.nonlinear.reduction.state_space as hb_state_space
+import nlgrd.nonlinear.stability.floquet as fl
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode, geared_sweep
-from nlgrd.nonlinear.state_space import LinearStateSpace
+from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
 from nlgrd.rotor.rigid_body import rigid_body_modes
 
 TWO_SHAFT = Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml"
@@ -76,7 +77,7 @@ def test_verdicts_and_max_modulus_equal_the_reference_monodromy(swept):
     shared by the state spaces of the sweep (the down sweep reuses the up sweep's)."""
     model, pts = _points(swept)
     nl = model.reduced.nonlinearities
-    shared = fl.FloquetCache(maxsize=4096)
+    shared = hb_state_space.FloquetCache(maxsize=4096)
     old, new, reuse, lti = [], [], [], []
     with threadpool_limits(limits=1):
         for w, z in pts:
@@ -258,7 +259,7 @@ def test_expm_matches_scipy():
 def test_small_systems_return_every_multiplier():
     """Up to DENSE_STATE_LIMIT the default is the dense method: the 2 x 2 single-DOF gear
     pair gets both multipliers, equal to the reference."""
-    from nlgrd.nonlinear.sdof import SDOFGearPair
+    from nlgrd.nonlinear.models.sdof import SDOFGearPair
 
     LSTE = np.array([0.0, 2e-6, 1e-6])
     sd = SDOFGearPair(4.7e-2, 0.2587e9, 50e-6, 2295.0, LSTE, damping_ratio=0.02)
@@ -274,13 +275,15 @@ def test_small_systems_return_every_multiplier():
 def test_cache_is_bounded_and_on_objects():
     """FloquetCache drops its oldest entry when full; no Floquet cache is a module global
     (the reference's eigenvalue cache lives on the state space now)."""
-    c = fl.FloquetCache(maxsize=3)
+    c = hb_state_space.FloquetCache(maxsize=3)
     for i in range(5):
         assert c.get(i, lambda i=i: i * i) == i * i
     assert len(c) == 3 and c.peek(0) is None and c.peek(4) == 16
     assert not hasattr(hb, "_EIG_CACHE")
     for mod in (fl, hb, hb_state_space):
-        globals_ = [k for k, v in vars(mod).items() if isinstance(v, dict | OrderedDict | fl.FloquetCache)]
+        globals_ = [
+            k for k, v in vars(mod).items() if isinstance(v, dict | OrderedDict | hb_state_space.FloquetCache)
+        ]
         assert [k for k in globals_ if not k.startswith("__")] == []
     ss = LinearStateSpace([[1.0]], [[0.1]], [[0.0]], [[1.0]])
     assert ss.floquet_cache is ss.floquet_cache and LinearStateSpace([[1.0]], [[0.1]], [[0.0]], [[1.0]]) == ss

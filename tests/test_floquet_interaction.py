@@ -1,11 +1,11 @@
 """The Magnus product in the interaction picture of each piece's mean state matrix
-(:func:`nlgrd.nonlinear.magnus_steps.interaction_piece`) on systems of several DOFs, where the
+(:func:`nlgrd.nonlinear.stability.magnus_steps.interaction_piece`) on systems of several DOFs, where the
 stiff constant part is integrated exactly and only the tangent's variation through W
 enters the Magnus term.
 
 The reference is the variational equation integrated by scipy's DOP853 (rtol 1e-12) with
 the tangent evaluated pointwise from the force law at each instant: it shares neither the
-pieces, the Gauss points nor the exponentials of :mod:`nlgrd.nonlinear.floquet`.
+pieces, the Gauss points nor the exponentials of :mod:`nlgrd.nonlinear.stability.floquet`.
 """
 
 from __future__ import annotations
@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from nlgrd.nonlinear.clearance import RadialClearanceLaw
-from nlgrd.nonlinear.floquet import MAGNUS_ATOL, floquet_analysis
-from nlgrd.nonlinear.force_laws import ParametricMesh
-from nlgrd.nonlinear.harmonics import evaluate
-from nlgrd.nonlinear.state_space import LinearStateSpace
+from nlgrd.nonlinear.fourier.harmonics import evaluate
+from nlgrd.nonlinear.laws.clearance import RadialClearanceLaw
+from nlgrd.nonlinear.laws.force_laws import ParametricMesh
+from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
+from nlgrd.nonlinear.stability.floquet import MAGNUS_ATOL, floquet_analysis
 
 
 def _chain(n: int, stiffness: float, mass: float) -> tuple[np.ndarray, np.ndarray]:
@@ -106,7 +106,7 @@ def test_thin_updates_and_their_guard_against_integration(monkeypatch, damping, 
     beyond ``THIN_GROWTH`` (Rayleigh damping 1e-3 K + 50 M: the decaying modes lose
     e^{>10} per period): both paths taken as stated, every multiplier against DOP853
     within 1e-6 (measured 1.5e-9 and 7.7e-10)."""
-    import nlgrd.nonlinear.magnus_steps as steps
+    import nlgrd.nonlinear.stability.magnus_steps as steps
 
     taken = []
     original = steps.thin_steps
@@ -133,7 +133,7 @@ def test_thin_updates_and_their_guard_against_integration(monkeypatch, damping, 
 def test_thin_steps_equal_the_plain_product():
     """E^m X of :func:`magnus_steps.thin_steps` against the plain product of the m factors
     E (I + L P_j Rᵀ), random 30 x 30 with rank-4 updates: equal to 1e-12 relative (rounding)."""
-    from nlgrd.nonlinear.magnus_steps import thin_steps
+    from nlgrd.nonlinear.stability.magnus_steps import thin_steps
 
     rng = np.random.default_rng(3)
     n, k, m = 30, 4, 12

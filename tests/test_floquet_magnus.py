@@ -2,7 +2,7 @@
 
 The references are the variational equations integrated by scipy's DOP853 (rtol 1e-12),
 with the tangent evaluated pointwise from the force law at each instant: they share
-neither the breaks nor the exponentials of :mod:`nlgrd.nonlinear.floquet`.
+neither the breaks nor the exponentials of :mod:`nlgrd.nonlinear.stability.floquet`.
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from nlgrd.nonlinear.clearance import RadialClearanceLaw
-from nlgrd.nonlinear.floquet import MAGNUS_ATOL, floquet_analysis, floquet_multipliers
-from nlgrd.nonlinear.force_laws import BacklashMesh, ParametricMesh
-from nlgrd.nonlinear.harmonics import evaluate
-from nlgrd.nonlinear.state_space import LinearStateSpace
+from nlgrd.nonlinear.fourier.harmonics import evaluate
+from nlgrd.nonlinear.laws.clearance import RadialClearanceLaw
+from nlgrd.nonlinear.laws.force_laws import BacklashMesh, ParametricMesh
+from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
+from nlgrd.nonlinear.stability.floquet import MAGNUS_ATOL, floquet_analysis, floquet_multipliers
 
 
 def _reference(M, D, K, W, tangent, omega):

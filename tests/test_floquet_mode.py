@@ -1,4 +1,5 @@
-"""The dominant Floquet multiplier's eigenvector (:mod:`nlgrd.nonlinear.floquet_mode`), the direction
+"""The dominant Floquet multiplier's eigenvector (:mod:`nlgrd.nonlinear.stability.floquet_mode`), the
+direction
 in which a sweep's unstable orbit departs (issue 10 item 3, kept for period-doubling
 branch switching).
 
@@ -23,11 +24,11 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.floquet import floquet_multipliers
-from nlgrd.nonlinear.floquet_mode import dominant_floquet_mode
-from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode
-from nlgrd.nonlinear.harmonics import evaluate
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.fourier.harmonics import evaluate
+from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.stability.floquet_mode import dominant_floquet_mode
+from nlgrd.nonlinear.tracing.sweep import sweep
 
 TWO_SHAFT = Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml"
 

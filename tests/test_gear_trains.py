@@ -24,9 +24,9 @@ import scipy.sparse.linalg as spla
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.frequency_plan import FrequencyPlan
-from nlgrd.nonlinear.harmonics import real_to_complex
-from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+from nlgrd.nonlinear.fourier.harmonics import real_to_complex
+from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 from nlgrd.rotor.assembly import assemble
 from nlgrd.rotor.modal import modal_analysis
 

@@ -23,8 +23,8 @@ import numpy as np
 import pytest
 from link_comparison import compare, damped, report
 
-from nlgrd.nonlinear.link_model import build_link_model
-from nlgrd.nonlinear.links import BearingClearance
+from nlgrd.nonlinear.links.contract import BearingClearance
+from nlgrd.nonlinear.models.link_model import build_link_model
 
 #: stable orbits of the up sweep (H = 9, ζ = 0.05) with contact loss at the mesh: near
 #: 3390 Hz, 5340-5364 and 5418-5472 Hz mesh frequency (20 Hz map of 2000-5500 Hz, then

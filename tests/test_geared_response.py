@@ -19,8 +19,8 @@ import pytest
 import scipy.sparse.linalg as spla
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import build_geared_model, geared_continuation, geared_sweep, sdof_model
-from nlgrd.nonlinear.harmonics import real_to_complex
+from nlgrd.nonlinear.fourier.harmonics import real_to_complex
+from nlgrd.nonlinear.models.geared import build_geared_model, geared_continuation, geared_sweep, sdof_model
 from nlgrd.rotor.assembly import assemble
 
 KUBO = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
@@ -83,7 +83,7 @@ def test_bearing_forces_match_full_model(heavy):
 def test_fe_with_stiff_shafts_close_to_single_dof():
     """Kubo's rig has stiff shafts and bearings: the paper found NLGRD and the SDOF model
     (DYTE) alike. The main-resonance DSLR peaks of the FE and SDOF sweeps lie within 2 %."""
-    from nlgrd.nonlinear.sweep import sweep
+    from nlgrd.nonlinear.tracing.sweep import sweep
 
     s = load_model(KUBO)
     omegas = 2 * np.pi * np.linspace(3000, 6000, 61)
@@ -151,9 +151,9 @@ def test_stability_basis_gives_the_verdicts_of_the_full_basis():
     every point, and max |μ| within 1e-2 (observed 3e-3 on the 252-DOF benchmark model;
     the modes left out lie above 3x the mesh frequency, quasi-static in the variational
     equation)."""
-    from nlgrd.nonlinear.floquet import floquet_multipliers
-    from nlgrd.nonlinear.geared import gear_pair_mode
-    from nlgrd.nonlinear.state_space import LinearStateSpace
+    from nlgrd.nonlinear.models.geared import gear_pair_mode
+    from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
+    from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 
     s = load_model(Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml")
     s = dc.replace(s, gear_pairs=(dc.replace(s.gear_pairs[0], damping_ratio=0.03),))
@@ -206,7 +206,7 @@ def test_sweep_leaves_unstable_branches():
     model = build_geared_model(kubo, 2 * np.pi * 16000 / 60 * 25 * 1.01, H=5)
     om = model.mesh_frequency(rpm)
     stay = geared_sweep(kubo, omegas=om, H=5, model=model, period=1)
-    from nlgrd.nonlinear.sweep import sweep
+    from nlgrd.nonlinear.tracing.sweep import sweep
 
     kept = sweep(model.reduced, om, 5, leave_unstable=False, jump="auto")
     assert np.sum(kept.converged & ~kept.stable) >= 4

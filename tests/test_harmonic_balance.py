@@ -4,15 +4,15 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from nlgrd.nonlinear.describing_functions import deadzone
-from nlgrd.nonlinear.floquet import floquet_multipliers
-from nlgrd.nonlinear.force_laws import AFTNonlinearity, BacklashMesh
-from nlgrd.nonlinear.harmonic_balance import ReducedModel, ReducedProblem
-from nlgrd.nonlinear.harmonics import evaluate
-from nlgrd.nonlinear.hill import hill_multipliers
-from nlgrd.nonlinear.sdof import SDOFGearPair
-from nlgrd.nonlinear.solvers import solve
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.fourier.harmonics import evaluate
+from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel, ReducedProblem
+from nlgrd.nonlinear.hb.solvers import solve
+from nlgrd.nonlinear.laws.describing_functions import deadzone
+from nlgrd.nonlinear.laws.force_laws import AFTNonlinearity, BacklashMesh
+from nlgrd.nonlinear.models.sdof import SDOFGearPair
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.stability.hill import hill_multipliers
+from nlgrd.nonlinear.tracing.sweep import sweep
 
 # Kubo et al. (1972) single-DOF data as decoded in model.md §5, with an LSTE of three
 # harmonics (first-harmonic amplitude 1.24 µm = half the 2.479 µm STE amplitude).
@@ -110,7 +110,7 @@ def test_a_failed_point_leaves_the_next_start_alone(monkeypatch):
     and those far above it, in full contact again, must converge to the linear answer
     (independent reference: Newton with its default iterations at each of them). Every
     start the sweep hands to Newton is recorded: all finite."""
-    import nlgrd.nonlinear.sweep as sweep_module
+    import nlgrd.nonlinear.tracing.sweep as sweep_module
 
     starts = []
 
@@ -230,7 +230,7 @@ def test_floquet_monodromy_matches_integrated_variational_equation():
     model = kubo()
     wn = model.natural_frequency
     rm = model.reduced_model()
-    from nlgrd.nonlinear.continuation import continuation
+    from nlgrd.nonlinear.tracing.continuation import continuation
 
     c = continuation(rm, 1.1 * wn, 0.7 * wn, 5, stability=True)
     i = int(np.argmax(c.curve.floquet_max))

@@ -1,4 +1,4 @@
-"""The number of harmonics chosen by the error estimate (nlgrd.nonlinear.harmonic_convergence).
+"""The number of harmonics chosen by the error estimate (nlgrd.nonlinear.tracing.harmonic_convergence).
 
 Independent reference: the same sweep at H = 25 (the harmonics of the kinked backlash
 force decay algebraically; on these cases H = 25 and H = 17 differ by < 1e-4, two
@@ -18,8 +18,8 @@ import pytest
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import sdof_model
-from nlgrd.nonlinear.harmonic_convergence import (
+from nlgrd.nonlinear.models.geared import sdof_model
+from nlgrd.nonlinear.tracing.harmonic_convergence import (
     FOLD_RTOL,
     OUTPUT_RTOL,
     check_harmonics,
@@ -27,7 +27,7 @@ from nlgrd.nonlinear.harmonic_convergence import (
     next_harmonics,
     pad_harmonics,
 )
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.tracing.sweep import sweep
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 
@@ -121,9 +121,9 @@ def test_continuation_chooses_h_like_the_sweep():
     frequency (main and superharmonic resonances, with folds): every stable point of the
     curve meets the tolerance against H = 25 solved at the same frequency from it
     (Newton at H = 25, an independent solve), and the ladder had to climb past H = 5."""
-    from nlgrd.nonlinear.harmonic_convergence import converged_continuation
-    from nlgrd.nonlinear.metrics import metrics_from_harmonics
-    from nlgrd.nonlinear.solvers import solve
+    from nlgrd.nonlinear.hb.solvers import solve
+    from nlgrd.nonlinear.results.metrics import metrics_from_harmonics
+    from nlgrd.nonlinear.tracing.harmonic_convergence import converged_continuation
 
     sdof = sdof_model(load_model(DATA / "case_studies/kubo.toml"))
     rm = sdof.reduced_model()
@@ -161,7 +161,7 @@ def test_link_model_chooses_h_against_h25_on_the_idler_train():
     rung, H' = 13, not to H -> infinity, and the kinked backlash force's harmonics decay
     algebraically) and the estimate is at least a third of the true error, as for the
     single-mesh path above."""
-    from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+    from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 
     model = build_link_model(load_model(DATA / "models/idler_train.toml"))
     omegas = 2 * np.pi * np.linspace(1150.0, 1200.0, 3)
@@ -194,8 +194,8 @@ def test_link_model_climbs_the_ladder_by_lifting_without_resweeping(monkeypatch)
     stability per point and every link output within 1e-8 relative (both are Newton
     solutions of the same equations to a residual of 1e-10; 1e-8 leaves room for the
     conditioning of the outputs near a contact-loss onset)."""
-    import nlgrd.nonlinear.harmonic_convergence as hc
-    from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+    import nlgrd.nonlinear.tracing.harmonic_convergence as hc
+    from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 
     calls = []
     original = hc.sweep

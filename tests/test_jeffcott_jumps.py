@@ -38,10 +38,10 @@ import time
 import numpy as np
 import pytest
 
-from nlgrd.nonlinear.harmonics import sample
-from nlgrd.nonlinear.link_model import Unbalance, build_link_model, link_sweep
-from nlgrd.nonlinear.links import BearingClearance
-from nlgrd.nonlinear.results import find_jumps
+from nlgrd.nonlinear.fourier.harmonics import sample
+from nlgrd.nonlinear.links.contract import BearingClearance
+from nlgrd.nonlinear.models.link_model import Unbalance, build_link_model, link_sweep
+from nlgrd.nonlinear.results.sweep_results import find_jumps
 from nlgrd.rotor.bearing import Bearing
 from nlgrd.rotor.disk import Disk
 from nlgrd.rotor.materials import Material

@@ -19,13 +19,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import nlgrd.nonlinear.arclength as arclength
+import nlgrd.nonlinear.tracing.arclength as arclength
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.arclength import LANDING_EVALUATIONS, jump_to_branch
-from nlgrd.nonlinear.floquet import floquet_multipliers
-from nlgrd.nonlinear.landing import same_orbit
-from nlgrd.nonlinear.link_model import build_link_model, link_sweep
-from nlgrd.nonlinear.sweep import FailedSearches
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.tracing.arclength import LANDING_EVALUATIONS, jump_to_branch
+from nlgrd.nonlinear.tracing.landing import same_orbit
+from nlgrd.nonlinear.tracing.sweep import FailedSearches
 
 IDLER = Path(__file__).resolve().parent.parent / "data" / "models" / "idler_train.toml"
 W = 2 * np.pi * np.array([1550.0, 1600.0])

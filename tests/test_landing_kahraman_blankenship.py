@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import build_geared_model, geared_sweep
+from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
 from nlgrd.timedomain.geared import time_sweep
 
 KB = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kahraman_blankenship.toml"

@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.arclength import jump_to_branch
-from nlgrd.nonlinear.floquet import floquet_multipliers
-from nlgrd.nonlinear.geared import build_geared_model, geared_sweep
-from nlgrd.nonlinear.harmonics import evaluate
-from nlgrd.nonlinear.results import STABLE_RTOL
-from nlgrd.nonlinear.solvers import solve
+from nlgrd.nonlinear.fourier.harmonics import evaluate
+from nlgrd.nonlinear.hb.solvers import solve
+from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
+from nlgrd.nonlinear.results.sweep_results import STABLE_RTOL
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.tracing.arclength import jump_to_branch
 from nlgrd.rotor.system import refined
 from nlgrd.timedomain.geared import start_from_harmonics, time_response
 

@@ -1,5 +1,5 @@
 """The modal reduction of the link path for large models (issue 11, item 3): a Galerkin
-basis of modes and attachment vectors (nlgrd.nonlinear.modal_basis) in pole-residue form,
+basis of modes and attachment vectors (nlgrd.nonlinear.reduction.modal_basis) in pole-residue form,
 against direct sparse solves of the full model.
 
 Model: data/models/two_shaft.toml with every shaft element split (492 and 972 DOFs), the
@@ -18,9 +18,9 @@ import pytest
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.link_model import Unbalance, build_link_model
-from nlgrd.nonlinear.link_reduction import MODAL_CHECK_RTOL, LinkReceptance
-from nlgrd.nonlinear.links import BearingClearance
+from nlgrd.nonlinear.links.contract import BearingClearance
+from nlgrd.nonlinear.models.link_model import Unbalance, build_link_model
+from nlgrd.nonlinear.reduction.link_reduction import MODAL_CHECK_RTOL, LinkReceptance
 from nlgrd.rotor.system import refined
 
 MODELS = Path(__file__).resolve().parents[1] / "data" / "models"
@@ -137,8 +137,8 @@ def test_floquet_multipliers_on_the_stability_basis_equal_the_full_state_space()
     its cut-off: at 1000 Hz a pair at |μ| = 1 - 7e-6, a lightly damped mode above 51 kHz
     that no harmonic excites (so "the largest multiplier off the unit circle" is not a
     fair comparison there; every multiplier of the basis is)."""
-    from nlgrd.nonlinear.floquet import floquet_multipliers
-    from nlgrd.nonlinear.link_model import link_sweep
+    from nlgrd.nonlinear.models.link_model import link_sweep
+    from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 
     system = with_clearance(two_shaft())
     Hs = 5

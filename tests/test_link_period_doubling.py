@@ -60,14 +60,14 @@ import pytest
 from nlgrd.cli import main
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import model_from_dict
-from nlgrd.nonlinear.auto_period import transitions
-from nlgrd.nonlinear.floquet import floquet_multipliers
-from nlgrd.nonlinear.frequency_plan import FrequencyPlan
-from nlgrd.nonlinear.harmonics import analyse
-from nlgrd.nonlinear.link_model import build_link_model, link_sweep, period_model
-from nlgrd.nonlinear.links import GearMeshLink
-from nlgrd.nonlinear.metrics import NO_STABLE
-from nlgrd.nonlinear.subharmonic import amplitudes, spread, subharmonic_mask
+from nlgrd.nonlinear.fourier.harmonics import analyse
+from nlgrd.nonlinear.fourier.periods import amplitudes, spread, subharmonic_mask
+from nlgrd.nonlinear.links.contract import GearMeshLink
+from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep, period_model
+from nlgrd.nonlinear.results.metrics import NO_STABLE
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.tracing.auto_period import transitions
 from nlgrd.timedomain.links import link_time_response, start_from_harmonics
 
 MODEL = """

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.link_model import build_link_model
-from nlgrd.nonlinear.links import BearingClearance
+from nlgrd.nonlinear.links.contract import BearingClearance
+from nlgrd.nonlinear.models.link_model import build_link_model
 from nlgrd.rotor.assembly import assemble
 from nlgrd.rotor.rigid_body import rigid_body_modes
 
@@ -89,7 +89,7 @@ def test_a_mean_external_force_enters_like_a_static_load():
     the external forces gives the same F_0 as the same force among the static loads, and
     both equal (Pᵀ K_r⁻¹ P)⁻¹ Pᵀ K_r⁻¹ f_0 from one bordered solve of the whole f_0
     (1e-10: the same factorisation, d = 3 coordinates)."""
-    from nlgrd.nonlinear.link_reduction import LinkReceptance
+    from nlgrd.nonlinear.reduction.link_reduction import LinkReceptance
 
     system = clearance_system(1.5)
     rec = build_link_model(system, gravity=(-9.81, 0.0)).receptance

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from link_comparison import compare, damped, mesh_losses, report
 
-from nlgrd.nonlinear.link_model import build_link_model
+from nlgrd.nonlinear.models.link_model import build_link_model
 
 #: bands of the idler's up sweep (ζ = 0.05, H = 15) with both meshes losing contact on a
 #: stable orbit: the 1100 Hz and 1220 Hz superharmonic peaks and the two peaks of the

@@ -26,7 +26,7 @@ from threadpoolctl import threadpool_limits
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import geared_sweep
+from nlgrd.nonlinear.models.geared import geared_sweep
 from nlgrd.rotor.assembly import LinearModel, assemble
 from nlgrd.rotor.modal import modal_analysis
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes

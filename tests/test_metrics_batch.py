@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nlgrd.nonlinear.force_laws import BacklashMesh, ContactStop, ParametricMesh
-from nlgrd.nonlinear.metrics import metrics_of_points, time_history
+from nlgrd.nonlinear.laws.force_laws import BacklashMesh, ContactStop, ParametricMesh
+from nlgrd.nonlinear.results.metrics import metrics_of_points, time_history
 
 H = 5
 B = 20e-6

@@ -68,7 +68,7 @@ import pytest
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import gear_pair_mode, sdof_model
+from nlgrd.nonlinear.models.geared import gear_pair_mode, sdof_model
 from nlgrd.studies.experimental import directions_of, hysteresis_bands, local_peak, resonance_jumps
 from nlgrd.studies.notebooks import NOTEBOOKS, notebook_parameters, run_notebook
 
@@ -519,7 +519,8 @@ def test_kb_dte_main_resonance_and_superharmonics(outputs, kb_mode):
     np.testing.assert_allclose(yu[ok], yd[ok], rtol=1e-6)
 
 
-#: What every converged point of a period-"auto" sweep answers (nlgrd.nonlinear.results.response_kind).
+#: What every converged point of a period-"auto" sweep answers
+#: (nlgrd.nonlinear.results.sweep_results.response_kind).
 ANSWERS = ("periodic", "period 2", "quasi-periodic", "no stable mesh-periodic response")
 
 
@@ -563,7 +564,7 @@ def test_kb_period_two_where_period_one_flips(outputs, kb_mode):
     assert (two["period"] == 2).all() and (two["stable"] == True).all()  # noqa: E712
     # A real period doubling grows the omega/2 harmonic to the size of the motion (measured 1.19 um
     # against 1.00 um of DTE RMS); 10 % of the DTE RMS is far above the 1e-6 relative at which
-    # nlgrd.nonlinear.subharmonic.period_of counts it as present, and far below what was measured.
+    # nlgrd.nonlinear.fourier.periods.period_of counts it as present, and far below what was measured.
     assert (two["subharmonic_amp [um]"] > 0.1 * two["dte_rms [um]"]).all()
     p1 = read(out, "period1_at_period2_points.csv").set_index(["direction", HZ])
     for d, f in zip(two["direction"], two[HZ], strict=True):
@@ -686,7 +687,7 @@ def test_flexibility_linear_study_and_bearing_forces(outputs, kubo):
 
 #: Columns that carry a response value in a sweep table.
 RESPONSE_COLUMNS = ("dslr [-]", "dte_rms [um]", "force_max [N]")
-#: The default output tolerance of the harmonic estimate (nlgrd.nonlinear.harmonic_convergence).
+#: The default output tolerance of the harmonic estimate (nlgrd.nonlinear.tracing.harmonic_convergence).
 HARMONIC_RTOL = 5e-3
 
 

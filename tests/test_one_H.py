@@ -27,7 +27,7 @@ from test_link_period_doubling import MODEL as DRIVE  # noqa: E402
 import nlgrd.cli_sweep as cli_sweep  # noqa: E402
 from nlgrd.cli import main  # noqa: E402
 from nlgrd.io.command_line import Outputs, harmonics_line  # noqa: E402
-from nlgrd.nonlinear.results import SweepResult  # noqa: E402
+from nlgrd.nonlinear.results.sweep_results import SweepResult  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 KUBO = ROOT / "data" / "case_studies" / "kubo.toml"

@@ -25,11 +25,11 @@ import numpy as np
 import pytest
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.harmonics import differentiate, evaluate
-from nlgrd.nonlinear.orbit_search import follow_orbit, same_motion, search_orbits, shifted
-from nlgrd.nonlinear.sdof import SDOFGearPair
-from nlgrd.nonlinear.subharmonic import amplitudes
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.fourier.harmonics import differentiate, evaluate
+from nlgrd.nonlinear.fourier.periods import amplitudes
+from nlgrd.nonlinear.models.sdof import SDOFGearPair
+from nlgrd.nonlinear.tracing.orbit_search import follow_orbit, same_motion, search_orbits, shifted
+from nlgrd.nonlinear.tracing.sweep import sweep
 from nlgrd.timedomain.sdof import integrate
 
 K, M, B = 1e8, 0.1, 50e-6
@@ -175,9 +175,9 @@ def test_search_on_two_nonlinear_coordinates_and_with_user_starts_only():
     with no perturbed starts the user's start alone gives it again."""
     from test_period_doubling import K2, KC, LOAD, M2, SEAT, two_dof
 
-    from nlgrd.nonlinear.force_laws import ContactStop
-    from nlgrd.nonlinear.harmonic_balance import ReducedModel
-    from nlgrd.nonlinear.subharmonic import spread
+    from nlgrd.nonlinear.fourier.periods import spread
+    from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
+    from nlgrd.nonlinear.laws.force_laws import ContactStop
 
     D, wn = two_dof()
 

@@ -33,11 +33,13 @@ import numpy as np
 import pytest
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.clearance import RadialClearanceLaw
-from nlgrd.nonlinear.force_laws import AFTNonlinearity, BacklashMesh, ContactStop, ParametricMesh
-from nlgrd.nonlinear.harmonic_balance import ReducedModel
-from nlgrd.nonlinear.metrics import PointMetrics
-from nlgrd.nonlinear.orbit_search import (
+from nlgrd.nonlinear.fourier.periods import amplitudes, on_shorter_period, period_of, spread
+from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.laws.clearance import RadialClearanceLaw
+from nlgrd.nonlinear.laws.force_laws import AFTNonlinearity, BacklashMesh, ContactStop, ParametricMesh
+from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
+from nlgrd.nonlinear.results.metrics import PointMetrics
+from nlgrd.nonlinear.tracing.orbit_search import (
     N_STARTS,
     SHAPED_EVERY,
     START_RANGE,
@@ -45,8 +47,6 @@ from nlgrd.nonlinear.orbit_search import (
     search_orbits,
     start_scales,
 )
-from nlgrd.nonlinear.state_space import LinearStateSpace
-from nlgrd.nonlinear.subharmonic import amplitudes, on_shorter_period, period_of, spread
 
 MASS, STIFF, ZETA = 10.0, 1e6, 0.01
 DAMP = 2 * ZETA * np.sqrt(STIFF * MASS)
@@ -284,7 +284,7 @@ def test_shipped_rub_rotor_rub_orbits_found_by_default():
     import scipy.sparse.linalg as spla
 
     from nlgrd.io.model_file import load_model
-    from nlgrd.nonlinear.link_model import build_link_model, period_model
+    from nlgrd.nonlinear.models.link_model import build_link_model, period_model
     from nlgrd.rotor.assembly import assemble
 
     system = load_model(RUB)
@@ -324,7 +324,7 @@ def test_shipped_geared_clearance_model_three_coordinates():
     period (as tests/test_shipped_clearance_models.py). The former starts, sized 0.05-5
     times 59 µm with no law's length, found no orbit there at all."""
     from nlgrd.io.model_file import load_model
-    from nlgrd.nonlinear.link_model import build_link_model, link_sweep, period_model
+    from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep, period_model
 
     lm = build_link_model(load_model(GEARED))
     plan = lm.receptance.plan

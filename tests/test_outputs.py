@@ -20,12 +20,12 @@ import pytest
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.continuation import continuation
-from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode, geared_sweep
-from nlgrd.nonlinear.modal_basis import ModeCapWarning, lowest_modes
-from nlgrd.nonlinear.receptance import MeshReceptance
-from nlgrd.nonlinear.sdof import SDOFGearPair
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.models.sdof import SDOFGearPair
+from nlgrd.nonlinear.reduction.modal_basis import ModeCapWarning, lowest_modes
+from nlgrd.nonlinear.reduction.receptance import MeshReceptance
+from nlgrd.nonlinear.tracing.continuation import continuation
+from nlgrd.nonlinear.tracing.sweep import sweep
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 LSTE = np.array([0.0, 3e-6, 0.0, 1e-6, 0.0])
@@ -68,7 +68,7 @@ def test_time_integration_is_the_same_result_family_with_its_residual_named():
     """A time-integration sweep is a SweepResult like a harmonic-balance sweep: the same
     table, but its residual column names what it is (the period-to-period difference, not
     a harmonic-balance residual) and ``stable`` is NA (not computed), never True/False."""
-    from nlgrd.nonlinear.results import RESIDUAL_COLUMNS, SweepResult
+    from nlgrd.nonlinear.results.sweep_results import RESIDUAL_COLUMNS, SweepResult
     from nlgrd.timedomain.sdof import time_sweep
 
     om = KUBO_SDOF.natural_frequency * np.array([0.5, 0.55])
@@ -154,7 +154,7 @@ def test_pole_residue_receptances_are_checked_and_fall_back_to_a_direct_solve(mo
     """The a-posteriori check of the pole-residue form passes on the two-shaft model
     (difference < 1e-8 for every harmonic); with the check's tolerance forced to fail,
     each harmonic falls back to the direct reduced solve and gives the same h_k to 1e-8."""
-    import nlgrd.nonlinear.receptance as rec
+    import nlgrd.nonlinear.reduction.receptance as rec
 
     s = _two_shaft()
     f0 = 2 * np.pi * gear_pair_mode(s)[0]
@@ -206,7 +206,7 @@ def test_continuation_that_turns_back_is_not_complete():
     turning point (near 4273 Hz) and leaves the range below 3000 Hz; that is not a
     complete curve (it was flagged complete before). From 1000 to 1400 Hz (no fold)
     it is."""
-    from nlgrd.nonlinear.geared import geared_continuation
+    from nlgrd.nonlinear.models.geared import geared_continuation
 
     kubo = load_model(DATA / "case_studies" / "kubo.toml")
     c = geared_continuation(kubo, 2 * np.pi * 3000, 2 * np.pi * 5000, 5)

@@ -23,11 +23,12 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.force_laws import ParametricMesh
-from nlgrd.nonlinear.harmonics import analyse, evaluate
-from nlgrd.nonlinear.sdof import SDOFGearPair
-from nlgrd.nonlinear.subharmonic import amplitudes, period_of, period_sweep
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.fourier.harmonics import analyse, evaluate
+from nlgrd.nonlinear.fourier.periods import amplitudes, period_of
+from nlgrd.nonlinear.laws.force_laws import ParametricMesh
+from nlgrd.nonlinear.models.sdof import SDOFGearPair
+from nlgrd.nonlinear.tracing.subharmonic import period_sweep
+from nlgrd.nonlinear.tracing.sweep import sweep
 from nlgrd.timedomain.sdof import integrate
 
 K, M, B, W0, E1, ZETA = 1e8, 0.1, 50e-6, 1e8 * 10e-6, 1e-6, 0.02

@@ -4,7 +4,7 @@ Model: Kubo's rig (data/case_studies/kubo.toml) at mesh damping ratio 0.02 (so t
 integration settles in some hundred periods) with ``stiffness_variation = "load_sharing"``:
 k(θ) = k_h ρ(θ), ρ the shape of the tangent mesh stiffness of nlgrd's load sharing at the
 rig's load (0.65 to 1.25 of the mean: one and two tooth pairs, contact ratio ~1.6), and
-the effective unloaded error e_p = e + W_0/k_h (1 - 1/ρ) (:func:`nlgrd.nonlinear.mesh_law.mesh_law`).
+the effective unloaded error e_p = e + W_0/k_h (1 - 1/ρ) (:func:`nlgrd.nonlinear.laws.mesh_law.mesh_law`).
 
 Independent reference: the HHT-α integration of the full FE model with the same
 force law k_h ρ(θ_n) f(δ - e_p(θ_n)) at every step, swept up and down with each point
@@ -31,10 +31,10 @@ import pytest
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.force_laws import BacklashMesh, ParametricMesh
-from nlgrd.nonlinear.geared import build_geared_model, geared_sweep
-from nlgrd.nonlinear.harmonics import evaluate, sample
-from nlgrd.nonlinear.mesh_law import mesh_law
+from nlgrd.nonlinear.fourier.harmonics import evaluate, sample
+from nlgrd.nonlinear.laws.force_laws import BacklashMesh, ParametricMesh
+from nlgrd.nonlinear.laws.mesh_law import mesh_law
+from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
 from nlgrd.timedomain.geared import time_sweep
 
 KUBO = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"

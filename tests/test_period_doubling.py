@@ -32,15 +32,16 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.auto_period import merge_periods, transitions
-from nlgrd.nonlinear.floquet import floquet_multipliers
-from nlgrd.nonlinear.force_laws import BacklashMesh, ContactStop
-from nlgrd.nonlinear.harmonic_balance import ReducedModel
-from nlgrd.nonlinear.harmonics import analyse, evaluate
-from nlgrd.nonlinear.results import dominant_multiplier
-from nlgrd.nonlinear.sdof import SDOFGearPair
-from nlgrd.nonlinear.subharmonic import amplitudes, period_continuation, period_of, period_sweep, spread
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.fourier.harmonics import analyse, evaluate
+from nlgrd.nonlinear.fourier.periods import amplitudes, period_of, spread
+from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.laws.force_laws import BacklashMesh, ContactStop
+from nlgrd.nonlinear.models.sdof import SDOFGearPair
+from nlgrd.nonlinear.results.sweep_results import dominant_multiplier
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.tracing.auto_period import merge_periods, transitions
+from nlgrd.nonlinear.tracing.subharmonic import period_continuation, period_sweep
+from nlgrd.nonlinear.tracing.sweep import sweep
 from nlgrd.timedomain.sdof import integrate
 
 K, M, B = 1e8, 0.1, 50e-6

@@ -26,12 +26,13 @@ import numpy as np
 import pytest
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.floquet import floquet_multipliers
-from nlgrd.nonlinear.geared import build_geared_model
-from nlgrd.nonlinear.harmonics import analyse
-from nlgrd.nonlinear.orbit_search import same_motion, search_orbits
-from nlgrd.nonlinear.subharmonic import amplitudes, branch_off, period_of, spread
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.fourier.harmonics import analyse
+from nlgrd.nonlinear.fourier.periods import amplitudes, period_of, spread
+from nlgrd.nonlinear.models.geared import build_geared_model
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.tracing.orbit_search import same_motion, search_orbits
+from nlgrd.nonlinear.tracing.subharmonic import branch_off
+from nlgrd.nonlinear.tracing.sweep import sweep
 from nlgrd.timedomain.geared import start_from_harmonics, time_response
 
 KUBO = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"

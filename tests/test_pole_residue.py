@@ -22,9 +22,9 @@ import pytest
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.link_model import build_link_model
-from nlgrd.nonlinear.link_reduction import LinkReceptance
-from nlgrd.nonlinear.pole_residue import POLE_CHECK_RTOL, PoleResidue
+from nlgrd.nonlinear.models.link_model import build_link_model
+from nlgrd.nonlinear.reduction.link_reduction import LinkReceptance
+from nlgrd.nonlinear.reduction.pole_residue import POLE_CHECK_RTOL, PoleResidue
 
 MODELS = Path(__file__).resolve().parents[1] / "data" / "models"
 

@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 import nlgrd
-from nlgrd.nonlinear.link_model import build_link_model
-from nlgrd.nonlinear.orbit_search import same_motion
-from nlgrd.nonlinear.solvers import solve
+from nlgrd.nonlinear.hb.solvers import solve
+from nlgrd.nonlinear.models.link_model import build_link_model
+from nlgrd.nonlinear.tracing.orbit_search import same_motion
 
 ROOT = Path(__file__).resolve().parents[1]
 CLEARANCE = ROOT / "data" / "models" / "two_shaft_clearance.toml"

@@ -1,4 +1,4 @@
-"""Two-frequency harmonic balance (nlgrd.nonlinear.quasi_periodic) against time integration.
+"""Two-frequency harmonic balance (nlgrd.nonlinear.hb.quasi_periodic) against time integration.
 
 The reference is independent: scipy's DOP853 integration of the single-DOF gear pair with
 backlash, m δ'' + c (δ' - e') + k f(δ - e) = W_0 + F₂ cos ω₂ t, e = e₁ cos ω₁ t, ω₂/ω₁
@@ -13,10 +13,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear import quasi_periodic as qp
-from nlgrd.nonlinear import torus_grid as tg
-from nlgrd.nonlinear.force_laws import BacklashMesh
-from nlgrd.nonlinear.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.hb import quasi_periodic as qp
+from nlgrd.nonlinear.hb import torus_grid as tg
+from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.laws.force_laws import BacklashMesh
 
 M, K, ZETA, B, W0, E1, F2 = 1.0, 1.0, 0.05, 0.5, 1.0, 0.25, 0.7
 C = 2 * ZETA
@@ -125,9 +125,9 @@ def test_autonomous_torus_matches_exact_flow(ratio):
     from test_period_doubling import two_dof_model  # noqa: PLC0415
     from test_two_dof_torus import W1, poincare_sweep  # noqa: PLC0415
 
-    from nlgrd.nonlinear.floquet_mode import dominant_floquet_mode  # noqa: PLC0415
-    from nlgrd.nonlinear.harmonics import real_to_complex  # noqa: PLC0415
-    from nlgrd.nonlinear.solvers import solve  # noqa: PLC0415
+    from nlgrd.nonlinear.fourier.harmonics import real_to_complex  # noqa: PLC0415
+    from nlgrd.nonlinear.hb.solvers import solve  # noqa: PLC0415
+    from nlgrd.nonlinear.stability.floquet_mode import dominant_floquet_mode  # noqa: PLC0415
 
     red = two_dof_model(1)
     model = qp.TorusModel.from_reduced(red)
@@ -167,8 +167,8 @@ def test_kubo_torus_against_stored_time_integration():
     from pathlib import Path  # noqa: PLC0415
 
     from nlgrd.io.model_file import load_model  # noqa: PLC0415
-    from nlgrd.nonlinear.geared import build_geared_model  # noqa: PLC0415
-    from nlgrd.nonlinear.torus_sweep import torus_sweep  # noqa: PLC0415
+    from nlgrd.nonlinear.models.geared import build_geared_model  # noqa: PLC0415
+    from nlgrd.nonlinear.tracing.torus_sweep import torus_sweep  # noqa: PLC0415
 
     kubo = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
     model = build_geared_model(load_model(kubo), 2 * np.pi * 14500 / 60 * 25 * 1.0001, H=13)
@@ -197,14 +197,14 @@ def test_kubo_torus_against_stored_time_integration():
 def test_bearing_recovery_of_a_periodic_orbit_matches_the_sweep():
     """A periodic orbit written as a torus (its k₂ > 0 part zero): the bearing forces of
     :func:`torus_bearing_forces` (Z(Ω)⁻¹ w h(Ω)⁻¹ Y per frequency) against the sweep's
-    (:func:`nlgrd.nonlinear.bearing_loads.bearing_harmonics`, the periodic recovery).
+    (:func:`nlgrd.nonlinear.results.bearing_loads.bearing_harmonics`, the periodic recovery).
     Measured 4e-6: the sampled maximum (1024 samples) against the sweep's refined one."""
     from pathlib import Path  # noqa: PLC0415
 
     from nlgrd.io.model_file import load_model  # noqa: PLC0415
-    from nlgrd.nonlinear.geared import build_geared_model, geared_sweep  # noqa: PLC0415
-    from nlgrd.nonlinear.harmonics import real_to_complex  # noqa: PLC0415
-    from nlgrd.nonlinear.torus_sweep import torus_bearing_forces  # noqa: PLC0415
+    from nlgrd.nonlinear.fourier.harmonics import real_to_complex  # noqa: PLC0415
+    from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep  # noqa: PLC0415
+    from nlgrd.nonlinear.tracing.torus_sweep import torus_bearing_forces  # noqa: PLC0415
 
     kubo = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
     system = load_model(kubo)

@@ -14,7 +14,7 @@ import pytest
 import scipy.linalg as sla
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.receptance import MeshReceptance
+from nlgrd.nonlinear.reduction.receptance import MeshReceptance
 
 MODEL = Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml"
 

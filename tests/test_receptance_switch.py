@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear import direct_receptance as dr
-from nlgrd.nonlinear import receptance as rc
-from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.reduction import direct_receptance as dr
+from nlgrd.nonlinear.reduction import receptance as rc
 
 MODEL = Path(__file__).resolve().parents[1] / "data" / "models" / "two_shaft.toml"
 

@@ -16,7 +16,7 @@ Model: Kubo's rig (data/case_studies/kubo.toml, 84 DOFs, gyroscopic terms presen
   6700-6420 rpm keeps clear of a narrow resonance of a high LSTE harmonic near 6380 rpm,
   which no ramp at this rate resolves (the ramp rounds its 6 % peak off).
 - A jump: at mesh damping ratio 0.02 the down sweep's high branch ends near 7900 rpm
-  (harmonic balance on a 25 rpm grid, :func:`nlgrd.nonlinear.geared.geared_sweep`, from
+  (harmonic balance on a 25 rpm grid, :func:`nlgrd.nonlinear.models.geared.geared_sweep`, from
   8400 rpm, below a short quasi-periodic band); the ramp, started on the HB orbit at 8400
   rpm, must fall off it no earlier than the HB's last high-branch point and at most four
   grid steps later (a slow passage through a fold is delayed, never early), and halving
@@ -33,8 +33,8 @@ import pytest
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import build_geared_model, geared_sweep
-from nlgrd.nonlinear.harmonics import real_to_complex
+from nlgrd.nonlinear.fourier.harmonics import real_to_complex
+from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
 from nlgrd.timedomain.geared import start_from_harmonics, time_response
 from nlgrd.timedomain.run_down import ramp_from, run_down
 

@@ -4,8 +4,8 @@ cycles).
 
 Runout (:class:`nlgrd.gear.modifications.GearRunout`) adds e_m cos(θ/z_m + φ_m) to the
 LSTE; the analysis is then over a revolution in harmonics of the shaft frequency
-(:mod:`nlgrd.nonlinear.shaft_orders`). Unbalance goes through the link model
-(:func:`nlgrd.nonlinear.link_model.build_link_model`, base = the shaft speed from
+(:mod:`nlgrd.nonlinear.models.shaft_orders`). Unbalance goes through the link model
+(:func:`nlgrd.nonlinear.models.link_model.build_link_model`, base = the shaft speed from
 :meth:`FrequencyPlan.for_system`, the mesh at harmonic 25). Each check is against an
 independent reference: a direct solve of the assembled FE model (linear case) or the
 HHT-α integration of the same equations over revolutions (contact loss).
@@ -23,10 +23,10 @@ from nlgrd.errors import ModelError
 from nlgrd.gear.mesh import GearMesh
 from nlgrd.gear.modifications import GearErrors, GearRunout
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.frequency_plan import FrequencyPlan
-from nlgrd.nonlinear.link_model import Unbalance, build_link_model, link_sweep
-from nlgrd.nonlinear.links import GearMeshLink
-from nlgrd.nonlinear.shaft_orders import dte_spectrum, shaft_order_model, shaft_order_sweep
+from nlgrd.nonlinear.links.contract import GearMeshLink
+from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
+from nlgrd.nonlinear.models.link_model import Unbalance, build_link_model, link_sweep
+from nlgrd.nonlinear.models.shaft_orders import dte_spectrum, shaft_order_model, shaft_order_sweep
 from nlgrd.rotor.assembly import assemble
 
 TWO_SHAFT = Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml"

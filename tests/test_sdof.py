@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from nlgrd.nonlinear.harmonics import differentiate, evaluate
-from nlgrd.nonlinear.metrics import metrics_from_history
-from nlgrd.nonlinear.sdof import SDOFGearPair
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.fourier.harmonics import differentiate, evaluate
+from nlgrd.nonlinear.models.sdof import SDOFGearPair
+from nlgrd.nonlinear.results.metrics import metrics_from_history
+from nlgrd.nonlinear.tracing.sweep import sweep
 from nlgrd.timedomain.sdof import integrate, time_sweep
 
 # Kubo et al. (1972) single-DOF data (model.md §5): m_eq = 0.261 kg, k_h = 0.2587e9 N/m,

@@ -2,7 +2,7 @@
 
 ``sdof_model`` dropped ``stiffness_variation``: the single-DOF pair of a parametric FE
 model was silently the constant-k_h one. Reference: the combination of k(θ) and e(θ)
-stated in :func:`nlgrd.nonlinear.mesh_law.mesh_law` (Özgüven & Houser 1988), evaluated
+stated in :func:`nlgrd.nonlinear.laws.mesh_law.mesh_law` (Özgüven & Houser 1988), evaluated
 here independently on 4096 samples: e_p(θ) = e(θ) + W_0/k_h (1 - 1/ρ(θ)) with e the
 constant model's LSTE and ρ the given series, Fourier-analysed by FFT. 1/ρ of this ρ
 (0.75 <= ρ <= 1.25) has harmonics decaying like 0.27^k, so 30 harmonics leave ~1e-17 of
@@ -18,8 +18,8 @@ import pytest
 from nlgrd.errors import ModelError
 from nlgrd.gear.modifications import GearErrors
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import sdof_model
-from nlgrd.nonlinear.harmonics import analyse, evaluate
+from nlgrd.nonlinear.fourier.harmonics import analyse, evaluate
+from nlgrd.nonlinear.models.geared import sdof_model
 
 KUBO = Path(__file__).resolve().parents[1] / "data" / "case_studies" / "kubo.toml"
 

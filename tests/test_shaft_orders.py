@@ -3,7 +3,7 @@
 line of action (``GearErrors(spacing_gear=[5e-6, 0, ..., 0])``).
 
 The LSTE then repeats every 25 mesh cycles, one gear revolution: it is solved over that
-period in harmonics of the shaft frequency (:mod:`nlgrd.nonlinear.shaft_orders`), and the
+period in harmonics of the shaft frequency (:mod:`nlgrd.nonlinear.models.shaft_orders`), and the
 DTE holds the mesh harmonics with sidebands at k f_mesh ± j f_shaft and low shaft orders.
 
 Independent reference: the HHT-α integration of the full FE model over gear revolutions
@@ -28,8 +28,8 @@ import pytest
 from nlgrd.errors import ModelError
 from nlgrd.gear.modifications import GearErrors
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import build_geared_model
-from nlgrd.nonlinear.shaft_orders import (
+from nlgrd.nonlinear.models.geared import build_geared_model
+from nlgrd.nonlinear.models.shaft_orders import (
     bearing_force_spectrum,
     dte_spectrum,
     shaft_order_model,

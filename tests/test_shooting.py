@@ -1,4 +1,4 @@
-"""nlgrd.nonlinear.shooting against the brute-force reference of tests/piecewise_reference.py
+"""nlgrd.nonlinear.stability.shooting against the brute-force reference of tests/piecewise_reference.py
 (issue 35, part 1): the two-DOF chain with a stiff one-sided spring, built with the library
 (``ReducedModel.from_matrices`` and ``ContactStop``), its orbits polished by shooting.
 
@@ -20,11 +20,11 @@ import piecewise_reference as pr
 import pytest
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.floquet import floquet_multipliers
-from nlgrd.nonlinear.force_laws import ContactStop, ParametricMesh
-from nlgrd.nonlinear.harmonic_balance import ReducedModel
-from nlgrd.nonlinear.harmonics import analyse
-from nlgrd.nonlinear.shooting import shoot_orbit
+from nlgrd.nonlinear.fourier.harmonics import analyse
+from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.laws.force_laws import ContactStop, ParametricMesh
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.stability.shooting import shoot_orbit
 
 
 def chain() -> ReducedModel:

@@ -34,8 +34,8 @@ from nlgrd.cli import main
 from nlgrd.errors import ModelError
 from nlgrd.gear.stiffness_file import read_stiffness_file
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import build_geared_model, geared_sweep
-from nlgrd.nonlinear.mesh_law import mesh_law
+from nlgrd.nonlinear.laws.mesh_law import mesh_law
+from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
 from nlgrd.timedomain.geared import time_response
 
 ROOT = Path(__file__).resolve().parent.parent

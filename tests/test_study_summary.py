@@ -79,7 +79,7 @@ def test_named_bearings_summary_equals_the_hand_sweep(tmp_path):
     force of the sweep (it was NaN: the summary looked for columns named ``bearing ...``),
     ``dte_rms_peak [um]`` the largest RMS DTE in µm."""
     from nlgrd.io.model_file import model_from_file_data
-    from nlgrd.nonlinear.geared import geared_sweep
+    from nlgrd.nonlinear.models.geared import geared_sweep
 
     summary, spec = one_task(tmp_path, TWO_SHAFT)
     system = model_from_file_data(spec.model_data, spec.model_file)
@@ -111,9 +111,9 @@ def test_link_model_summary_equals_the_hand_sweep(tmp_path):
     (the link's own ``metrics``; the bearings' recovery, checked against the single path in
     tests/test_engine_equivalence.py)."""
     from nlgrd.io.model_file import model_from_file_data
-    from nlgrd.nonlinear.bearing_loads import link_bearing_outputs
-    from nlgrd.nonlinear.link_model import build_link_model, link_sweep, needs_links
-    from nlgrd.nonlinear.links import BearingClearance, GearMeshLink
+    from nlgrd.nonlinear.links.contract import BearingClearance, GearMeshLink
+    from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep, needs_links
+    from nlgrd.nonlinear.results.bearing_loads import link_bearing_outputs
 
     model_file = tmp_path / "two_shaft_clearance.toml"
     model_file.write_text(TWO_SHAFT.read_text() + CLEARANCE)
@@ -173,8 +173,8 @@ def test_a_study_asks_every_model_for_period_auto(tmp_path, monkeypatch):
     sweep is asked for ``period="auto"``, geared_sweep's own default."""
     import inspect
 
-    import nlgrd.nonlinear.link_model as link_model
-    from nlgrd.nonlinear.geared import geared_sweep
+    import nlgrd.nonlinear.models.link_model as link_model
+    from nlgrd.nonlinear.models.geared import geared_sweep
 
     asked = {}
     real = link_model.link_sweep

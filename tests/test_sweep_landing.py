@@ -24,9 +24,9 @@ import numpy as np
 import pytest
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.geared import sdof_model
-from nlgrd.nonlinear.harmonics import differentiate, evaluate
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.fourier.harmonics import differentiate, evaluate
+from nlgrd.nonlinear.models.geared import sdof_model
+from nlgrd.nonlinear.tracing.sweep import sweep
 from nlgrd.timedomain.sdof import time_sweep
 
 KUBO = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"

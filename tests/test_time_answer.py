@@ -33,8 +33,8 @@ import numpy as np
 import pytest
 
 import nlgrd
-from nlgrd.nonlinear.link_model import build_link_model
-from nlgrd.nonlinear.response_kinds import CHAOTIC, TIME_DOMAIN
+from nlgrd.nonlinear.models.link_model import build_link_model
+from nlgrd.nonlinear.results.response_kinds import CHAOTIC, TIME_DOMAIN
 from nlgrd.timedomain.sweep_answers import base_harmonics, with_time_answers
 from nlgrd.timedomain.time_answer import batch_mean, mser5, record_max, time_answer
 
@@ -191,7 +191,7 @@ def test_kubo_bands_against_four_times_longer_integrations():
 
 def test_link_sweep_answers_its_gaps():
     """The link path (any model): K&B's rig reduced to its links and swept as a link model."""
-    from nlgrd.nonlinear.link_model import link_sweep
+    from nlgrd.nonlinear.models.link_model import link_sweep
 
     model = build_link_model(nlgrd.load(KB))
     res = link_sweep(model, 2 * np.pi * np.array([3500.0, 3600.0]), 5, directions="up")

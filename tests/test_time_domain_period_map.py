@@ -22,8 +22,8 @@ from test_geared_time_domain import refined_kubo
 
 import nlgrd.timedomain.integrator as integrator
 import nlgrd.timedomain.links as td_links
-from nlgrd.nonlinear.geared import build_geared_model
-from nlgrd.nonlinear.link_model import link_sweep
+from nlgrd.nonlinear.models.geared import build_geared_model
+from nlgrd.nonlinear.models.link_model import link_sweep
 from nlgrd.timedomain.links import link_time_response, start_from_harmonics
 
 

@@ -52,9 +52,9 @@ import numpy as np
 import pytest
 from test_period_doubling import K2, KC, LOAD, M2, SEAT, two_dof, two_dof_cycle, two_dof_model
 
-from nlgrd.nonlinear.auto_period import transitions
-from nlgrd.nonlinear.results import QUASI_PERIODIC, response_kind
-from nlgrd.nonlinear.sweep import sweep
+from nlgrd.nonlinear.results.sweep_results import QUASI_PERIODIC, response_kind
+from nlgrd.nonlinear.tracing.auto_period import transitions
+from nlgrd.nonlinear.tracing.sweep import sweep
 
 W1 = two_dof()[1]
 STEP = 0.02  # grid step [ω_1]

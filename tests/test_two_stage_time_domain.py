@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from link_comparison import compare, damped, mesh_losses, report
 
-from nlgrd.nonlinear.link_model import build_link_model
+from nlgrd.nonlinear.models.link_model import build_link_model
 
 #: the two-stage train's up sweep (ζ = 0.05, H = 45: 9 harmonics of the faster mesh) has
 #: both meshes losing contact on stable orbits at base frequencies near 359 and 483 Hz

@@ -1,7 +1,7 @@
 """Disk unbalance in the model file and `nlgrd sweep` (issue 12, item 4): the
 ``[[unbalance]]`` table (validation, round trip), the link model taking the system's
 unbalance by default, and the CLI link sweep against calling
-:func:`nlgrd.nonlinear.link_model.link_sweep` directly."""
+:func:`nlgrd.nonlinear.models.link_model.link_sweep` directly."""
 
 from __future__ import annotations
 
@@ -17,8 +17,8 @@ from nlgrd.cli import main
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
 from nlgrd.io.model_writer import model_to_dict, save_model
-from nlgrd.nonlinear.link_model import Unbalance, build_link_model, link_sweep, needs_links
-from nlgrd.nonlinear.receptance import MeshReceptance
+from nlgrd.nonlinear.models.link_model import Unbalance, build_link_model, link_sweep, needs_links
+from nlgrd.nonlinear.reduction.receptance import MeshReceptance
 from nlgrd.rotor.loads import Unbalance as RotorUnbalance
 from nlgrd.rotor.system import refined
 

@@ -1,4 +1,4 @@
-"""Converged stability verdicts (issue 35 item 1): nlgrd.nonlinear.verdicts, the shooting start
+"""Converged stability verdicts (issue 35 item 1): nlgrd.nonlinear.stability.verdicts, the shooting start
 of a contact stop without preload, the memory-bounded H ladder and the stability columns of
 merged period-1/period-2 rows.
 
@@ -19,10 +19,15 @@ import piecewise_reference as pr
 import pytest
 from test_shooting import reference_orbit
 
-from nlgrd.nonlinear.auto_period import beyond_period_one, merge_periods, transitions
-from nlgrd.nonlinear.force_laws import ContactStop
-from nlgrd.nonlinear.harmonic_balance import ReducedModel
-from nlgrd.nonlinear.harmonic_convergence import (
+from nlgrd.nonlinear.fourier.periods import spread
+from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.laws.force_laws import ContactStop
+from nlgrd.nonlinear.results.metrics import MeshMetrics
+from nlgrd.nonlinear.results.sweep_results import SweepResult, assemble_result
+from nlgrd.nonlinear.stability.shooting import initial_state
+from nlgrd.nonlinear.stability.verdicts import agree, converge_verdicts, locate_bifurcations
+from nlgrd.nonlinear.tracing.auto_period import beyond_period_one, merge_periods, transitions
+from nlgrd.nonlinear.tracing.harmonic_convergence import (
     LADDER,
     HarmonicsWarning,
     check_harmonics,
@@ -30,13 +35,8 @@ from nlgrd.nonlinear.harmonic_convergence import (
     ladder_for,
     next_harmonics,
 )
-from nlgrd.nonlinear.harmonic_ladder import harmonics_memory, max_harmonics
-from nlgrd.nonlinear.metrics import MeshMetrics
-from nlgrd.nonlinear.results import SweepResult, assemble_result
-from nlgrd.nonlinear.shooting import initial_state
-from nlgrd.nonlinear.subharmonic import spread
-from nlgrd.nonlinear.sweep import sweep
-from nlgrd.nonlinear.verdicts import agree, converge_verdicts, locate_bifurcations
+from nlgrd.nonlinear.tracing.harmonic_ladder import harmonics_memory, max_harmonics
+from nlgrd.nonlinear.tracing.sweep import sweep
 
 #: The reference's bifurcations (tests/piecewise_reference.py, located to 1e-9).
 NS = (1.364089063, 1.432756685)

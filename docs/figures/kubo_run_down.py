@@ -24,7 +24,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from nlgrd.io.model_file import load_model  # noqa: E402
-from nlgrd.nonlinear.geared import build_geared_model, gear_pair_mode, geared_sweep  # noqa: E402
+from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep  # noqa: E402
 from nlgrd.plotting import save_figure  # noqa: E402
 from nlgrd.plotting.common import place_legend  # noqa: E402
 from nlgrd.plotting.nonlinear import plot_sweep_frame  # noqa: E402

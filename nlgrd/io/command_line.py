@@ -230,7 +230,7 @@ def parse_orders(text: str) -> dict[str, float]:
 
 
 def check_quantity(name: str) -> str:
-    """``--quantity``: one of :data:`nlgrd.nonlinear.metrics.METRIC_NAMES`.
+    """``--quantity``: one of :data:`nlgrd.nonlinear.results.metrics.METRIC_NAMES`.
 
     Parameters
     ----------
@@ -247,7 +247,7 @@ def check_quantity(name: str) -> str:
     ModelError
         When ``name`` is not a metric name.
     """
-    from nlgrd.nonlinear.metrics import METRIC_NAMES
+    from nlgrd.nonlinear.results.metrics import METRIC_NAMES
 
     if name not in METRIC_NAMES:
         raise ModelError("--quantity", f"unknown quantity {name!r}; use one of {', '.join(METRIC_NAMES)}")

@@ -149,8 +149,8 @@ def check_speed_range(system: RotorSystem, top: float, in_rpm: bool, key: str, g
     ModelError
         When a gear pair's pitch-line velocity exceeds the limit.
     """
-    from nlgrd.nonlinear.frequency_plan import FrequencyPlan
-    from nlgrd.nonlinear.link_model import needs_links
+    from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
+    from nlgrd.nonlinear.models.link_model import needs_links
 
     pairs = [g for g in system.gear_pairs if hasattr(g, "geometry")]
     if not pairs:

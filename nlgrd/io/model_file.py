@@ -49,7 +49,7 @@ Format, version 1::
     [[gear_pairs]]                   # nlgrd.gear.mesh.GearMesh fields, nested tables as
     ...                              # [gear_pairs.geometry] and so on; any number of them
 
-    [[bearing_clearances]]           # nlgrd.nonlinear.links.BearingClearance fields
+    [[bearing_clearances]]           # nlgrd.nonlinear.links.contract.BearingClearance fields
     name = "B1"                      # a radial clearance, a nonlinear link
     shaft = 0
     node = 8
@@ -119,7 +119,7 @@ MAX_COUNT = 100_000
 #: not exist yet: (owner, field) -> (module, class). Imported on first use.
 _LATE_TYPES: dict[tuple[type, str], tuple[str, str]] = {
     (RotorSystem, "gear_pairs"): ("nlgrd.gear.mesh", "GearMesh"),
-    (RotorSystem, "bearing_clearances"): ("nlgrd.nonlinear.links", "BearingClearance"),
+    (RotorSystem, "bearing_clearances"): ("nlgrd.nonlinear.links.contract", "BearingClearance"),
 }
 
 #: Sequence fields whose entries may carry ``count = N``.

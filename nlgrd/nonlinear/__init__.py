@@ -1,3 +1,2 @@
-"""Nonlinear analysis: describing functions, receptance reduction, harmonic balance,
-Floquet stability, frequency sweeps and landings, continuation, harmonic convergence
-and the per-point results."""
+"""Nonlinear periodic response, in layers (lowest first): fourier, laws, results, links,
+reduction, hb, stability, tracing, models (docs/conventions.md)."""

@@ -42,7 +42,7 @@ FLOQUET = "floquet_max [-]"
 
 
 #: The "response" column's value at a point with a periodic response (any other value,
-#: nlgrd.nonlinear.metrics.NO_STABLE in the written tables, marks a point without one).
+#: nlgrd.nonlinear.results.metrics.NO_STABLE in the written tables, marks a point without one).
 PERIODIC = "periodic"
 #: ... of a point whose period-1 orbit lost stability to a complex pair of multipliers.
 QUASI_PERIODIC = "quasi-periodic"
@@ -194,7 +194,7 @@ def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms) -> None:
 
 def _uncertainty_column(column: str) -> str:
     """ "dte_rms [um]" -> "dte_rms_uncertainty [um]" (the tables' rule,
-    :func:`nlgrd.nonlinear.response_kinds.uncertainty_column`; plotting imports no analysis)."""
+    :func:`nlgrd.nonlinear.results.response_kinds.uncertainty_column`; plotting imports no analysis)."""
     stem, sep, unit = column.partition(" [")
     return f"{stem}_uncertainty{sep}{unit}"
 
@@ -213,17 +213,18 @@ def _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms) -> None:
 
 
 def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
-    """The columns :func:`plot_sweep_frame` reads, from a :class:`~nlgrd.nonlinear.results.SweepResult`.
+    """The columns :func:`plot_sweep_frame` reads, from a
+    :class:`~nlgrd.nonlinear.results.sweep_results.SweepResult`.
 
     ``quantity`` (a metric name) becomes column "value" in the units of the axis label;
     frequencies are mesh frequencies [Hz].
 
     Parameters
     ----------
-    result : nlgrd.nonlinear.results.SweepResult
+    result : nlgrd.nonlinear.results.sweep_results.SweepResult
         The sweep; its ``floquet_max`` and ``no_stable`` are used when it has them.
     quantity : str
-        A metric name (:data:`~nlgrd.nonlinear.metrics.METRIC_NAMES`); the DTE metrics are
+        A metric name (:data:`~nlgrd.nonlinear.results.metrics.METRIC_NAMES`); the DTE metrics are
         scaled to µm, the others kept as they are.
 
     Returns
@@ -271,7 +272,7 @@ def plot_sweep(
     xaxis: tuple[str, float] = MESH_HZ,
     title: str | None = None,
 ):
-    """Sweep curve(s) of a :class:`~nlgrd.nonlinear.results.SweepResult` against mesh frequency
+    """Sweep curve(s) of a :class:`~nlgrd.nonlinear.results.sweep_results.SweepResult` against mesh frequency
     (or the speed the range was given in, ``xaxis``).
 
     Up ▲ and down ▼ in different colours; stable filled/solid, unstable open/dashed,
@@ -280,10 +281,10 @@ def plot_sweep(
 
     Parameters
     ----------
-    result : nlgrd.nonlinear.results.SweepResult
+    result : nlgrd.nonlinear.results.sweep_results.SweepResult
         The sweep.
     quantity : str
-        The metric drawn (:data:`~nlgrd.nonlinear.metrics.METRIC_NAMES`), in the units of
+        The metric drawn (:data:`~nlgrd.nonlinear.results.metrics.METRIC_NAMES`), in the units of
         its axis label (see :func:`sweep_table`).
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure when None.
@@ -344,11 +345,11 @@ def plot_continuation(
 
     Parameters
     ----------
-    result : nlgrd.nonlinear.results.ContinuationResult
+    result : nlgrd.nonlinear.results.sweep_results.ContinuationResult
         The curve (its ``curve``, drawn in the order of the arc length) and its turning
         points.
     quantity : str
-        The metric drawn (:data:`~nlgrd.nonlinear.metrics.METRIC_NAMES`), in the units of
+        The metric drawn (:data:`~nlgrd.nonlinear.results.metrics.METRIC_NAMES`), in the units of
         its axis label (see :func:`sweep_table`).
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure when None.
@@ -383,13 +384,13 @@ def plot_continuation(
 
 
 def plot_time_history(history, quantity: str = "delta", ax=None, label: str | None = None):
-    """One period of a :class:`~nlgrd.nonlinear.metrics.TimeHistory`.
+    """One period of a :class:`~nlgrd.nonlinear.results.metrics.TimeHistory`.
 
     ``quantity``: "delta" (DTE δ and LSTE e, µm), "deflection" (δ - e, µm) or "force" (W, N).
 
     Parameters
     ----------
-    history : nlgrd.nonlinear.metrics.TimeHistory
+    history : nlgrd.nonlinear.results.metrics.TimeHistory
         The period, drawn against time [ms].
     quantity : str
         "delta", "deflection" or "force" (any other value: "delta").
@@ -430,8 +431,8 @@ def plot_spectrum(
     label: str | None = None,
 ):
     """A line spectrum against frequency [Hz], the mesh harmonics told from the sidebands
-    and shaft orders between them (:func:`nlgrd.nonlinear.shaft_orders.dte_spectrum`,
-    :func:`~nlgrd.nonlinear.shaft_orders.bearing_force_spectrum`).
+    and shaft orders between them (:func:`nlgrd.nonlinear.models.shaft_orders.dte_spectrum`,
+    :func:`~nlgrd.nonlinear.models.shaft_orders.bearing_force_spectrum`).
 
     Parameters
     ----------

@@ -15,7 +15,7 @@ class Unbalance:
 
     In a model file: a ``[[unbalance]]`` entry. It excites its node at |s| Ω (s the shaft's
     speed ratio, Ω the reference speed) with the force m e (s Ω)²; only the link analyses
-    (:mod:`nlgrd.nonlinear.link_model`) model it.
+    (:mod:`nlgrd.nonlinear.models.link_model`) model it.
 
     Parameters
     ----------

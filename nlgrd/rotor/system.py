@@ -126,14 +126,14 @@ class RotorSystem:
     gear_pairs : tuple
         Gear meshes (:class:`nlgrd.gear.mesh.GearMesh`).
     bearing_clearances : tuple
-        Radial clearances of bearings (:class:`nlgrd.nonlinear.links.BearingClearance`),
-        nonlinear links: only the link analyses (:mod:`nlgrd.nonlinear.link_model`) model
+        Radial clearances of bearings (:class:`nlgrd.nonlinear.links.contract.BearingClearance`),
+        nonlinear links: only the link analyses (:mod:`nlgrd.nonlinear.models.link_model`) model
         them.
     name : str
         Label.
     unbalance : tuple of Unbalance
         Mass unbalances (:class:`nlgrd.rotor.loads.Unbalance`), loads of the link analyses
-        (:func:`nlgrd.nonlinear.link_model.build_link_model`).
+        (:func:`nlgrd.nonlinear.models.link_model.build_link_model`).
     damping : StructuralDamping or None
         Damping of the whole FE rotor (a modal floor, Rayleigh α M + β K): a viscous
         matrix [N s/m] added to the assembled C (:mod:`nlgrd.rotor.structural_damping`);

@@ -31,7 +31,7 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.jumps import Jump, find_jumps
+from nlgrd.nonlinear.results.jumps import Jump, find_jumps
 
 #: Abscissa columns of a data file and the matching sweep-table column.
 X_COLUMNS = {
@@ -290,7 +290,7 @@ class CurveLandmarks:
     peak_x, peak_value : float
         Location and value of the largest y (the resonance location and peak).
     jump_x : float
-        Midpoint of the largest jump (:func:`nlgrd.nonlinear.jumps.find_jumps`); NaN if none.
+        Midpoint of the largest jump (:func:`nlgrd.nonlinear.results.jumps.find_jumps`); NaN if none.
     jump_from, jump_to : float
         The two points between which it lies (in sweep order); NaN if none.
     """
@@ -371,10 +371,11 @@ def largest_jump(
     """The largest jump of one sweep direction with its midpoint in [lo, hi].
 
     ``x`` and ``y`` are sorted here into sweep order (``direction`` "down": decreasing x);
-    jumps are found by :func:`nlgrd.nonlinear.jumps.find_jumps` (``rtol``, ``ratio``). ``sign``
+    jumps are found by :func:`nlgrd.nonlinear.results.jumps.find_jumps` (``rtol``, ``ratio``). ``sign``
     +1 keeps only rises of y in sweep order (the up sweep landing on the upper branch),
     -1 only drops (the down sweep falling off it), 0 both. Returns None when there is none;
-    the returned :class:`~nlgrd.nonlinear.results.Jump` holds values of ``x`` (whatever their unit) in
+    the returned :class:`~nlgrd.nonlinear.results.sweep_results.Jump` holds values of ``x`` (whatever their
+    unit) in
     its ``omega_from``, ``omega_to`` and ``omega``.
 
     Parameters

@@ -177,8 +177,8 @@ class SummaryColumns:
 def _link_columns(model) -> SummaryColumns:
     """The summary columns of a link sweep (``<link>.<quantity> [unit]``), by link type;
     the bearing forces those of the clearances and of every linear bearing."""
-    from nlgrd.nonlinear.bearing_loads import bearing_names
-    from nlgrd.nonlinear.links import BearingClearance, GearMeshLink
+    from nlgrd.nonlinear.links.contract import BearingClearance, GearMeshLink
+    from nlgrd.nonlinear.results.bearing_loads import bearing_names
 
     out = SummaryColumns(bearing_force=[f"{name}.force_max [N]" for name in bearing_names(model.system)])
     for link in model.links:
@@ -193,13 +193,13 @@ def _link_columns(model) -> SummaryColumns:
 
 def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float, SummaryColumns]:
     """Run the analysis on ``system``: (points, jumps, x column, x per rad/s, summary columns)."""
-    from nlgrd.nonlinear.link_model import needs_links
+    from nlgrd.nonlinear.models.link_model import needs_links
 
     values = np.linspace(analysis["start"], analysis["stop"], analysis["count"])
     rpm = analysis["unit"] == "rpm"
     options = {"directions": analysis["direction"], "stability": analysis["stability"]}
     if needs_links(system):
-        from nlgrd.nonlinear.link_model import build_link_model, link_sweep
+        from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 
         model = build_link_model(system)
         per_rad = 30 / math.pi * model.receptance.plan.speed_per_base if rpm else 1 / (2 * math.pi)
@@ -217,8 +217,8 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
         if rpm:
             frame.insert(1, x_col, frame["base_frequency [Hz]"] * 2 * math.pi * per_rad)
         return frame, res.jumps(), x_col, per_rad, _link_columns(model)
-    from nlgrd.nonlinear.geared import geared_sweep
-    from nlgrd.nonlinear.shaft_orders import shaft_order_sweep
+    from nlgrd.nonlinear.models.geared import geared_sweep
+    from nlgrd.nonlinear.models.shaft_orders import shaft_order_sweep
 
     gp = system.gear_pairs[0]
     mesh_per_pinion = gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
@@ -251,7 +251,7 @@ def _time_answers(res, model, analysis: dict, system=None):
     built from ``system``)."""
     if not (analysis["stability"] and analysis.get("time_domain", True)):
         return res
-    from nlgrd.nonlinear.link_model import build_link_model
+    from nlgrd.nonlinear.models.link_model import build_link_model
     from nlgrd.timedomain.sweep_answers import with_time_answers
 
     return with_time_answers(res, model if model is not None else build_link_model(system))

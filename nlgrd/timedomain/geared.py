@@ -1,5 +1,5 @@
 """Time integration of the full geared finite-element model, the independent reference
-of its harmonic balance (:class:`nlgrd.nonlinear.geared.GearedModel`): one frequency
+of its harmonic balance (:class:`nlgrd.nonlinear.models.geared.GearedModel`): one frequency
 (:func:`time_response`) and sweeps, each point continuing from the last
 (:func:`time_sweep`), or from a harmonic-balance orbit (:func:`start_from_harmonics`).
 """
@@ -12,10 +12,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.geared import GearedModel
-from nlgrd.nonlinear.harmonics import analyse, real_to_complex
-from nlgrd.nonlinear.results import SweepResult, assemble_result
-from nlgrd.nonlinear.sweep import sweep_orders
+from nlgrd.nonlinear.fourier.harmonics import analyse, real_to_complex
+from nlgrd.nonlinear.models.geared import GearedModel
+from nlgrd.nonlinear.results.sweep_results import SweepResult, assemble_result
+from nlgrd.nonlinear.tracing.sweep import sweep_orders
 from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.integrator import integrate_fe
 
@@ -42,7 +42,7 @@ def time_response(
     Parameters
     ----------
     model : GearedModel
-        The model (:func:`nlgrd.nonlinear.geared.build_geared_model`).
+        The model (:func:`nlgrd.nonlinear.models.geared.build_geared_model`).
     omega : float
         Mesh frequency [rad/s].
     steps_per_period : int
@@ -134,7 +134,7 @@ def time_sweep(
 ) -> SweepResult:
     """Time-domain up and/or down sweep of the full FE model, each point continuing from the last.
 
-    The independent reference for :func:`nlgrd.nonlinear.geared.geared_sweep`: the same
+    The independent reference for :func:`nlgrd.nonlinear.models.geared.geared_sweep`: the same
     equations integrated by HHT-α (:func:`time_response`) to a periodic steady state at
     every frequency, starting from the final state of the previous frequency, so the
     sweep stays on its branch and jumps where it must; the down sweep starts where the up
@@ -143,7 +143,7 @@ def time_sweep(
     Parameters
     ----------
     model : GearedModel
-        The model (:func:`nlgrd.nonlinear.geared.build_geared_model`).
+        The model (:func:`nlgrd.nonlinear.models.geared.build_geared_model`).
     omegas : array_like
         Mesh frequencies [rad/s], sorted here.
     directions : {"both", "up", "down"}

@@ -4,7 +4,7 @@
 
 with D containing the mesh damping c_m w wᵀ and K excluding the mesh stiffness, so the
 right-hand side is F0 - w k_h f(δ - e) + w c_m e'(t); a parametric mesh
-(:class:`~nlgrd.nonlinear.force_laws.ParametricMesh`) has k_h ρ(θ) in place of k_h.
+(:class:`~nlgrd.nonlinear.laws.force_laws.ParametricMesh`) has k_h ρ(θ) in place of k_h.
 
 Method: HHT-α (Hilber, Hughes & Taylor 1977), implicit, unconditionally stable and
 second order for -1/3 <= α <= 0, with γ = (1 - 2α)/2, β = (1 - α)²/4. Why: an FE rotor
@@ -36,9 +36,9 @@ import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.force_laws import BacklashMesh
-from nlgrd.nonlinear.harmonics import differentiate, sample
-from nlgrd.nonlinear.metrics import MeshMetrics, TimeHistory, metrics_from_history
+from nlgrd.nonlinear.fourier.harmonics import differentiate, sample
+from nlgrd.nonlinear.laws.force_laws import BacklashMesh
+from nlgrd.nonlinear.results.metrics import MeshMetrics, TimeHistory, metrics_from_history
 from nlgrd.rotor.assembly import mesh_matrix
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
 from nlgrd.timedomain.period_map import MAX_STATE, PeriodMap

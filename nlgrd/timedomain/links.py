@@ -1,5 +1,5 @@
 """Time integration of a rotor model with any number of nonlinear links: the independent
-reference of :mod:`nlgrd.nonlinear.link_model`.
+reference of :mod:`nlgrd.nonlinear.models.link_model`.
 
 The same equations as the harmonic balance,
 
@@ -26,12 +26,12 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.harmonics import analyse, evaluate
-from nlgrd.nonlinear.link_model import LinkModel
-from nlgrd.nonlinear.links import GearMeshLink
-from nlgrd.nonlinear.metrics import MeshMetrics
-from nlgrd.nonlinear.results import SweepResult, assemble_result
-from nlgrd.nonlinear.sweep import sweep_orders
+from nlgrd.nonlinear.fourier.harmonics import analyse, evaluate
+from nlgrd.nonlinear.links.contract import GearMeshLink
+from nlgrd.nonlinear.models.link_model import LinkModel
+from nlgrd.nonlinear.results.metrics import MeshMetrics
+from nlgrd.nonlinear.results.sweep_results import SweepResult, assemble_result
+from nlgrd.nonlinear.tracing.sweep import sweep_orders
 from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.integrator import hht_step
 from nlgrd.timedomain.period_map import MAX_STATE, PeriodMap
@@ -101,7 +101,7 @@ class LinkIntegrator:
     Parameters
     ----------
     model : LinkModel
-        From :func:`nlgrd.nonlinear.link_model.build_link_model`.
+        From :func:`nlgrd.nonlinear.models.link_model.build_link_model`.
     omega : float
         Base frequency [rad/s].
     steps_per_period : int
@@ -316,7 +316,7 @@ def link_time_response(
     Parameters
     ----------
     model : LinkModel
-        From :func:`nlgrd.nonlinear.link_model.build_link_model`.
+        From :func:`nlgrd.nonlinear.models.link_model.build_link_model`.
     omega : float
         Base frequency [rad/s].
     steps_per_period : int
@@ -422,7 +422,7 @@ def link_time_sweep(
     Parameters
     ----------
     model : LinkModel
-        From :func:`nlgrd.nonlinear.link_model.build_link_model`.
+        From :func:`nlgrd.nonlinear.models.link_model.build_link_model`.
     omegas : array_like
         Base frequencies [rad/s].
     directions : {"both", "up", "down"}

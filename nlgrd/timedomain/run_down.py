@@ -33,7 +33,7 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.geared import GearedModel
+from nlgrd.nonlinear.models.geared import GearedModel
 from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.geared import time_response
 from nlgrd.timedomain.integrator import hht_step
@@ -198,7 +198,7 @@ def run_down(
     Parameters
     ----------
     model : GearedModel
-        The model (:func:`nlgrd.nonlinear.geared.build_geared_model`), no hysteretic damping.
+        The model (:func:`nlgrd.nonlinear.models.geared.build_geared_model`), no hysteretic damping.
     omega_start, omega_stop : float
         Mesh frequency at the start and the end of the ramp [rad/s], ``omega_stop`` <
         ``omega_start`` (a run-down).

@@ -1,4 +1,4 @@
-"""Time integration of the single-DOF gear pair (:class:`nlgrd.nonlinear.sdof.SDOFGearPair`),
+"""Time integration of the single-DOF gear pair (:class:`nlgrd.nonlinear.models.sdof.SDOFGearPair`),
 the independent reference of its harmonic balance.
 
 The equation of motion is integrated with :func:`scipy.integrate.solve_ivp` in segments
@@ -15,12 +15,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 
-from nlgrd.nonlinear.describing_functions import deadzone
-from nlgrd.nonlinear.harmonics import analyse, differentiate, evaluate
-from nlgrd.nonlinear.metrics import TimeHistory, metrics_from_history
-from nlgrd.nonlinear.results import SweepResult, assemble_result
-from nlgrd.nonlinear.sdof import SDOFGearPair
-from nlgrd.nonlinear.sweep import sweep_orders
+from nlgrd.nonlinear.fourier.harmonics import analyse, differentiate, evaluate
+from nlgrd.nonlinear.laws.describing_functions import deadzone
+from nlgrd.nonlinear.models.sdof import SDOFGearPair
+from nlgrd.nonlinear.results.metrics import TimeHistory, metrics_from_history
+from nlgrd.nonlinear.results.sweep_results import SweepResult, assemble_result
+from nlgrd.nonlinear.tracing.sweep import sweep_orders
 
 
 @dataclass(frozen=True)

@@ -19,12 +19,12 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from nlgrd.nonlinear.geared import GearedSweepResult
-from nlgrd.nonlinear.link_model import LinkModel
-from nlgrd.nonlinear.link_results import LinkSweepResult
-from nlgrd.nonlinear.metrics import METRIC_NAMES
-from nlgrd.nonlinear.response_kinds import uncertainty_column
-from nlgrd.nonlinear.results import SweepResult
+from nlgrd.nonlinear.models.geared import GearedSweepResult
+from nlgrd.nonlinear.models.link_model import LinkModel
+from nlgrd.nonlinear.results.link_results import LinkSweepResult
+from nlgrd.nonlinear.results.metrics import METRIC_NAMES
+from nlgrd.nonlinear.results.response_kinds import uncertainty_column
+from nlgrd.nonlinear.results.sweep_results import SweepResult
 from nlgrd.timedomain.time_answer import TimeAnswer, time_answer
 
 __all__ = ["answer_gaps", "base_harmonics", "with_time_answers"]
@@ -63,7 +63,7 @@ def answer_gaps(
     ----------
     model : LinkModel
         The sweep's model as a link model (one mesh too:
-        :func:`nlgrd.nonlinear.link_model.build_link_model`).
+        :func:`nlgrd.nonlinear.models.link_model.build_link_model`).
     result : SweepResult
         The sweep (its harmonics of ω/``base`` on the link coordinates of ``model``).
     progress : callable, optional

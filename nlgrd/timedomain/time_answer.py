@@ -52,9 +52,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.harmonics import analyse
-from nlgrd.nonlinear.link_model import LinkModel
-from nlgrd.nonlinear.response_kinds import CHAOTIC, TIME_DOMAIN
+from nlgrd.nonlinear.fourier.harmonics import analyse
+from nlgrd.nonlinear.models.link_model import LinkModel
+from nlgrd.nonlinear.results.response_kinds import CHAOTIC, TIME_DOMAIN
 from nlgrd.rotor.rigid_body import rigid_body_modes
 from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.links import LinkIntegrator, start_from_harmonics
@@ -92,14 +92,14 @@ class TimeAnswer:
     omega : float
         Base frequency [rad/s].
     kind : str
-        "chaotic" or "time domain" (:mod:`nlgrd.nonlinear.response_kinds`).
+        "chaotic" or "time domain" (:mod:`nlgrd.nonlinear.results.response_kinds`).
     links : dict of str to Estimate
         ``<link>.<quantity>`` with the units of the links' own outputs (the columns of a
         link sweep): a mesh's ``dte_rms [m]``, ``force_max [N]``, ``dslr [-]``,
         ``contact_loss_fraction [-]``, ``back_contact``; a clearance's
         ``contact_fraction [-]``, ``force_max [N]``, ``displacement_max [m]``.
     mesh : dict of str to Estimate
-        The first mesh's :data:`~nlgrd.nonlinear.metrics.METRIC_NAMES` (SI; empty without a mesh).
+        The first mesh's :data:`~nlgrd.nonlinear.results.metrics.METRIC_NAMES` (SI; empty without a mesh).
     lyapunov : Estimate
         Largest Lyapunov exponent [1/s].
     transient : int
@@ -431,7 +431,7 @@ def time_answer(
     Parameters
     ----------
     model : LinkModel
-        The model (a single mesh too: :func:`nlgrd.nonlinear.link_model.build_link_model`).
+        The model (a single mesh too: :func:`nlgrd.nonlinear.models.link_model.build_link_model`).
     omega : float
         Base frequency [rad/s].
     harmonics : ndarray (d, 2H'+1), optional

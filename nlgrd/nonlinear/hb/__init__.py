@@ -1,0 +1,1 @@
+"""The harmonic-balance problem (residual, Jacobian), its solvers, and torus (quasi-periodic) HB."""

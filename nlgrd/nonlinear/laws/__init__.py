@@ -1,0 +1,1 @@
+"""The nonlinear force laws: backlash and clearance laws, describing functions, the mesh law."""

@@ -1,0 +1,1 @@
+"""The model builders: the geared FE model, the link model, the single-DOF model, shaft orders."""

@@ -1,0 +1,1 @@
+"""The reduction onto the nonlinear coordinates: receptances and the linear state space."""

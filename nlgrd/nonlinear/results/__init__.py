@@ -1,0 +1,1 @@
+"""What an analysis returns: sweep results, per-point metrics, response kinds, jumps, loads."""

@@ -1,0 +1,284 @@
+"""Bearing displacements and forces of a geared sweep, recovered from the solved mesh
+harmonics (:func:`bearing_response`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from nlgrd.nonlinear.fourier.harmonics import complex_to_real, real_to_complex
+from nlgrd.nonlinear.results.sweep_results import SweepResult
+
+RECOVERY_RTOL = 1e-12
+
+#: Each linear bearing's outputs on a link model (:func:`link_bearing_outputs`), radial
+#: magnitudes as :class:`BearingResponse`'s.
+BEARING_OUTPUTS = (
+    "displacement_max [m]",
+    "displacement_rms [m]",
+    "force_mean [N]",
+    "force_rms [N]",
+    "force_max [N]",
+)
+
+
+@dataclass(frozen=True)
+class BearingResponse:
+    """Bearing displacements and forces per sweep point, arrays (n_points, n_bearings).
+
+    Displacement and force are radial magnitudes |(y, z)| over one period:
+    ``*_mean`` of the static part, ``*_rms`` of the alternating part, ``*_max`` overall;
+    ``force_amplitude`` is the amplitude of the first mesh harmonic (largest axis).
+    NaN at points that did not converge or have no stable response.
+
+    Attributes
+    ----------
+    displacement_mean, displacement_rms, displacement_max : ndarray
+        Radial displacement of each bearing node, (n_points, n_bearings) [m].
+    force_mean, force_rms, force_max : ndarray
+        Radial bearing force, (n_points, n_bearings) [N].
+    force_amplitude : ndarray
+        Amplitude of the first mesh harmonic of the bearing force, largest of y and z,
+        (n_points, n_bearings) [N].
+    """
+
+    displacement_mean: NDArray
+    displacement_rms: NDArray
+    displacement_max: NDArray
+    force_mean: NDArray
+    force_rms: NDArray
+    force_max: NDArray
+    force_amplitude: NDArray
+
+
+def _radial_maxima(X: NDArray) -> NDArray:
+    """Maximum over one period of |(x_y, x_z)| for complex harmonics X (n_points, H+1, 2 n_b).
+
+    Columns come in (y, z) pairs. The magnitude is sampled at 64 (H+1) points per period
+    and its maximum refined by a parabola through the largest sample and its two
+    neighbours (relative error below 1e-5 for H = 5; 2048 plain samples erred by up to
+    3e-5).
+    """
+    H = X.shape[1] - 1
+    n = 64 * (H + 1)
+    theta = 2 * np.pi * np.arange(n) / n
+    kt = np.outer(theta, np.arange(H + 1))  # (n, H+1)
+    x = np.cos(kt) @ X.real - np.sin(kt) @ X.imag  # Re Σ X_k e^{ikθ}: (p, n, m)
+    mag = np.hypot(x[..., 0::2], x[..., 1::2])  # (p, n, nb)
+    j = np.argmax(mag, axis=1)[:, None, :]
+    y0 = np.take_along_axis(mag, (j - 1) % n, axis=1)[:, 0]
+    y1 = np.take_along_axis(mag, j, axis=1)[:, 0]
+    y2 = np.take_along_axis(mag, (j + 1) % n, axis=1)[:, 0]
+    den = y0 - 2 * y1 + y2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        peak = np.where(den < 0, y1 - (y2 - y0) ** 2 / (8 * den), y1)
+    return np.maximum(peak, y1)
+
+
+def _radial_rms(X: NDArray) -> NDArray:
+    """RMS over a period of the alternating part of |(x_y, x_z)| from complex harmonics
+    X (..., H+1, 2 n_b): sqrt(Σ_k≥1 (|X_y,k|² + |X_z,k|²) / 2)."""
+    return np.sqrt(np.sum(np.abs(X[..., 1:, 0::2]) ** 2 + np.abs(X[..., 1:, 1::2]) ** 2, axis=-2) / 2)
+
+
+def bearing_harmonics(model, omega: float, harmonics: NDArray) -> tuple[NDArray, NDArray]:
+    """Complex harmonics of every bearing's displacement and force at one solved point.
+
+    At a converged point the mesh force harmonics are G_k = F_k - κ_k Y_k (the balance the
+    solver met, to its tolerance), so recovery needs only the receptances the sweep
+    already computed: Q_k = U_k (F_k - G_k), Q_0 from the mean terms.
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.geared.GearedModel
+        The model solved.
+    omega : float
+        The frequency the model's receptances take: the mesh frequency, or the base ω/ν of
+        a period-ν model [rad/s].
+    harmonics : ndarray (2H+1,) or (1, 2H+1)
+        Real harmonics of δ on that base [m].
+
+    Returns
+    -------
+    Q : ndarray (H+1, 2 n_bearings), complex
+        Harmonics k = 0..H of each bearing node's (y, z) displacement [m].
+    F : ndarray (H+1, 2 n_bearings), complex
+        Harmonics of the (y, z) force of each bearing on its node [N].
+    """
+    system, mr = model.system, model.receptance
+    z = np.asarray(harmonics, dtype=float).reshape(-1)
+    H = (z.size - 1) // 2
+    w = float(omega)
+    Y = real_to_complex(z)[:, None]
+    F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
+    kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, -1)
+    Q = mr.recover(w, Y, F - kap * Y, F)
+    return Q, bearing_forces(system, Q, w, mr.speed(w))
+
+
+def bearing_forces(system, Q: NDArray, omega: float, speed: float) -> NDArray:
+    """Harmonics of the (y, z) force of each bearing on its node from its node's
+    displacement harmonics: -(K_b + i k ω C_b) q_k at the bearing's own shaft speed.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model (its bearings, in order).
+    Q : ndarray (H+1, 2 n_bearings), complex
+        Harmonics of each bearing node's (y, z) displacement [m], on the base ``omega``.
+    omega : float
+        The base frequency of the harmonics [rad/s].
+    speed : float
+        The reference shaft's speed [rad/s] (speed-dependent bearings).
+
+    Returns
+    -------
+    ndarray (H+1, 2 n_bearings), complex
+        [N].
+    """
+    k = np.arange(Q.shape[0])
+    Fb = np.empty_like(Q)
+    for j, b in enumerate(system.bearings):
+        s = system.shafts[b.shaft].speed_ratio * speed
+        q = Q[:, 2 * j : 2 * j + 2]
+        Fb[:, 2 * j : 2 * j + 2] = -(q @ b.stiffness(s).T + (1j * k * omega)[:, None] * (q @ b.damping(s).T))
+    return Fb
+
+
+def bearing_node_dofs(system) -> NDArray:
+    """The (u_y, u_z) DOFs of each bearing's node, bearing by bearing.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+
+    Returns
+    -------
+    ndarray of int (2 n_bearings,)
+    """
+    dofs = []
+    for b in system.bearings:
+        d = system.dofs.node_dofs(b.shaft, b.node)
+        dofs += [d[1], d[2]]
+    return np.array(dofs, dtype=int)
+
+
+def bearing_names(system) -> list[str]:
+    """One name per bearing: its own, or its shaft and node.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+
+    Returns
+    -------
+    list of str
+    """
+    return [b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(system.bearings)]
+
+
+def link_bearing_outputs(model, harmonics: NDArray, omega: float) -> dict[str, float]:
+    """Every linear bearing's outputs at one solved point of a link model, named
+    ``<bearing>.<quantity> [unit]`` like a link's: the bearing nodes' displacements
+    recovered from the link coordinates and their forces G = F - κ Y (the balance the
+    solver met; :meth:`~nlgrd.nonlinear.reduction.link_reduction.LinkReceptance.recover`), then
+    -(K_b + i k ω C_b) q_k.
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model solved (a period-ν model for a period-ν point).
+    harmonics : ndarray (n_coords, 2H+1)
+        Real harmonics of the link coordinates on the model's base [m].
+    omega : float
+        The frequency the model's receptances take [rad/s].
+
+    Returns
+    -------
+    dict
+        ``<bearing>.displacement_max [m]``, ``.displacement_rms [m]``, ``.force_mean [N]``,
+        ``.force_rms [N]``, ``.force_max [N]`` per bearing (radial magnitudes, as
+        :class:`BearingResponse`).
+    """
+    system, rec = model.system, model.receptance
+    if not system.bearings:
+        return {}
+    z = np.asarray(harmonics, dtype=float).reshape(rec.n_coords, -1)
+    H = (z.shape[1] - 1) // 2
+    w = float(omega)
+    Y = real_to_complex(z).T  # (H+1, d)
+    F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
+    kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, Y.shape[1], Y.shape[1])
+    G = F - np.einsum("kij,kj->ki", kap, Y)
+    q = rec.recover(w, H, z, complex_to_real(G.T), bearing_node_dofs(system))
+    Q = real_to_complex(q).T  # (H+1, 2 n_b)
+    Fb = bearing_forces(system, Q, w, rec.plan.speed(w))
+    stats = dict(
+        zip(
+            BEARING_OUTPUTS,
+            (
+                _radial_maxima(Q[None])[0],
+                _radial_rms(Q),
+                np.hypot(Fb[0, 0::2].real, Fb[0, 1::2].real),
+                _radial_rms(Fb),
+                _radial_maxima(Fb[None])[0],
+            ),
+            strict=True,
+        )
+    )
+    return {
+        f"{name}.{q}": float(v[j]) for j, name in enumerate(bearing_names(system)) for q, v in stats.items()
+    }
+
+
+def bearing_response(model, result: SweepResult) -> BearingResponse:
+    """Recover bearing displacements and forces for every converged point of ``result``
+    (:func:`bearing_harmonics` per point, the maxima of all points at once).
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.geared.GearedModel
+        The model the sweep was solved on.
+    result : SweepResult
+        The mesh solutions (harmonics of δ per point), at the frequencies the model's
+        receptances take (the base ω/ν of a period-ν model).
+
+    Returns
+    -------
+    BearingResponse
+        Per point and bearing; NaN at points that did not converge or have no stable
+        response.
+    """
+    system, mr = model.system, model.receptance
+    nb = len(system.bearings)
+    n = len(result.omega)
+    out = {k: np.full((n, nb), np.nan) for k in BearingResponse.__dataclass_fields__}
+    pts = [i for i in range(n) if result.converged[i] and not result.no_stable[i]]
+    if not pts:
+        return BearingResponse(**out)
+    H = (result.harmonics[pts[0]].size - 1) // 2
+    Qs = np.empty((len(pts), H + 1, 2 * nb), dtype=complex)
+    Fs = np.empty_like(Qs)
+    for row, i in enumerate(pts):
+        Qs[row], Fs[row] = bearing_harmonics(model, float(result.omega[i]), result.harmonics[i])
+    rows = np.array(pts)
+    out["displacement_mean"][rows] = np.hypot(Qs[:, 0, 0::2].real, Qs[:, 0, 1::2].real)
+    out["displacement_rms"][rows] = _radial_rms(Qs)
+    out["force_mean"][rows] = np.hypot(Fs[:, 0, 0::2].real, Fs[:, 0, 1::2].real)
+    out["force_rms"][rows] = _radial_rms(Fs)
+    m = mr.period  # the mesh harmonic on the base of a period-ν model
+    amp = np.maximum(np.abs(Fs[:, m, 0::2]), np.abs(Fs[:, m, 1::2])) if H >= m else 0.0
+    out["force_amplitude"][rows] = amp
+    for a in range(0, len(pts), 200):
+        sl = slice(a, a + 200)
+        out["displacement_max"][rows[sl]] = _radial_maxima(Qs[sl])
+        out["force_max"][rows[sl]] = _radial_maxima(Fs[sl])
+    # A bearing the mesh does not load (a stub shaft coupled in torsion only) gets
+    # rounding, 1e-60 and below, which differs from machine to machine: written as 0.
+    for v in out.values():
+        v[np.abs(v) <= RECOVERY_RTOL * np.nanmax(np.abs(v))] = 0.0
+    return BearingResponse(**out)

@@ -1,0 +1,233 @@
+"""The tables of link-model analyses: every link's outputs ``<link>.<quantity>`` per point
+of a sweep (:class:`LinkSweepResult`) or a continuation curve (:class:`LinkContinuationResult`),
+beside the points' own columns.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from nlgrd.errors import ModelError
+from nlgrd.nonlinear.results.bearing_loads import BEARING_OUTPUTS, bearing_names, link_bearing_outputs
+from nlgrd.nonlinear.results.sweep_results import ContinuationResult, SweepResult
+
+__all__ = [
+    "LinkContinuationResult",
+    "LinkSweepResult",
+    "bearing_columns",
+    "link_rows",
+    "metric_names",
+    "output_names",
+    "point_outputs",
+    "with_links",
+]
+
+
+def with_links(frame: pd.DataFrame, links: pd.DataFrame) -> pd.DataFrame:
+    """A sweep's or curve's table with the link columns in place of the first mesh's
+    metrics, its frequency column named ``base_frequency [Hz]``.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        :meth:`SweepResult.to_frame` of the points.
+    links : pandas.DataFrame
+        One row per point: ``<link>.<quantity>`` columns.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    drop = [c for c in frame.columns if c.startswith(("dte_", "force_", "dslr", "contact_loss", "back_"))]
+    frame = frame.drop(columns=drop).rename(columns={"mesh_frequency [Hz]": "base_frequency [Hz]"})
+    return pd.concat([frame, links], axis=1)
+
+
+@dataclass(frozen=True)
+class LinkSweepResult:
+    """A sweep of a link model: the harmonic-balance points and every link's outputs.
+
+    Attributes
+    ----------
+    result : SweepResult
+        The points (harmonics of all link coordinates, convergence, stability).
+    links : pandas.DataFrame
+        One row per point: ``<link>.<quantity>`` columns, over the point's whole period
+        (2T for a period-2 point), then every linear bearing's ``<bearing>.<quantity>``;
+        NaN where the point did not converge or has no stable periodic response.
+    bearings : tuple of str
+        Which of those columns are the linear bearings' (recovered, not a link's own).
+    """
+
+    result: SweepResult
+    links: pd.DataFrame
+    bearings: tuple = ()
+
+    def to_frame(self) -> pd.DataFrame:
+        """The sweep's table (frequency column ``base_frequency [Hz]``) with the link columns.
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        return with_links(self.result.to_frame(), self.links)
+
+    def jumps(self, quantities: str | Sequence[str] | None = None, rtol: float = 0.1, ratio: float = 3.0):
+        """Jumps of each sweep direction in the links' outputs (:meth:`SweepResult.jumps`
+        on the columns of :attr:`links`).
+
+        Parameters
+        ----------
+        quantities : str or sequence of str, optional
+            ``<link>.<quantity>`` columns; default every link's (the linear bearings follow
+            them: a bearing whose force changes smoothly by a third is no jump).
+        rtol, ratio : float
+            As :func:`nlgrd.nonlinear.results.jumps.find_jumps` [-].
+
+        Returns
+        -------
+        list of Jump
+        """
+        if quantities is None:
+            quantities = [c for c in self.links.columns if c not in self.bearings]
+        qs = [quantities] if isinstance(quantities, str) else list(quantities)
+        for q in qs:
+            if q not in self.links.columns:
+                raise ModelError(
+                    "quantities", f"no link output {q!r}; the columns are {list(self.links.columns)}"
+                )
+        return self.result.jumps_of({q: self.links[q].to_numpy() for q in qs}, rtol, ratio)
+
+
+def metric_names(link) -> list[str]:
+    """The names (with units) of a link's per-point outputs, in its ``metrics`` order.
+
+    Parameters
+    ----------
+    link : NonlinearLink
+        The link.
+
+    Returns
+    -------
+    list of str
+    """
+    return list(link.metrics(np.zeros((link.n_coords, 3)), 1.0))
+
+
+def output_names(model) -> list[str]:
+    """The ``<name>.<quantity> [unit]`` columns of a link model's points: every link's,
+    then every linear bearing's (:data:`BEARING_OUTPUTS`).
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model.
+
+    Returns
+    -------
+    list of str
+    """
+    return [f"{lk.name}.{k}" for lk in model.links for k in metric_names(lk)] + list(bearing_columns(model))
+
+
+def bearing_columns(model) -> tuple[str, ...]:
+    """The linear bearings' columns among :func:`output_names`.
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model.
+
+    Returns
+    -------
+    tuple of str
+    """
+    return tuple(f"{b}.{q}" for b in bearing_names(model.system) for q in BEARING_OUTPUTS)
+
+
+def point_outputs(model, harmonics: NDArray, omega: float) -> dict[str, float]:
+    """Every link's outputs (its ``metrics``) and every linear bearing's (force and
+    displacement recovered from the link coordinates:
+    :func:`~nlgrd.nonlinear.results.bearing_loads.link_bearing_outputs`) at one solved point.
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model solved (the period-ν model of a period-ν point).
+    harmonics : ndarray (n_coords, 2H+1)
+        Real harmonics of the link coordinates on the model's base [m].
+    omega : float
+        The frequency the model's receptances take [rad/s].
+
+    Returns
+    -------
+    dict
+        In the order of :func:`output_names`.
+    """
+    z = np.asarray(harmonics, dtype=float)
+    row = {}
+    for link, sl in zip(model.links, model.receptance.slices, strict=True):
+        row.update({f"{link.name}.{k}": v for k, v in link.metrics(z[sl], float(omega)).items()})
+    row.update(link_bearing_outputs(model, z, float(omega)))
+    return row
+
+
+def link_rows(model, res: SweepResult, usable: NDArray) -> pd.DataFrame:
+    """Every link's outputs at the period-1 points of ``res`` (NaN where not ``usable``).
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model whose links and slices of the coordinates are used.
+    res : SweepResult
+        The points (harmonics of all link coordinates on the model's base).
+    usable : ndarray of bool
+        Per point: whether it has outputs.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per point, ``<link>.<quantity>`` columns.
+    """
+    blank = dict.fromkeys(output_names(model), np.nan)
+    rows = [
+        point_outputs(model, res.harmonics[i], float(res.omega[i])) if usable[i] else blank
+        for i in range(len(res))
+    ]
+    return pd.DataFrame(rows, columns=list(blank))
+
+
+@dataclass(frozen=True)
+class LinkContinuationResult:
+    """A continuation curve of a link model with every link's outputs along it.
+
+    Attributes
+    ----------
+    curve : ContinuationResult
+        The curve (stable and unstable parts, turning points).
+    links : pandas.DataFrame
+        One row per curve point: ``<link>.<quantity>`` columns, for stable and unstable
+        points alike (the curve's ``stable`` column tells which).
+    """
+
+    curve: ContinuationResult
+    links: pd.DataFrame
+
+    @property
+    def omega(self) -> NDArray:
+        """Base frequencies along the curve [rad/s]."""
+        return self.curve.omega
+
+    def to_frame(self) -> pd.DataFrame:
+        """The curve's table (frequency column ``base_frequency [Hz]``) with the link columns.
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        return with_links(self.curve.to_frame(), self.links)

@@ -1,0 +1,1 @@
+"""Stability of orbits: Floquet monodromy, Hill's method, Floquet modes, shooting, verdicts."""

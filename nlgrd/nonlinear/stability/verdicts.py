@@ -1,0 +1,292 @@
+"""Stability verdicts reported only when converged (issue 35 item 1).
+
+The Floquet multipliers of a harmonic-balance orbit take the contact times from its
+truncated Fourier series. With a stiff contact these are off by far more than the orbit's
+amplitudes: on the two-DOF chain with a stop of 100 x its stiffness the orbit at H = 17 is
+within a few per cent, but its largest multiplier is -2.24 where the exact orbit is stable
+with |μ| = 0.86. The error estimate of the outputs (:mod:`nlgrd.nonlinear.tracing.harmonic_convergence`)
+does not see this, so each verdict is checked on its own (:func:`converge_verdicts`):
+
+1. Every point with multipliers is also evaluated at H', the harmonics its error was
+   estimated against (the check's re-solved orbit): the verdict (stable or not) and the
+   largest modulus max |μ| must agree to :data:`MULTIPLIER_RTOL`.
+2. Where the model's exact flow is known (:func:`nlgrd.nonlinear.stability.shooting.shootable`:
+   piecewise-linear laws of constant stiffness and the static force given), a point whose
+   verdict is doubtful (max |μ| within a factor :data:`DOUBT_BAND` of 1, or step 1 did not
+   agree) is polished by shooting (:func:`~nlgrd.nonlinear.stability.shooting.polish`); when the exact
+   orbit is the harmonic-balance orbit (the nonlinear coordinates within
+   :data:`ORBIT_RTOL` of their range over the period) its multipliers, from the exact
+   monodromy, are the verdict (exact up to the contact times' 1e-13 T; Leine & Nijmeijer
+   2004, Dynamics and Bifurcations of Non-Smooth Mechanical Systems, §3.5 for the monodromy
+   of a continuous piecewise-linear flow).
+3. Elsewhere (smooth laws, or no exact flow) a point whose verdict disagrees between H and
+   H' is solved at the next rungs above H' (up to :data:`EXTRA_RUNGS` of them, within what
+   the model was built for) until two successive rungs agree as in step 1; the higher
+   rung's multipliers are then the verdict.
+
+A point whose verdict did not converge keeps its orbit but has ``verdict_converged``
+False: the ``verdict`` column says "not converged", and neither ``stable`` nor the
+response's values are written.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from nlgrd.errors import ModelError
+from nlgrd.nonlinear.fourier.harmonics import evaluate
+from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.hb.solvers import solve
+from nlgrd.nonlinear.results.metrics import METRIC_NAMES
+from nlgrd.nonlinear.results.sweep_results import STABLE_RTOL, SweepResult, dominant_multiplier
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.stability.shooting import orbit_harmonics, polish, shootable
+
+#: A verdict whose largest multiplier modulus lies within this factor of 1 is polished by
+#: shooting where the exact flow is known (the H = 17 chain: -2.24 where exact 0.86).
+DOUBT_BAND = 10.0
+#: Two harmonic counts agree on a verdict when their max |μ| differ by at most this
+#: fraction (and both are on the same side of 1 + STABLE_RTOL).
+MULTIPLIER_RTOL = 1e-2
+#: A shot orbit is the harmonic-balance orbit when its nonlinear coordinates differ from the
+#: orbit's by at most this fraction of their peak-to-peak range over the period.
+ORBIT_RTOL = 0.05
+#: Rungs above H' tried for a verdict that disagrees (no exact flow).
+EXTRA_RUNGS = 3
+
+
+def _floquet(model: ReducedModel, z: NDArray, w: float) -> tuple[float, complex]:
+    ss = model.linear_state_space(w)
+    return dominant_multiplier(floquet_multipliers(ss, model.nonlinearities, z, w))
+
+
+def agree(a: float, b: float) -> bool:
+    """Whether two largest multiplier moduli give the same converged verdict.
+
+    Parameters
+    ----------
+    a, b : float
+        max |μ| at two harmonic counts [-].
+
+    Returns
+    -------
+    bool
+        The same side of 1 + STABLE_RTOL and within :data:`MULTIPLIER_RTOL` of each other.
+    """
+    same = (a < 1 + STABLE_RTOL) == (b < 1 + STABLE_RTOL)
+    return bool(same and abs(a - b) <= MULTIPLIER_RTOL * max(abs(a), abs(b)))
+
+
+def same_orbit(shot: NDArray, harmonics: NDArray) -> bool:
+    """Whether a shot orbit's harmonics are those of the harmonic-balance orbit.
+
+    Parameters
+    ----------
+    shot, harmonics : ndarray (n_nl, 2H+1)
+        Real harmonics of the nonlinear coordinates of the two orbits [m].
+
+    Returns
+    -------
+    bool
+        max |y_shot - y_HB| <= :data:`ORBIT_RTOL` x the peak-to-peak of y_shot, per coordinate.
+    """
+    theta = np.linspace(0, 2 * np.pi, 512, endpoint=False)
+    a = np.array([evaluate(row, theta) for row in np.atleast_2d(shot)])
+    b = np.array([evaluate(row, theta) for row in np.atleast_2d(harmonics)])
+    span = np.ptp(a, axis=-1) + 1e-300
+    return bool(np.all(np.max(np.abs(a - b), axis=-1) <= ORBIT_RTOL * span))
+
+
+def _pad(z: NDArray, H: int) -> NDArray:
+    z = np.atleast_2d(z)
+    out = np.zeros((z.shape[0], 2 * H + 1))
+    m = min(z.shape[1], out.shape[1])
+    out[:, :m] = z[:, :m]
+    return out
+
+
+def _escalate(model, w, z_check, mu_check, rungs, tol):
+    """max |μ| and dominant μ from the first two successive rungs above H' that agree, or None."""
+    zc, prev = z_check, mu_check
+    for H in rungs[:EXTRA_RUNGS]:
+        try:
+            sol = solve(model.at(w, H), _pad(zc, H), method="newton", tol=tol, fallback=False)
+        except ModelError:  # beyond what the model was built for
+            return None
+        if not sol.converged:
+            return None
+        zc = sol.harmonics
+        cur = _floquet(model, zc, w)
+        if agree(prev[0], cur[0]):
+            return cur
+        prev = cur
+    return None
+
+
+def converge_verdicts(
+    model: ReducedModel,
+    result: SweepResult,
+    solutions: dict,
+    *,
+    ladder: Sequence[int] = (),
+    tol: float = 1e-10,
+    polished: dict | None = None,
+) -> SweepResult:
+    """``result`` with every verdict checked (module docstring) and ``verdict_converged`` set.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model the result was solved on (its base frequency is ``result.omega``).
+    result : SweepResult
+        A sweep with stability.
+    solutions : dict
+        {row: HarmonicSolution at H' or None}: the check's re-solved points
+        (:attr:`~nlgrd.nonlinear.tracing.harmonic_convergence.HarmonicCheck.solutions`).
+    ladder : sequence of int
+        Harmonic counts (of the model's base) for step 3: those above H' are tried.
+    tol : float
+        Newton's tolerance at the higher rungs (relative residual).
+    polished : dict, optional
+        {ω: [(harmonics of an exact orbit, max |μ|, dominant μ)]}, filled and reused: the
+        exact orbit does not depend on H, so a sweep's rungs shoot each orbit once.
+
+    Returns
+    -------
+    SweepResult
+        ``floquet_max``, ``dominant_multiplier``, ``stable`` and ``no_stable`` of the
+        converged verdicts; ``verdict_converged`` False where none converged.
+    """
+    n = len(result)
+    fmax = np.array(result.floquet_max, dtype=float)
+    dom = np.array(result.dominant_multiplier, dtype=complex)
+    ok = np.ones(n, dtype=bool)
+    known = result.converged & result.stability_known
+    exact = shootable(model)
+    for i in np.nonzero(known)[0]:
+        w, z = float(result.omega[i]), result.harmonics[i]
+        sol = solutions.get(i)
+        fine = None if sol is None else _floquet(model, sol.harmonics, w)
+        agreed = fine is not None and agree(fmax[i], fine[0])
+        doubtful = not agreed or 1 / DOUBT_BAND < fmax[i] < DOUBT_BAND
+        if exact and doubtful:
+            found = _exact(model, z, w, {} if polished is None else polished)
+            if found is None:
+                ok[i] = False
+            else:
+                fmax[i], dom[i] = found
+            continue
+        if agreed:
+            fmax[i], dom[i] = fine
+            continue
+        rungs = [h for h in ladder if sol is not None and h > _H(sol)]
+        top = None if fine is None else _escalate(model, w, sol.harmonics, fine, rungs, tol)
+        if top is None:
+            ok[i] = False
+        else:
+            fmax[i], dom[i] = top
+    with np.errstate(invalid="ignore"):
+        stable = result.converged & np.isfinite(fmax) & (fmax < 1 + STABLE_RTOL)
+    changed = known & ok & (stable != result.stable)  # the sweep's verdict was wrong
+    no_stable = np.where(changed, ~stable, result.no_stable)
+    out = replace(result, floquet_max=fmax, dominant_multiplier=dom, stable=stable & ok, verdict_converged=ok)
+    return _refresh_metrics(model, out, no_stable)
+
+
+#: Harmonics kept of a shot orbit for the comparison with later rungs' orbits.
+KEPT_HARMONICS = 64
+
+
+def _exact(model, z, w, polished) -> tuple[float, complex] | None:
+    """(max |μ|, dominant μ) of the exact orbit that is the HB orbit ``z``, or None."""
+    for y, fm, mu in polished.get(w, ()):
+        if same_orbit(y, z):
+            return fm, mu
+    orbit = polish(model, z, w)
+    if orbit is None:
+        return None
+    y = orbit_harmonics(model, orbit, w, KEPT_HARMONICS)
+    if not same_orbit(y, z):
+        return None
+    fm, mu = dominant_multiplier(orbit.multipliers)
+    polished.setdefault(w, []).append((y, fm, mu))
+    return fm, mu
+
+
+def _H(sol) -> int:
+    return (np.asarray(sol.harmonics).shape[-1] - 1) // 2
+
+
+def _refresh_metrics(model: ReducedModel, result: SweepResult, no_stable: NDArray) -> SweepResult:
+    """Metrics of the points that became a stable response (the sweep left them NaN)."""
+    gained = np.nonzero(result.no_stable & ~no_stable & result.converged)[0]
+    metrics = {k: np.array(v, copy=True) for k, v in result.metrics.items()}
+    amps = np.array(result.amplitudes, dtype=float, copy=True)
+    for i in gained:
+        met = model.metrics.of(result.harmonics[i], float(result.omega[i]))
+        for name, value in zip(METRIC_NAMES, met.as_tuple(), strict=True):
+            metrics[name][i] = value
+        amps[i] = np.resize(met.dte_amplitudes, amps.shape[1])
+    return replace(result, no_stable=no_stable, metrics=metrics, amplitudes=amps)
+
+
+def locate_bifurcations(model: ReducedModel, result: SweepResult, *, rtol: float = 1e-6) -> list[tuple]:
+    """Where the converged verdict changes between two consecutive points of a sweep on a
+    :func:`~nlgrd.nonlinear.stability.shooting.shootable` model, the frequency at which max |μ| of the
+    exact orbit crosses 1 + STABLE_RTOL, by bisection (each orbit shot from the
+    harmonic-balance orbit of the stable side's point).
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model of the sweep (period 1: its base frequency is ``result.omega``).
+    result : SweepResult
+        A sweep with converged verdicts (:func:`converge_verdicts`).
+    rtol : float
+        Relative width of the final bracket [-].
+
+    Returns
+    -------
+    list of (str, str, float)
+        (direction, kind, ω [rad/s]): kind "Neimark-Sacker", "period doubling" or "fold"
+        from the dominant multiplier on the unstable side; empty when the model is not
+        shootable.
+    """
+    if not shootable(model):
+        return []
+    out = []
+    ok = result.converged & result.stability_known & result.verdict_converged
+    for d in dict.fromkeys(result.direction.tolist()):
+        idx = np.nonzero((result.direction == d) & ok)[0]
+        for i, j in zip(idx[:-1], idx[1:], strict=True):
+            if result.stable[i] == result.stable[j]:
+                continue
+            s, u = (i, j) if result.stable[i] else (j, i)
+            mu = complex(result.dominant_multiplier[u])
+            kind = (
+                "Neimark-Sacker"
+                if abs(mu.imag) > 1e-6 * abs(mu)
+                else ("period doubling" if mu.real < 0 else "fold")
+            )
+            w = _bisect(model, result.harmonics[s], float(result.omega[s]), float(result.omega[u]), rtol)
+            if w is not None:
+                out.append((d, kind, w))
+    return out
+
+
+def _bisect(model, z, w_stable, w_unstable, rtol):
+    a, b = w_stable, w_unstable
+    while abs(b - a) > rtol * abs(a):
+        mid = 0.5 * (a + b)
+        orbit = polish(model, z, mid)
+        if orbit is None:
+            return None
+        if np.max(np.abs(orbit.multipliers)) < 1 + STABLE_RTOL:
+            a = mid
+        else:
+            b = mid
+    return 0.5 * (a + b)

@@ -1,0 +1,1 @@
+"""Orbits over frequency: sweeps, landings, continuation, the choice of H and period, orbit search."""

@@ -1,0 +1,137 @@
+"""Pseudo-arc-length continuation of harmonic-balance solutions in the mesh frequency.
+
+Follows the solution curve {(z, ω): R(z, ω) = 0} through turning points (folds), so
+the unstable middle branch between the two stable branches of a jump is traced too
+(the stepper: :mod:`nlgrd.nonlinear.tracing.arclength`). Every point carries Floquet stability;
+turning points are where dω/ds changes sign, located by a parabola through the three
+points around the extremum of ω(s).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.hb.solvers import solve
+from nlgrd.nonlinear.results.sweep_results import ContinuationResult, assemble_result
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.tracing.arclength import CurvePoint, Tracer
+from nlgrd.threads import single_blas_thread
+
+
+def _turning(omega: NDArray, s: NDArray, tangents_w: NDArray) -> tuple[NDArray, NDArray]:
+    """Indices where dω/ds changes sign and the parabolic estimate of ω at the extremum."""
+    sign = np.sign(tangents_w)
+    idx = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
+    omegas = []
+    for i in idx:
+        seg = slice(max(i - 1, 0), min(i + 2, omega.size - 1) + 1)
+        ss, ww = s[seg], omega[seg]
+        est = float(omega[i] if abs(tangents_w[i]) < abs(tangents_w[i + 1]) else omega[i + 1])
+        if ss.size >= 3:
+            c = np.polyfit(ss - ss[0], ww, 2)
+            if c[0] != 0:
+                s_star = -c[1] / (2 * c[0])
+                if 0 <= s_star <= ss[-1] - ss[0]:
+                    est = float(np.polyval(c, s_star))
+        omegas.append(est)
+    return idx, np.asarray(omegas)
+
+
+@single_blas_thread
+def continuation(
+    model: ReducedModel,
+    omega_start: float,
+    omega_end: float,
+    H: int = 5,
+    z0: ArrayLike | None = None,
+    *,
+    ds: float = 0.01,
+    ds_min: float = 1e-7,
+    ds_max: float = 0.02,
+    max_steps: int = 2000,
+    tol: float = 1e-9,
+    stability: bool = True,
+    n_samples: int = 2048,
+) -> ContinuationResult:
+    """Trace the harmonic-balance solution curve from ``omega_start`` towards ``omega_end``.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The harmonic-balance model as a function of the mesh frequency.
+    omega_start, omega_end : float
+        Frequency range [rad/s]; the curve starts at ``omega_start`` (solved by Newton
+        from ``z0`` or the linear response) and stops when ω leaves the range.
+    H : int
+        Harmonics.
+    z0 : array_like, optional
+        Start of Newton at ``omega_start``: real harmonics [x0, a1, b1, ...] of the
+        nonlinear coordinates, shape (n_nl, 2H+1) or flat [m]; default the full-contact
+        linear response.
+    ds, ds_min, ds_max : float
+        Initial, minimum and maximum scaled arc-length step [-].
+    max_steps : int
+        Limit of continuation steps.
+    tol : float
+        Scaled residual tolerance of the corrector.
+    stability : bool
+        Floquet multipliers per point (needs ``model.state_space``).
+    n_samples : int
+        Samples per period for the force extremes of the metrics.
+
+    Returns
+    -------
+    ContinuationResult
+        The curve (one row per point, ``direction`` "curve"), its arc length and turning
+        points; ``complete`` tells whether it left the range past ``omega_end``.
+
+    Raises
+    ------
+    RuntimeError
+        No converged starting solution at ``omega_start``.
+    """
+    first = solve(model.at(omega_start, H), z0)
+    if not first.converged:
+        raise RuntimeError(f"no converged starting solution at omega = {omega_start}: {first.message}")
+    lo, hi = sorted((omega_start, omega_end))
+    span = hi - lo
+    tracer = Tracer(model, H, first.harmonics, omega_start, tol)
+    direction = 1 if omega_end >= omega_start else -1
+    pts: list[CurvePoint] = []
+    complete = False
+    for p in tracer.trace(first.harmonics, omega_start, direction, ds, ds_min, ds_max, max_steps):
+        pts.append(p)
+        if len(pts) > 1 and not (lo - 1e-9 * span <= p.omega <= hi + 1e-9 * span):
+            # left the range: complete only past omega_end (not back out at the start)
+            complete = (p.omega - omega_start) * direction > 0
+            break
+    n = model.at(omega_start, H).n_coords
+    zs = [p.z.reshape(n, -1) for p in pts]
+    ws = np.array([p.omega for p in pts])
+    fm, mets = [], []
+    for z, w in zip(zs, ws, strict=False):
+        f = np.nan
+        if stability and model.linear_state_space(w) is not None:
+            f = float(
+                np.max(np.abs(floquet_multipliers(model.linear_state_space(w), model.nonlinearities, z, w)))
+            )
+        fm.append(f)
+        mets.append(model.metrics.of(z, w, n_samples))
+    curve = assemble_result(
+        ws,
+        ["curve"] * len(pts),
+        zs,
+        [p.residual <= tol for p in pts],
+        [p.residual for p in pts],
+        [p.iterations for p in pts],
+        fm,
+        mets,
+        f"pseudo-arc-length continuation (H={H})",
+    )
+    U = np.array([np.append(p.z / tracer.Lz, p.omega / tracer.Lw) for p in pts])
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(U, axis=0), axis=1))])
+    tw = np.array([p.tangent[-1] for p in pts])
+    idx, tom = _turning(ws, s, tw)
+    return ContinuationResult(curve, s, idx, tom, complete)
