@@ -424,33 +424,22 @@ def link_period_response(model, omegas, at, nu: int, H: int | None, directions: 
         The response (None when no period-ν orbit was found), the orbits found and the
         followed branches.
     """
-    import dataclasses as dc
-
-    from nlgrd.cli_orbits import PERIOD_HARMONICS, merge_branches, on_followed_branch, search_and_follow
-    from nlgrd.nonlinear.tracing.harmonic_convergence import check_harmonics, next_harmonics
+    from nlgrd.cli_orbits import PERIOD_HARMONICS, period_response
     from nlgrd.nonlinear.tracing.orbit_search import N_STARTS
 
     H = H or PERIOD_HARMONICS
     view, top = LinkOrbits(model, column), float(np.max(omegas))
     where = ", ".join(f"{v:g}" for v in at) + f" {unit.name}"
     print(f"period {nu}: searching at {where} ({N_STARTS} starts each, H = {H})")
-    orbits, frames, followed = search_and_follow(
+    res, orbits, frames = period_response(
         view.model_of(H, top),
+        lambda H_check: view.model_of(H_check, top)(nu),
         omegas,
         at,
-        (nu,),
+        nu,
         H,
         unit,
-        on_followed_branch(nu),
-        "on a branch already followed",
+        directions,
         view,
-        every=True,
     )
-    if not followed:
-        return None, (orbits, frames)
-    res = merge_branches([b for _, b in followed], omegas, directions)
-    H_check = next_harmonics(H)
-    on_base = dc.replace(res, omega=res.omega / nu)  # the frequencies the period model takes
-    check = check_harmonics(view.model_of(H_check, top)(nu), on_base, nu * H_check, jumps=False)
-    res = dc.replace(res, harmonic_error=check.error, H_check=H_check)
-    return view.result(res), (orbits, frames)
+    return (None if res is None else view.result(res)), (orbits, frames)

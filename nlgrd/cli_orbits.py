@@ -389,10 +389,66 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
     """
     from nlgrd.nonlinear.models.geared import GearedSweepResult, build_geared_model
     from nlgrd.nonlinear.results.bearing_loads import bearing_names, bearing_response
+
+    def fine_of(H_check: int):
+        return model.cache.get(
+            ("period", nu, nu * H_check),
+            lambda: build_geared_model(
+                model.system,
+                model.max_mesh_frequency,
+                nu * H_check,
+                model.receptance.requested_method,
+                period=nu,
+            ),
+        ).reduced
+
+    res, orbits, frames = period_response(
+        lambda _: model.reduced, fine_of, omegas, at, nu, H, unit, directions, GearOrbits(model.pinion_rpm)
+    )
+    if res is None:
+        return None, orbits, frames
+    on_base = dc.replace(res, omega=res.omega / nu)  # the frequencies the model's receptances take
+    names = bearing_names(model.system)
+    out = GearedSweepResult(res, bearing_response(model, on_base), model.pinion_rpm(res.omega), names, H)
+    return out, orbits, frames
+
+
+def period_response(model_of, fine_of, omegas, at, nu: int, H: int, unit, directions: str, view):
+    """``--period N`` on any model: search at ``at`` for period-ν orbits, follow each new one
+    over the grid (unstable ones too), merge the branches into one response per grid point
+    and direction (:func:`merge_branches`) and estimate its harmonic error at the next rung.
+
+    Parameters
+    ----------
+    model_of : callable
+        ``model_of(nu)``: the period-ν reduced model at H.
+    fine_of : callable
+        ``fine_of(H')``: the period-ν reduced model serving ν H' harmonics of ω/ν.
+    omegas : ndarray
+        The grid's base frequencies [rad/s].
+    at : ndarray
+        Search speeds, in the unit of ``unit``.
+    nu : int
+        The period sought [base periods].
+    H : int
+        Harmonics of the base (ν H of ω/ν) [-].
+    unit : callable
+        Frequency [rad/s] to text in the range's unit; ``unit.omega`` the inverse.
+    directions : {"both", "up", "down"}
+        Sweep directions of the response.
+    view : GearOrbits or nlgrd.cli_link_sweep.LinkOrbits
+        Each orbit's and branch's columns.
+
+    Returns
+    -------
+    (SweepResult or None, DataFrame, DataFrame)
+        The response with its harmonic error (None when no period-ν orbit was found), the
+        orbits found and the followed branches.
+    """
     from nlgrd.nonlinear.tracing.harmonic_convergence import check_harmonics, next_harmonics
 
     orbits, frames, followed = search_and_follow(
-        lambda _: model.reduced,
+        model_of,
         omegas,
         at,
         (nu,),
@@ -400,7 +456,7 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
         unit,
         on_followed_branch(nu),
         "on a branch already followed",
-        GearOrbits(model.pinion_rpm),
+        view,
         every=True,
     )
     if not followed:
@@ -408,17 +464,8 @@ def period_search(model, omegas, at, nu: int, H: int, unit, directions: str):
     res = merge_branches([b for _, b in followed], omegas, directions)
     on_base = dc.replace(res, omega=res.omega / nu)  # the frequencies the model's receptances take
     H_check = next_harmonics(H)
-    fine = model.cache.get(
-        ("period", nu, nu * H_check),
-        lambda: build_geared_model(
-            model.system, model.max_mesh_frequency, nu * H_check, model.receptance.requested_method, period=nu
-        ),
-    )
-    check = check_harmonics(fine.reduced, on_base, nu * H_check, jumps=False)
-    res = dc.replace(res, harmonic_error=check.error, H_check=H_check)  # of ω, as H
-    names = bearing_names(model.system)
-    out = GearedSweepResult(res, bearing_response(model, on_base), model.pinion_rpm(res.omega), names, H)
-    return out, orbits, frames
+    check = check_harmonics(fine_of(H_check), on_base, nu * H_check, jumps=False)
+    return dc.replace(res, harmonic_error=check.error, H_check=H_check), orbits, frames  # of ω, as H
 
 
 def merge_branches(branches: list, omegas, directions: str = "both"):
