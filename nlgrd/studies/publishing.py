@@ -11,18 +11,50 @@ import signal
 import subprocess
 import sys
 import threading
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
 from nlgrd.studies.notebooks import (
     notebook_names,
 )
 
-if TYPE_CHECKING:  # pragma: no cover
-    from nlgrd.studies.reports import Build
-
 #: The parts of a report build.
 PARTS = ("models", "gears", "notebooks")
+
+
+@dataclass(frozen=True)
+class Build:
+    """One run: where it publishes (``out``), where it builds (``stage``), in which mode.
+
+    Attributes
+    ----------
+    out : pathlib.Path
+        The folder the run publishes to (``reports/``).
+    stage : pathlib.Path
+        The staging folder the run builds in (:func:`staging_dir`).
+    fast : bool
+        Fast mode: the notebooks' quick mode and fewer Campbell speeds.
+    notebooks : tuple of str or None
+        The notebooks to run (``--notebook``); None for all.
+    stream : file-like or None
+        Receives the notebooks' printed output; None for standard output.
+    parameters : Mapping of str to Any or None
+        Parameters passed to every notebook (``-p NAME VALUE``); None for none.
+    """
+
+    out: Path
+    stage: Path
+    fast: bool = False
+    notebooks: tuple[str, ...] | None = None
+    stream: Any = None
+    parameters: Mapping[str, Any] | None = None  # passed to every notebook (``-p NAME VALUE``)
+
+    @property
+    def mode(self) -> str:
+        """The run mode: "fast" or "full"."""
+        return "fast" if self.fast else "full"
 
 
 class ReportError(RuntimeError):

@@ -31,7 +31,6 @@ import threading
 import time
 import traceback
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -50,6 +49,7 @@ from nlgrd.studies.notebooks import (
 )
 from nlgrd.studies.publishing import (
     PARTS,
+    Build,
     ReportError,
     carry_over,
     clean_stale,
@@ -74,39 +74,6 @@ INTERRUPTED = 130
 # --------------------------------------------------------------------------------------
 # Parts
 # --------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Build:
-    """One run: where it publishes (``out``), where it builds (``stage``), in which mode.
-
-    Attributes
-    ----------
-    out : pathlib.Path
-        The folder the run publishes to (``reports/``).
-    stage : pathlib.Path
-        The staging folder the run builds in (:func:`staging_dir`).
-    fast : bool
-        Fast mode: the notebooks' quick mode and fewer Campbell speeds.
-    notebooks : tuple of str or None
-        The notebooks to run (``--notebook``); None for all.
-    stream : file-like or None
-        Receives the notebooks' printed output; None for standard output.
-    parameters : Mapping of str to Any or None
-        Parameters passed to every notebook (``-p NAME VALUE``); None for none.
-    """
-
-    out: Path
-    stage: Path
-    fast: bool = False
-    notebooks: tuple[str, ...] | None = None
-    stream: Any = None
-    parameters: Mapping[str, Any] | None = None  # passed to every notebook (``-p NAME VALUE``)
-
-    @property
-    def mode(self) -> str:
-        """The run mode: "fast" or "full"."""
-        return "fast" if self.fast else "full"
 
 
 def _captions(folder: Path, captions: Mapping[str, str]) -> None:
