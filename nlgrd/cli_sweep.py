@@ -18,7 +18,7 @@ from nlgrd.io.command_line import (
     pyplot,
     snap_to_grid,
 )
-from nlgrd.io.model_checks import check_speed_range
+from nlgrd.io.model_checks import check_harmonics_memory, check_speed_range
 
 
 class _Unit:
@@ -108,7 +108,10 @@ def cmd_sweep(args) -> int:
         _check_period_options(args, period)
         search = (search[0] if search is not None else default_search(values), (period,))
     system = load_model(args.model)
-    check_harmonics_memory(args.harmonics, system, args.model)
+    try:
+        check_harmonics_memory(system, args.harmonics, "--harmonics")
+    except ModelError as err:
+        raise err.within(file=str(args.model)) from None
     from nlgrd.cli_link_sweep import link_sweep_command, needs_links
 
     if search is not None and not needs_links(system) and system.gear_pairs[0].error_period > 1:
@@ -510,34 +513,3 @@ def _continuation(args, system, trace, unit, omegas, count, quantity, out, png) 
         file=sys.stderr,
     )
     return 1
-
-
-# ---------------------------------------------------------------------------- parser, main
-
-
-def check_harmonics_memory(H: int | None, system, path) -> None:
-    """Raise ModelError when ``--harmonics`` H exceeds what memory holds for the model
-    (:func:`nlgrd.nonlinear.tracing.harmonic_ladder.max_harmonics` of its DOFs and links).
-
-    Parameters
-    ----------
-    H : int or None
-        The ``--harmonics`` option (None: chosen, nothing to check).
-    system : RotorSystem
-        The model loaded.
-    path : str or Path
-        Its file, named in the message.
-    """
-    if H is None:
-        return
-    from nlgrd.nonlinear.tracing.harmonic_ladder import available_memory, max_harmonics
-
-    n_coords = max(1, len(system.gear_pairs) + 2 * len(getattr(system, "bearing_clearances", ())))
-    top = max_harmonics(system.dofs.n_dofs, n_coords)
-    if H > top:
-        raise ModelError(
-            "--harmonics",
-            f"{H} harmonics of a model with {system.dofs.n_dofs} DOFs and {n_coords} link coordinates "
-            f"need more memory than available ({available_memory() / 2**30:.1f} GiB); at most {top}",
-            path,
-        )

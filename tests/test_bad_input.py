@@ -459,6 +459,7 @@ STUDY_CASES = {
     "rpm 1e9": (("rpm = [6000.0, 12000.0, 7]", "rpm = [1e9, 2e9, 3]"), "analysis.rpm"),
     "rpm and hz": (("rpm = [6000.0, 12000.0, 7]", "rpm = [6000.0, 12000.0, 7]\nhz = [1, 2, 3]"), "analysis"),
     "harmonics 0": (("harmonics = 5", "harmonics = 0"), "analysis.harmonics"),
+    "harmonics beyond memory": (("harmonics = 5", "harmonics = 100000000"), "analysis.harmonics"),
     "stability a word": (("stability = false", 'stability = "no"'), "analysis.stability"),
     "time_domain a word": (
         ("stability = false", 'stability = false\ntime_domain = "no"'),
@@ -548,6 +549,21 @@ def test_study_speeds_read_as_the_base_frequency_of_a_link_model(tmp_path, capsy
     line = one_line(err)
     assert rc == 2 and line.startswith(f"nlgrd: error: {path}: analysis.hz") and "pitch-line" in line, line
     assert not (tmp_path / "s").exists()
+
+
+def test_study_harmonics_bounded_by_memory_as_the_command_line(tmp_path):
+    """A study's ``analysis.harmonics`` has the bound of ``--harmonics`` (memory, issue 35
+    item 1), not the old constant 50: 75 (what a stiff contact needs) loads on Kubo's model;
+    a number beyond memory is refused by STUDY_CASES."""
+    from nlgrd.io.model_checks import check_harmonics_memory
+    from nlgrd.io.model_file import load_model
+    from nlgrd.studies.study_file import load_study
+
+    path = tmp_path / "s.toml"
+    path.write_text(STUDY.replace("harmonics = 5", "harmonics = 75"))
+    study = load_study(path)
+    assert study.analysis.harmonics == 75
+    check_harmonics_memory(load_model(KUBO), 75, "--harmonics")  # the CLI's bound accepts it too
 
 
 # ----------------------------------------------------------------------- reports, schedulers

@@ -169,6 +169,39 @@ def check_speed_range(system: RotorSystem, top: float, in_rpm: bool, key: str, g
         check_pitch_line_velocity(gp, mesh, key, given)
 
 
+def check_harmonics_memory(system: RotorSystem, H: int | None, key: str) -> None:
+    """Refuse H harmonics that the model's harmonic balance cannot hold in memory
+    (:func:`nlgrd.nonlinear.tracing.harmonic_ladder.max_harmonics` of its DOFs and link
+    coordinates): the one bound of ``--harmonics`` and a study's ``analysis.harmonics``.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    H : int or None
+        The harmonics asked for (None: chosen by the error estimate, nothing to check).
+    key : str
+        The option or key, named in the error.
+
+    Raises
+    ------
+    ModelError
+        When H exceeds the bound.
+    """
+    if H is None:
+        return
+    from nlgrd.nonlinear.tracing.harmonic_ladder import available_memory, max_harmonics
+
+    n_coords = max(1, len(system.gear_pairs) + 2 * len(getattr(system, "bearing_clearances", ())))
+    top = max_harmonics(system.dofs.n_dofs, n_coords)
+    if H > top:
+        raise ModelError(
+            key,
+            f"{H} harmonics of a model with {system.dofs.n_dofs} DOFs and {n_coords} link coordinates "
+            f"need more memory than available ({available_memory() / 2**30:.1f} GiB); at most {top}",
+        )
+
+
 def _check_duplicate_meshes(system: RotorSystem) -> None:
     seen: dict[frozenset, int] = {}
     for i, g in enumerate(system.gear_pairs):

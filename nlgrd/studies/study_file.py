@@ -304,7 +304,7 @@ def _analysis(data: dict, w: _Where) -> Analysis:
         raise w.error("analysis.direction", f"must be 'up', 'down' or 'both', got {direction!r}")
     harmonics = t.get("harmonics")
     if harmonics is not None:
-        harmonics = _integer(harmonics, "analysis.harmonics", w, 1, 50)
+        harmonics = _integer(harmonics, "analysis.harmonics", w, 1, 10**9)  # memory: _check_speeds
     tolerance = _number(t.get("tolerance", 0.005), "analysis.tolerance", w, positive=True)
     stability = t.get("stability", True)
     if not isinstance(stability, bool):
@@ -316,12 +316,14 @@ def _analysis(data: dict, w: _Where) -> Analysis:
 
 
 def _check_speeds(system, analysis: Analysis, w: _Where) -> None:
-    """The sweep's top speed within every gear pair's pitch-line velocity limit."""
-    from nlgrd.io.model_checks import check_speed_range
+    """The sweep's top speed within every gear pair's pitch-line velocity limit, and its
+    harmonics within memory (the bound of ``--harmonics``)."""
+    from nlgrd.io.model_checks import check_harmonics_memory, check_speed_range
 
     try:
         key, given = f"analysis.{analysis.unit}", f"{analysis.stop:g} {analysis.unit}"
         check_speed_range(system, analysis.stop, analysis.unit == "rpm", key, given)
+        check_harmonics_memory(system, analysis.harmonics, "analysis.harmonics")
     except ModelError as err:
         raise w.error(err.key, err.message) from None
 
