@@ -7,6 +7,7 @@ of its harmonic balance (:class:`nlgrd.nonlinear.models.geared.GearedModel`): on
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -15,12 +16,57 @@ from nlgrd.errors import ModelError
 from nlgrd.nonlinear.fourier.harmonics import analyse, differentiate, real_to_complex, sample
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh
 from nlgrd.nonlinear.models.geared import GearedModel
-from nlgrd.nonlinear.results.metrics import TimeHistory
+from nlgrd.nonlinear.results.metrics import MeshMetrics, TimeHistory, metrics_from_history
 from nlgrd.nonlinear.results.sweep_results import SweepResult, assemble_result
 from nlgrd.nonlinear.tracing.sweep import sweep_orders
 from nlgrd.threads import single_blas_thread
-from nlgrd.timedomain.integrator import FETimeResponse
 from nlgrd.timedomain.links import LinkIntegrator, settle
+
+
+@dataclass(frozen=True)
+class FETimeResponse:
+    """Time integration of the FE model to periodic steady state at one mesh frequency.
+
+    Attributes
+    ----------
+    omega : float
+        Mesh frequency [rad/s].
+    history : TimeHistory
+        δ, δ', e, e', W over the last period (one sample per time step).
+    converged : bool
+        Periodic steady state reached (criterion of :func:`nlgrd.timedomain.links.settle`).
+    periods : int
+        Periods simulated.
+    difference : float
+        Last relative period-to-period difference of δ [-].
+    q : ndarray (N, steps_per_period) or None
+        All DOFs over the last period [SI], when ``store_dofs``.
+    state : tuple of ndarray
+        (q, q', q'') at the end, to continue a sweep.
+    poincare : ndarray (periods,)
+        δ at the start of every period integrated (the Poincaré section θ = 0 mod 2π) [m]:
+        a fixed point for a mesh-periodic orbit, ν points for period ν, a closed curve for
+        a torus.
+    """
+
+    omega: float
+    history: TimeHistory
+    converged: bool
+    periods: int
+    difference: float
+    q: NDArray | None
+    state: tuple
+    poincare: NDArray | None = None
+
+    def dof(self, index: int) -> NDArray:
+        """Time history of one DOF over the last period."""
+        if self.q is None:
+            raise ValueError("integrate with store_dofs=True to keep DOF histories")
+        return self.q[index]
+
+    def metrics(self, mesh: BacklashMesh, H: int = 15) -> MeshMetrics:
+        """DTE and mesh-force metrics of the last period."""
+        return metrics_from_history(self.history, mesh, H)
 
 
 def integrate_fe(
@@ -153,7 +199,7 @@ def time_response(
     Returns
     -------
     FETimeResponse
-        See :class:`nlgrd.timedomain.integrator.FETimeResponse`.
+        See :class:`FETimeResponse`.
 
     Raises
     ------

@@ -8,13 +8,19 @@ The same equations as the harmonic balance,
 (D with the links' viscous damping, K without their stiffness, f the static loads,
 unbalance and the links' own forcing) are integrated by the HHT-α method (Hilber,
 Hughes & Taylor 1977, Earthq. Eng. Struct. Dyn. 5:283; β = (1 - α)²/4, γ = 1/2 - α) with
-a fixed step. Each step is linear in q except through the link coordinates y = Pᵀ q:
-with K_eff factorised once and S = Pᵀ K_eff⁻¹ P (d x d), the step solves
-y = y_lin - (1 + α) S g(y) by Newton on the d link coordinates only, with the links'
-pointwise tangents, then q follows (up to a few hundred DOFs through the precomputed
-:class:`nlgrd.timedomain.period_map.PeriodMap`, as in
-:func:`nlgrd.timedomain.integrator.integrate_fe`). Integration runs period by period to a
-periodic steady state (the criterion of :func:`nlgrd.timedomain.integrator.integrate_fe`).
+a fixed step (:func:`nlgrd.timedomain.integrator.hht_step`). Each step is linear in q
+except through the link coordinates y = Pᵀ q: with K_eff factorised once and
+S = Pᵀ K_eff⁻¹ P (d x d), the step solves y = y_lin - (1 + α) S g(y) on the d link
+coordinates only: by Newton with the links' pointwise tangents, or in closed form for a
+single gear mesh (the scalar piecewise-linear equation of its dead zone); then q follows
+(up to a few hundred DOFs through the precomputed
+:class:`nlgrd.timedomain.period_map.PeriodMap`, so that a step costs a dot product and
+that equation). Integration runs period by period to a periodic steady state
+(:func:`settle`).
+
+:class:`LinkIntegrator` is nlgrd's one HHT-α integrator of these equations: of a link
+model (its constructor) and of the FE model of one gear mesh
+(:meth:`LinkIntegrator.of_mesh`, used by :func:`nlgrd.timedomain.geared.integrate_fe`).
 """
 
 from __future__ import annotations
@@ -309,7 +315,7 @@ class LinkIntegrator:
         if self.d == 1 and isinstance(links[0], GearMeshLink):  # one mesh: the closed-form step
             self._mesh = self._mesh_law(links[0].mesh)
             self._solve_link = self._mesh_step
-        self.pmap = None
+        self.pmap, self._last = None, None
         if 3 * self.N + self.d <= MAX_STATE:
             full = self._loads + self._link_loads @ self.P.T
             self.pmap = PeriodMap(self.step, alpha, self.P, full)
@@ -429,6 +435,8 @@ class LinkIntegrator:
         -------
         PeriodRecord
         """
+        if self._last is not None and self._last[0] is s and len(output_dofs) == 0:
+            return self._last[1]
         N, ns, st, alpha, d = self.N, self.ns, self.step, self.alpha, self.d
         P, Zp, A, lu, ap = self.P, self.Zp, self.step.A_all, self.step.lu, self.step.ap
         loads, link_loads, nl = self._loads, self._link_loads, self._loads.shape[0]
@@ -437,23 +445,25 @@ class LinkIntegrator:
         y_hist, v_hist, g_hist = np.empty((d, ns)), np.empty((d, ns)), np.empty((d, ns))
         q_hist = np.empty((out.size, ns))
         p1, z1, g1 = P[:, 0], Zp[:, 0], float(g[0])
+        solve, lam = self._solve_link, link_loads[:, 0].tolist()
         for j in range(ns):
             u_old, v_old, acc_old = state[:N], state[N : 2 * N], state[2 * N :]
-            q_hist[:, j] = u_old[out]
+            if out.size:
+                q_hist[:, j] = u_old[out]
             if d == 1:  # one link: floats and vectors
                 y_hist[0, j], v_hist[0, j], g_hist[0, j] = p1 @ u_old, p1 @ v_old, g1
-                q_lin = lu.solve(A @ state + loads[j % nl] + p1 * (link_loads[j, 0] + alpha * g1))
-                g1 = self._solve_link(float(p1 @ q_lin), j)[1]
+                q_lin = lu.solve(A @ state + loads[j % nl] + p1 * (lam[j] + alpha * g1))
+                g1 = solve(float(p1 @ q_lin), j)[1]
                 q_new = q_lin - z1 * (ap * g1)
             else:
                 y_hist[:, j], v_hist[:, j], g_hist[:, j] = P.T @ u_old, P.T @ v_old, g
                 q_lin = lu.solve(A @ state + loads[j % nl] + P @ (link_loads[j] + alpha * g))
-                g = self._solve_link(P.T @ q_lin, j)[1]
+                g = solve(P.T @ q_lin, j)[1]
                 q_new = q_lin - Zp @ (ap * g)
             du = q_new - u_old
             acc_new = st.a1 * du - st.a2 * v_old - st.a3 * acc_old
             v_new = st.b1 * du + st.b2 * v_old + st.b3 * acc_old  # the period map's form
-            state = np.concatenate([q_new, v_new, acc_new])
+            state = np.concatenate((q_new, v_new, acc_new))
         if d == 1:
             g = np.array([g1])
         return PeriodRecord(y_hist, v_hist, g_hist, q_hist, np.concatenate([state, g]))
@@ -496,8 +506,9 @@ class LinkIntegrator:
             The extended state at the end of the period.
         """
         if self.pmap is None:
-            y, _, s_end = self.stepped(s)
-            return y, s_end
+            rec = self.record(s)
+            self._last = (s, rec)  # a recording of this period from s reuses it
+            return rec.y, rec.end
         return self.pmap.run(s, self._solve_link)
 
 
