@@ -346,11 +346,18 @@ class LinkIntegrator:
         return y_lin - c * g, g
 
     def _newton_link(self, y_lin, j: int):
-        """Link coordinates and forces at phase j + 1 (floats when d = 1) by Newton on d."""
-        if self.d == 1:
-            y1, g1 = self._solve_y(np.array([y_lin]), (j + 1) % self.ns)
-            return float(y1[0]), float(g1[0])
-        return self._solve_y(y_lin, (j + 1) % self.ns)
+        """Link coordinates and forces at phase j + 1 by Newton on d (floats when d = 1)."""
+        y0 = np.atleast_1d(np.asarray(y_lin, dtype=float))
+        y, th, ap = y0.copy(), self.theta[(j + 1) % self.ns], self.step.ap
+        for _ in range(50):
+            gy, Ty = self.link_forces(y, th)
+            res = y - y0 + ap * (self.S @ gy)
+            if abs(res).max() <= 1e-13 * (abs(y).max() + 1e-12):
+                break
+            y = y - np.linalg.solve(self._eye + ap * (self.S @ Ty), res)
+        else:
+            gy = self.link_forces(y, th)[0]
+        return (float(y[0]), float(gy[0])) if np.ndim(y_lin) == 0 else (y, gy)
 
     def link_forces(self, y: NDArray, th: float) -> tuple[NDArray, NDArray]:
         """The links' forces g(y, θ) (d,) [N] and their tangent (d, d) [N/m].
@@ -408,18 +415,6 @@ class LinkIntegrator:
             Fb, phi = self._forcing
             acc = spla.splu(self.M).solve(Fb[0] + self.P @ (phi[0] - g) - self.D @ v - self.K @ u)
         return np.concatenate([u, v, acc, g])
-
-    def _solve_y(self, y_lin: NDArray, jn: int) -> tuple[NDArray, NDArray]:
-        """Link coordinates and forces at phase jn from the prediction with g = 0 (Newton on d)."""
-        y = y_lin.copy()
-        ap, eye = self.step.ap, self._eye
-        for _ in range(50):
-            gy, Ty = self.link_forces(y, self.theta[jn])
-            res = y - y_lin + ap * (self.S @ gy)
-            if abs(res).max() <= 1e-13 * (abs(y).max() + 1e-12):
-                return y, gy
-            y = y - np.linalg.solve(eye + ap * (self.S @ Ty), res)
-        return y, self.link_forces(y, self.theta[jn])[0]
 
     def record(self, s: NDArray, output_dofs=()) -> PeriodRecord:
         """One period step by step on all DOFs from the extended state ``s``, recorded.
