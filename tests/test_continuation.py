@@ -13,7 +13,8 @@ from nlgrd.nonlinear.results.metrics import metrics_from_harmonics
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 from nlgrd.nonlinear.tracing.continuation import continuation
 from nlgrd.nonlinear.tracing.sweep import sweep
-from nlgrd.timedomain.integrator import integrate_fe, static_solution
+from nlgrd.timedomain.geared import integrate_fe
+from nlgrd.timedomain.integrator import static_solution
 
 LSTE = np.array([0.0, 1.24e-6, 0.0, 0.50e-6, 0.30e-6, 0.10e-6, -0.05e-6])
 MAIN = SDOFGearPair(0.261, 0.2587e9, 50e-6, 2295.0, LSTE, damping_ratio=0.02)

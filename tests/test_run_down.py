@@ -3,7 +3,7 @@
 Model: Kubo's rig (data/case_studies/kubo.toml, 84 DOFs, gyroscopic terms present).
 
 - Constant speed (rate 0): the ramp's recurrence is the steady-state integrator's
-  (:func:`nlgrd.timedomain.integrator.integrate_fe`) with the forcing folded into the
+  (:func:`nlgrd.timedomain.geared.integrate_fe`) with the forcing folded into the
   mesh force and the steps grouped in blocks; from that integrator's periodic state it
   must stay on it, every mesh cycle's DTE mean and RMS equal to the steady state's to
   1e-9 (rounding only: the same operations in another order).

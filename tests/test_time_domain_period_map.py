@@ -20,7 +20,7 @@ import pytest
 from test_bearing_clearance import clearance_model, disk_dofs
 from test_geared_time_domain import refined_kubo
 
-import nlgrd.timedomain.integrator as integrator
+import nlgrd.timedomain.geared as geared
 import nlgrd.timedomain.links as td_links
 from nlgrd.nonlinear.models.geared import build_geared_model
 from nlgrd.nonlinear.models.link_model import link_sweep
@@ -50,12 +50,12 @@ def test_geared_fe_period_map_equals_the_steps(monkeypatch, hz):
     speed = rec.speed(w)
 
     def run():
-        return integrator.integrate_fe(
+        return geared.integrate_fe(
             lm.M, lm.damping(speed), lm.stiffness(speed), rec.W[:, 0], model.mesh, rec.static_force, w,
             steps_per_period=512, tol=0.0, max_periods=30, store_dofs=True,
         )  # fmt: skip
 
-    fast, slow = _both(monkeypatch, integrator, run)
+    fast, slow = _both(monkeypatch, td_links, run)
     assert fast.periods == slow.periods == 30
     h_f, h_s = fast.history, slow.history
     separated = np.abs(h_s.delta - h_s.lste) < model.mesh.half_backlash

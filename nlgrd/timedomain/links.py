@@ -8,13 +8,19 @@ The same equations as the harmonic balance,
 (D with the links' viscous damping, K without their stiffness, f the static loads,
 unbalance and the links' own forcing) are integrated by the HHT-α method (Hilber,
 Hughes & Taylor 1977, Earthq. Eng. Struct. Dyn. 5:283; β = (1 - α)²/4, γ = 1/2 - α) with
-a fixed step. Each step is linear in q except through the link coordinates y = Pᵀ q:
-with K_eff factorised once and S = Pᵀ K_eff⁻¹ P (d x d), the step solves
-y = y_lin - (1 + α) S g(y) by Newton on the d link coordinates only, with the links'
-pointwise tangents, then q follows (up to a few hundred DOFs through the precomputed
-:class:`nlgrd.timedomain.period_map.PeriodMap`, as in
-:func:`nlgrd.timedomain.integrator.integrate_fe`). Integration runs period by period to a
-periodic steady state (the criterion of :func:`nlgrd.timedomain.integrator.integrate_fe`).
+a fixed step (:func:`nlgrd.timedomain.integrator.hht_step`). Each step is linear in q
+except through the link coordinates y = Pᵀ q: with K_eff factorised once and
+S = Pᵀ K_eff⁻¹ P (d x d), the step solves y = y_lin - (1 + α) S g(y) on the d link
+coordinates only: by Newton with the links' pointwise tangents, or in closed form for a
+single gear mesh (the scalar piecewise-linear equation of its dead zone); then q follows
+(up to a few hundred DOFs through the precomputed
+:class:`nlgrd.timedomain.period_map.PeriodMap`, so that a step costs a dot product and
+that equation). Integration runs period by period to a periodic steady state
+(:func:`settle`).
+
+:class:`LinkIntegrator` is nlgrd's one HHT-α integrator of these equations: of a link
+model (its constructor) and of the FE model of one gear mesh
+(:meth:`LinkIntegrator.of_mesh`, used by :func:`nlgrd.timedomain.geared.integrate_fe`).
 """
 
 from __future__ import annotations
@@ -22,18 +28,20 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.fourier.harmonics import analyse, evaluate
+from nlgrd.nonlinear.fourier.harmonics import analyse, differentiate, evaluate, sample
+from nlgrd.nonlinear.laws.force_laws import BacklashMesh
 from nlgrd.nonlinear.links.contract import GearMeshLink
 from nlgrd.nonlinear.models.link_model import LinkModel
 from nlgrd.nonlinear.results.metrics import MeshMetrics
 from nlgrd.nonlinear.results.sweep_results import SweepResult, assemble_result
 from nlgrd.nonlinear.tracing.sweep import sweep_orders
 from nlgrd.threads import single_blas_thread
-from nlgrd.timedomain.integrator import hht_step
+from nlgrd.timedomain.integrator import hht_step, static_solution
 from nlgrd.timedomain.period_map import MAX_STATE, PeriodMap
 
 
@@ -90,13 +98,70 @@ def _forcing_samples(model: LinkModel, omega: float, ns: int, H: int) -> NDArray
     return np.real(np.exp(1j * np.outer(theta, k)) @ f)
 
 
+@dataclass(frozen=True)
+class PeriodRecord:
+    """One period stepped on all DOFs, with the link histories recorded.
+
+    Attributes
+    ----------
+    y, ydot, g : ndarray (d, ns)
+        Link coordinates [m], their velocities [m/s] and the link forces [N] at the start
+        of each step.
+    q : ndarray (len(output_dofs), ns)
+        The recorded DOFs at the start of each step [m, rad].
+    end : ndarray (3N + d,)
+        The extended state at the end of the period.
+    """
+
+    y: NDArray
+    ydot: NDArray
+    g: NDArray
+    q: NDArray
+    end: NDArray
+
+
+@dataclass(frozen=True)
+class Settled:
+    """The periods integrated towards a periodic steady state (:func:`settle`).
+
+    Attributes
+    ----------
+    start, end : ndarray (3N + d,)
+        The extended state at the start and at the end of the last period.
+    periods : int
+        Periods integrated [-].
+    differences : list of float
+        The relative period-to-period differences of the link coordinates [-].
+    converged : bool
+        The steady-state criterion was met.
+    section : ndarray (d, periods)
+        The link coordinates at the start of every period (the Poincaré section θ = 0
+        mod 2π) [m].
+    """
+
+    start: NDArray
+    end: NDArray
+    periods: int
+    differences: list
+    converged: bool
+    section: NDArray
+
+
 class LinkIntegrator:
-    """Fixed-step HHT-α integration of a link model at one base frequency, period by period.
+    """Fixed-step HHT-α integration of the reduced equations at one base frequency, period
+    by period: the one time integrator of nlgrd's FE and link models.
 
     The state is the extended one of :class:`~nlgrd.timedomain.period_map.PeriodMap`,
     s = (q, q', q'', g) with g the link forces of the last step. Up to
     :data:`~nlgrd.timedomain.period_map.MAX_STATE` a period runs on the precomputed period
-    map; above, step by step on all DOFs.
+    map; above, step by step on all DOFs. Each step solves the links' own equation
+    y = y_lin - (1 + α) S g(y, θ) on the d link coordinates: by Newton with the links'
+    pointwise tangents, or, for a single gear mesh (d = 1, the dead zone k f(x), x = y - e),
+    in closed form: y + c k f(y - e) = y_lin with c = (1 + α) S > 0 is monotone and
+    piecewise linear, so x = (x_lin ∓ c k b)/(1 + c k) beyond ±b and x = x_lin inside.
+
+    Built from a link model (this constructor) or from the FE matrices of one mesh
+    (:meth:`of_mesh`).
 
     Parameters
     ----------
@@ -120,6 +185,8 @@ class LinkIntegrator:
         Time step [s].
     step : HHTStep
         The step matrices (their Newmark coefficients give the link velocities).
+    model : LinkModel or None
+        The link model (None when built by :meth:`of_mesh`).
 
     Raises
     ------
@@ -136,55 +203,190 @@ class LinkIntegrator:
         alpha: float = -0.05,
         forcing_harmonics: int | None = None,
     ):
+        rec = model.receptance
+        speed = rec.plan.speed(omega)
+        if forcing_harmonics is None:
+            forcing_harmonics = max([30] + [getattr(lk, "excitation_harmonics", 0) for lk in model.links])
+        ns = int(steps_per_period)
+        self._setup(
+            rec.model.M,
+            rec.model.damping(speed) + rec.C_link,
+            rec.model.stiffness(speed),
+            rec.P,
+            tuple(model.links),
+            tuple(rec.slices),
+            (_forcing_samples(model, omega, ns, forcing_harmonics), np.zeros((ns, rec.P.shape[1]))),
+            omega,
+            alpha,
+        )
+        self.model = model
+
+    @classmethod
+    def of_mesh(
+        cls,
+        M,
+        D,
+        K,
+        projection: ArrayLike,
+        mesh: BacklashMesh,
+        static_force: ArrayLike,
+        omega: float,
+        *,
+        steps_per_period: int = 512,
+        alpha: float = -0.05,
+    ) -> LinkIntegrator:
+        """The integrator of an FE model with one nonlinear gear mesh, given its matrices.
+
+        The equations M q'' + D q' + K q = F0 - w W(t) with W = k_h f(wᵀq - e) +
+        c_m (wᵀq' - e') and c_m w wᵀ inside D: the one link δ = wᵀ q with the forcing
+        F0 + w c_m e'(t); the rest state is :func:`~nlgrd.timedomain.integrator.static_solution`.
+
+        Parameters
+        ----------
+        M, D, K : sparse or dense (N, N)
+            Mass [kg], velocity matrix incl. c_m w wᵀ [N s/m], stiffness without the mesh
+            [N/m].
+        projection : array_like (N,)
+            The projection w onto the line of action, δ = wᵀ q [-].
+        mesh : BacklashMesh
+            k_h (k_h ρ(θ) of a parametric mesh), b, c_m and the LSTE in θ = ω t.
+        static_force : array_like (N,)
+            F0, self-equilibrated static loads [N, N m].
+        omega : float
+            Mesh frequency [rad/s].
+        steps_per_period : int
+            Fixed time steps per period [-].
+        alpha : float
+            HHT-α parameter in [-1/3, 0] [-].
+
+        Returns
+        -------
+        LinkIntegrator
+
+        Raises
+        ------
+        ModelError
+            ``projection`` or ``static_force`` of the wrong size; ``alpha`` outside [-1/3, 0].
+        """
+        M = sp.csc_matrix(M)
+        w = np.asarray(projection, dtype=float).reshape(-1)
+        F0 = np.asarray(static_force, dtype=float).reshape(-1)
+        if w.size != M.shape[0] or F0.size != M.shape[0]:
+            raise ModelError("projection", f"projection and static force need {M.shape[0]} entries")
+        ns = int(steps_per_period)
+        dz = differentiate(mesh.lste)
+        edot = omega * (sample(dz, ns) if ns > dz.size else evaluate(dz, 2 * np.pi * np.arange(ns) / ns))
+        self = cls.__new__(cls)
+        link = GearMeshLink("mesh", mesh, w)
+        forcing = (F0[None, :], (mesh.damping * edot)[:, None])  # F0 and the LSTE's damping forcing along w
+        self._setup(M, D, K, w[:, None], (link,), (slice(0, 1),), forcing, omega, alpha)
+        self.model = None
+        self._rest = (K, w, mesh, F0)
+        return self
+
+    def _setup(self, M, D, K, P, links, slices, forcing, omega, alpha) -> None:
+        """The step matrices, the links' laws and the period map (shared by the constructors).
+
+        ``forcing`` is f(t_j) = F_j + P φ_j at the ns steps, as the pair (F, φ) of shapes
+        (ns, N) or (1, N) (a constant load) and (ns, d) [N]; a constant F enters the step's
+        load term (1 + α) f_{j+1} - α f_j as itself.
+        """
         if not -1 / 3 <= alpha <= 0:
             raise ModelError("alpha", f"HHT-α needs -1/3 <= alpha <= 0, got {alpha}")
-        rec = model.receptance
-        self.model, self.omega, self.alpha = model, float(omega), float(alpha)
-        speed = rec.plan.speed(omega)
-        self.M = rec.model.M.tocsc()
-        self.D = (rec.model.damping(speed) + rec.C_link).tocsc()
-        self.K = rec.model.stiffness(speed).tocsc()
-        self.P = rec.P
+        self.omega, self.alpha = float(omega), float(alpha)
+        self.M, self.D, self.K = (sp.csc_matrix(a) for a in (M, D, K))
+        self.P = np.asarray(P, dtype=float)
+        self.links, self.slices = links, slices
         self.N, self.d = self.P.shape
-        self.ns = int(steps_per_period)
+        Fb, phi = (np.asarray(a, dtype=float) for a in forcing)
+        self.ns = phi.shape[0]
+        self.F = Fb + phi @ self.P.T  # f(t_j) (ns, N) [N]
         self.dt = 2 * np.pi / omega / self.ns
         self.step = hht_step(self.M, self.D, self.K, self.dt, alpha)
         self.Zp = self.step.lu.solve(self.P)  # K_eff⁻¹ P
         self.S = self.P.T @ self.Zp
-        if forcing_harmonics is None:
-            forcing_harmonics = max([30] + [getattr(lk, "excitation_harmonics", 0) for lk in model.links])
-        self.F = _forcing_samples(model, omega, self.ns, forcing_harmonics)
+        ap = self.step.ap
+        self._forcing = (Fb, phi)
+        self._loads = Fb if Fb.shape[0] == 1 else ap * np.roll(Fb, -1, axis=0) - alpha * Fb
+        self._link_loads = ap * np.roll(phi, -1, axis=0) - alpha * phi
         self.theta = 2 * np.pi * np.arange(self.ns) / self.ns
         self._eye = np.eye(self.d)
-        self._mesh_law = None
-        link0 = model.links[0]
-        if self.d == 1 and isinstance(link0, GearMeshLink):  # one mesh: the step's exact solution
-            th = self.theta
-            self._mesh_law = (
-                evaluate(link0.mesh.lste, th),
-                link0.mesh.stiffness_time(th),
-                float(link0.mesh.half_backlash),
-                self.step.ap * float(self.S[0, 0]),
-            )
-        self.pmap = None
+        self._solve_link = self._newton_link
+        if self.d == 1 and isinstance(links[0], GearMeshLink):  # one mesh: the closed-form step
+            self._mesh = self._mesh_law(links[0].mesh)
+            self._solve_link = self._mesh_step
+        self.pmap, self._last = None, None
         if 3 * self.N + self.d <= MAX_STATE:
-            ap = self.step.ap
-            self.pmap = PeriodMap(self.step, alpha, self.P, ap * np.roll(self.F, -1, axis=0) - alpha * self.F)
+            full = self._loads + self._link_loads @ self.P.T
+            self.pmap = PeriodMap(self.step, alpha, self.P, full)
+
+    def _mesh_law(self, mesh: BacklashMesh) -> tuple:
+        """e and k at the ends of the steps (phase j + 1 for step j), b and c = (1 + α) S, as
+        Python floats: a step of :meth:`_mesh_step` is a few scalar operations."""
+        ns, th = self.ns, np.roll(self.theta, -1)
+        e = np.roll(sample(mesh.lste, ns), -1) if ns > mesh.lste.size else evaluate(mesh.lste, th)
+        c = self.step.ap * float(self.P[:, 0] @ self.Zp[:, 0])
+        return e.tolist(), mesh.stiffness_time(th).tolist(), float(mesh.half_backlash), c
+
+    def _mesh_step(self, y_lin: float, j: int) -> tuple[float, float]:
+        """The closed-form step of one gear mesh: (y, g) at phase j + 1.
+
+        y + c k f(y - e) = y_lin with f the dead zone of half-width b and c > 0: the left
+        side increases with y, so x = y - e lies on the branch of x_lin = y_lin - e, where
+        the equation is linear: x = (x_lin ∓ c k b)/(1 + c k) beyond ±b, g = 0 inside.
+        """
+        e, k, b, c = self._mesh
+        x_lin, kj = y_lin - e[j], k[j]
+        if x_lin > b:
+            g = kj * ((x_lin + c * kj * b) / (1 + c * kj) - b)
+        elif x_lin < -b:
+            g = kj * ((x_lin - c * kj * b) / (1 + c * kj) + b)
+        else:
+            return y_lin, 0.0
+        return y_lin - c * g, g
+
+    def _newton_link(self, y_lin, j: int):
+        """Link coordinates and forces at phase j + 1 by Newton on d (floats when d = 1)."""
+        y0 = np.atleast_1d(np.asarray(y_lin, dtype=float))
+        y, th, ap = y0.copy(), self.theta[(j + 1) % self.ns], self.step.ap
+        for _ in range(50):
+            gy, Ty = self.link_forces(y, th)
+            res = y - y0 + ap * (self.S @ gy)
+            if abs(res).max() <= 1e-13 * (abs(y).max() + 1e-12):
+                break
+            y = y - np.linalg.solve(self._eye + ap * (self.S @ Ty), res)
+        else:
+            gy = self.link_forces(y, th)[0]
+        return (float(y[0]), float(gy[0])) if np.ndim(y_lin) == 0 else (y, gy)
 
     def link_forces(self, y: NDArray, th: float) -> tuple[NDArray, NDArray]:
-        """The links' forces g(y, θ) (d,) [N] and their tangent (d, d) [N/m]."""
+        """The links' forces g(y, θ) (d,) [N] and their tangent (d, d) [N/m].
+
+        Parameters
+        ----------
+        y : ndarray (d,)
+            Link coordinates [m].
+        th : float
+            Base angle ω t [rad].
+
+        Returns
+        -------
+        tuple of ndarray
+            g (d,) [N] and ∂g/∂y (d, d) [N/m].
+        """
         d = self.d
         g = np.zeros(d)
         T = np.zeros((d, d))
-        for link, sl in zip(self.model.links, self.model.receptance.slices, strict=True):
+        for link, sl in zip(self.links, self.slices, strict=True):
             gi, ti = link.pointwise(y[sl], th)
             g[sl] = gi
             T[sl, sl] = ti
         return g, T
 
     def start(self, state0: tuple | None = None) -> NDArray:
-        """The extended state from (q, q'[, q'']); default at rest at the static position of
-        the linear system with the links at their linear stiffness.
+        """The extended state from (q, q'[, q'']); default at rest at the static position
+        (of the linear system with the links at their linear stiffness; of
+        :func:`~nlgrd.timedomain.integrator.static_solution` for :meth:`of_mesh`).
 
         Parameters
         ----------
@@ -195,10 +397,14 @@ class LinkIntegrator:
         -------
         ndarray (3N + d,)
         """
-        rec = self.model.receptance
         N = self.N
         if state0 is None:
-            u = rec.mean.solve(rec.plan.speed(self.omega), rec.static_force[:, None])[:, 0]
+            if self.model is None:
+                K, w, mesh, F0 = self._rest
+                u = static_solution(K, w, mesh, F0, M=self.M)
+            else:
+                rec = self.model.receptance
+                u = rec.mean.solve(rec.plan.speed(self.omega), rec.static_force[:, None])[:, 0]
             v = np.zeros(N)
         else:
             u, v = np.array(state0[0], dtype=float), np.array(state0[1], dtype=float)
@@ -206,38 +412,56 @@ class LinkIntegrator:
         if state0 is not None and len(state0) > 2:
             acc = np.array(state0[2], dtype=float)
         else:
-            acc = spla.splu(self.M).solve(self.F[0] - self.P @ g - self.D @ v - self.K @ u)
+            Fb, phi = self._forcing
+            acc = spla.splu(self.M).solve(Fb[0] + self.P @ (phi[0] - g) - self.D @ v - self.K @ u)
         return np.concatenate([u, v, acc, g])
 
-    def _solve_y(self, y_lin: NDArray, jn: int) -> tuple[NDArray, NDArray]:
-        """Link coordinates and forces at phase jn from the prediction with g = 0 (Newton on d)."""
-        y = y_lin.copy()
-        ap, eye = self.step.ap, self._eye
-        for _ in range(50):
-            gy, Ty = self.link_forces(y, self.theta[jn])
-            res = y - y_lin + ap * (self.S @ gy)
-            if abs(res).max() <= 1e-13 * (abs(y).max() + 1e-12):
-                return y, gy
-            y = y - np.linalg.solve(eye + ap * (self.S @ Ty), res)
-        return y, self.link_forces(y, self.theta[jn])[0]
+    def record(self, s: NDArray, output_dofs=()) -> PeriodRecord:
+        """One period step by step on all DOFs from the extended state ``s``, recorded.
 
-    def _solve_link(self, y_lin, j):
-        if self._mesh_law is not None:
-            # y + c k f(y - e) = y_lin with the dead zone f: piecewise linear, solved exactly
-            e, k, b, c = self._mesh_law
-            jn = (j + 1) % self.ns
-            x_lin, ck = y_lin - e[jn], c * k[jn]
-            if x_lin > b:
-                x = (x_lin + ck * b) / (1 + ck)
-                return x + e[jn], k[jn] * (x - b)
-            if x_lin < -b:
-                x = (x_lin - ck * b) / (1 + ck)
-                return x + e[jn], k[jn] * (x + b)
-            return float(y_lin), 0.0
-        if self.d == 1:
-            y1, g1 = self._solve_y(np.array([y_lin]), (j + 1) % self.ns)
-            return float(y1[0]), float(g1[0])
-        return self._solve_y(y_lin, (j + 1) % self.ns)
+        Parameters
+        ----------
+        s : ndarray (3N + d,)
+            The extended state at the start of the period.
+        output_dofs : sequence of int
+            DOFs recorded.
+
+        Returns
+        -------
+        PeriodRecord
+        """
+        if self._last is not None and self._last[0] is s and len(output_dofs) == 0:
+            return self._last[1]
+        N, ns, st, alpha, d = self.N, self.ns, self.step, self.alpha, self.d
+        P, Zp, A, lu, ap = self.P, self.Zp, self.step.A_all, self.step.lu, self.step.ap
+        loads, link_loads, nl = self._loads, self._link_loads, self._loads.shape[0]
+        state, g = s[: 3 * N], np.array(s[3 * N :], dtype=float)
+        out = np.asarray(output_dofs, dtype=int)
+        y_hist, v_hist, g_hist = np.empty((d, ns)), np.empty((d, ns)), np.empty((d, ns))
+        q_hist = np.empty((out.size, ns))
+        p1, z1, g1 = P[:, 0], Zp[:, 0], float(g[0])
+        solve, lam = self._solve_link, link_loads[:, 0].tolist()
+        for j in range(ns):
+            u_old, v_old, acc_old = state[:N], state[N : 2 * N], state[2 * N :]
+            if out.size:
+                q_hist[:, j] = u_old[out]
+            if d == 1:  # one link: floats and vectors
+                y_hist[0, j], v_hist[0, j], g_hist[0, j] = p1 @ u_old, p1 @ v_old, g1
+                q_lin = lu.solve(A @ state + loads[j % nl] + p1 * (lam[j] + alpha * g1))
+                g1 = solve(float(p1 @ q_lin), j)[1]
+                q_new = q_lin - z1 * (ap * g1)
+            else:
+                y_hist[:, j], v_hist[:, j], g_hist[:, j] = P.T @ u_old, P.T @ v_old, g
+                q_lin = lu.solve(A @ state + loads[j % nl] + P @ (link_loads[j] + alpha * g))
+                g = solve(P.T @ q_lin, j)[1]
+                q_new = q_lin - Zp @ (ap * g)
+            du = q_new - u_old
+            acc_new = st.a1 * du - st.a2 * v_old - st.a3 * acc_old
+            v_new = st.b1 * du + st.b2 * v_old + st.b3 * acc_old  # the period map's form
+            state = np.concatenate((q_new, v_new, acc_new))
+        if d == 1:
+            g = np.array([g1])
+        return PeriodRecord(y_hist, v_hist, g_hist, q_hist, np.concatenate([state, g]))
 
     def stepped(self, s: NDArray, output_dofs=()) -> tuple[NDArray, NDArray, NDArray]:
         """One period step by step on all DOFs from the extended state ``s``.
@@ -258,23 +482,8 @@ class LinkIntegrator:
         s : ndarray (3N + d,)
             The extended state at the end of the period.
         """
-        N, ns, st, alpha = self.N, self.ns, self.step, self.alpha
-        state, g = s[: 3 * N], s[3 * N :]
-        out = np.asarray(output_dofs, dtype=int)
-        y_hist, q_hist = np.empty((self.d, ns)), np.empty((out.size, ns))
-        for j in range(ns):
-            y_hist[:, j] = self.P.T @ state[:N]
-            q_hist[:, j] = state[out]
-            jn = (j + 1) % ns
-            rhs = st.A_all @ state + st.ap * self.F[jn] - alpha * self.F[j] + alpha * (self.P @ g)
-            q_lin = st.lu.solve(rhs)
-            _, g = self._solve_y(self.P.T @ q_lin, jn)
-            q_new = q_lin - st.ap * (self.Zp @ g)
-            u_old, v_old, acc_old = state[:N], state[N : 2 * N], state[2 * N :]
-            acc_new = st.a1 * (q_new - u_old) - st.a2 * v_old - st.a3 * acc_old
-            v_new = v_old + self.dt * ((1 - st.gamma) * acc_old + st.gamma * acc_new)
-            state = np.concatenate([q_new, v_new, acc_new])
-        return y_hist, q_hist, np.concatenate([state, g])
+        rec = self.record(s, output_dofs)
+        return rec.y, rec.q, rec.end
 
     def period(self, s: NDArray) -> tuple[NDArray, NDArray]:
         """One period from the extended state ``s``: on the period map when there is one.
@@ -292,9 +501,62 @@ class LinkIntegrator:
             The extended state at the end of the period.
         """
         if self.pmap is None:
-            y, _, s_end = self.stepped(s)
-            return y, s_end
+            rec = self.record(s)
+            self._last = (s, rec)  # a recording of this period from s reuses it
+            return rec.y, rec.end
         return self.pmap.run(s, self._solve_link)
+
+
+def settle(
+    integ: LinkIntegrator,
+    s: NDArray,
+    *,
+    tol: float,
+    max_periods: int,
+    min_periods: int,
+    floor: float = 0.0,
+) -> Settled:
+    """Integrate period by period from ``s`` to a periodic steady state.
+
+    With d_p the largest change of the link coordinates from period p - 1 to p relative
+    to their largest peak-to-peak range plus ``floor``, and ρ = d_p/d_{p-1}: stop at
+    p >= ``min_periods`` when d_p < ``tol`` and the geometric remainder d_p ρ/(1 - ρ) <
+    ``tol`` (ρ < 1), two differences being needed for ρ.
+
+    Parameters
+    ----------
+    integ : LinkIntegrator
+        The integrator.
+    s : ndarray (3N + d,)
+        The extended state at the start (:meth:`LinkIntegrator.start`).
+    tol : float
+        Steady-state tolerance [-].
+    max_periods, min_periods : int
+        Most and fewest periods integrated [-].
+    floor : float
+        Added to the peak-to-peak range of the criterion (a clearance, W_0/k_h) [m].
+
+    Returns
+    -------
+    Settled
+    """
+    prev, diffs, section, converged, p = None, [], [], False, 0
+    start = s
+    for p in range(1, max_periods + 1):
+        start = s
+        cur, s = integ.period(s)
+        section.append(cur[:, 0].copy())
+        if prev is not None:
+            scale = float(np.max(np.ptp(cur, axis=1))) + floor + 1e-300
+            diffs.append(float(np.max(np.abs(cur - prev))) / scale)
+            if p >= min_periods and len(diffs) >= 2:
+                rho = diffs[-1] / diffs[-2] if diffs[-2] > 0 else 0.0
+                tail = diffs[-1] * rho / (1 - rho) if rho < 1 else np.inf
+                if diffs[-1] < tol and tail < tol:
+                    converged = True
+                    break
+        prev = cur
+    return Settled(start, s, p, diffs, converged, np.array(section).reshape(p, integ.d).T)
 
 
 @single_blas_thread
@@ -347,25 +609,11 @@ def link_time_response(
     )
     N = integ.N
     scale_c = max((getattr(lk, "clearance", 0.0) for lk in model.links), default=0.0)
-    prev, diffs, converged, p = None, [], False, 0
-    s = integ.start(state0)
-    start = s
-    for p in range(1, max_periods + 1):
-        start = s
-        cur, s = integ.period(s)
-        if prev is not None:
-            scale = float(np.max(np.ptp(cur, axis=1))) + scale_c + 1e-300
-            diffs.append(float(np.max(np.abs(cur - prev))) / scale)
-            if p >= min_periods and len(diffs) >= 2:
-                rho = diffs[-1] / diffs[-2] if diffs[-2] > 0 else 0.0
-                tail = diffs[-1] * rho / (1 - rho) if rho < 1 else np.inf
-                if diffs[-1] < tol and tail < tol:
-                    converged = True
-                    break
-        prev = cur
-    y_hist, q_hist, s_end = integ.stepped(start, output_dofs)  # the last period, all DOFs recorded
-    if integ.pmap is not None:
-        s = s_end
+    run = settle(
+        integ, integ.start(state0), tol=tol, max_periods=max_periods, min_periods=min_periods, floor=scale_c
+    )
+    y_hist, q_hist, s = integ.stepped(run.start, output_dofs)  # the last period, all DOFs recorded
+    diffs, p, converged = run.differences, run.periods, run.converged
     return LinkTimeResponse(
         float(omega),
         y_hist,

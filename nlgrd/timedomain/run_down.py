@@ -7,7 +7,7 @@ the mesh frequency ω(t) = ω_0 - r t ramped linearly and the mesh phase its int
 θ(t) = ω_0 t - r t²/2, so the LSTE e(θ(t)) and its rate e' = ω(t) de/dθ follow the speed
 as they do on a rig whose motor is slowed down.
 
-Method: the HHT-α recurrence of :func:`nlgrd.timedomain.integrator.integrate_fe` with a
+Method: the HHT-α recurrence of :func:`nlgrd.timedomain.geared.integrate_fe` with a
 fixed step Δt = 2π / (ω_0 steps_per_period) throughout (finer per mesh cycle as the speed
 falls). The forcing c_m e' enters along w exactly as the mesh force does with the
 opposite sign, so the step sees one scalar force along w, G = g(δ - e) - c_m e', and the
@@ -213,7 +213,7 @@ def run_down(
         HHT-α parameter in [-1/3, 0] [-].
     tol : float
         Steady-state tolerance of the settling run at ``omega_start``
-        (:func:`nlgrd.timedomain.integrator.integrate_fe`) [-].
+        (:func:`nlgrd.timedomain.geared.integrate_fe`) [-].
     block : int
         Steps per block map [-].
     speed_rtol : float
