@@ -147,6 +147,36 @@ class Settled:
     section: NDArray
 
 
+def backlash_force(x_lin: float, stiffness: float, b: float, compliance: float) -> float:
+    """The mesh force g of an implicit step x + s g(x) = x_lin, g = k f(x), f the dead zone
+    of half-width b, s >= 0: x lies on the branch of x_lin (the left side increases with
+    x), where the equation is linear.
+
+    Parameters
+    ----------
+    x_lin : float
+        The step's x without the mesh force [m].
+    stiffness : float
+        k, the mesh stiffness at the step's end [N/m].
+    b : float
+        Half the backlash [m].
+    compliance : float
+        s, the step's compliance along the mesh, (1 + α) S [m/N].
+
+    Returns
+    -------
+    float
+        g [N].
+    """
+    k = stiffness
+    ck = compliance * k
+    if x_lin > b:
+        return k * ((x_lin + ck * b) / (1 + ck) - b)
+    if x_lin < -b:
+        return k * ((x_lin - ck * b) / (1 + ck) + b)
+    return 0.0
+
+
 class LinkIntegrator:
     """Fixed-step HHT-α integration of the reduced equations at one base frequency, period
     by period: the one time integrator of nlgrd's FE and link models.
@@ -336,13 +366,7 @@ class LinkIntegrator:
         the equation is linear: x = (x_lin ∓ c k b)/(1 + c k) beyond ±b, g = 0 inside.
         """
         e, k, b, c = self._mesh
-        x_lin, kj = y_lin - e[j], k[j]
-        if x_lin > b:
-            g = kj * ((x_lin + c * kj * b) / (1 + c * kj) - b)
-        elif x_lin < -b:
-            g = kj * ((x_lin - c * kj * b) / (1 + c * kj) + b)
-        else:
-            return y_lin, 0.0
+        g = backlash_force(y_lin - e[j], k[j], b, c)
         return y_lin - c * g, g
 
     def _newton_link(self, y_lin, j: int):

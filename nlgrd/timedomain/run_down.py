@@ -37,6 +37,7 @@ from nlgrd.nonlinear.models.geared import GearedModel
 from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.geared import time_response
 from nlgrd.timedomain.integrator import hht_step
+from nlgrd.timedomain.links import backlash_force
 from nlgrd.timedomain.period_map import PeriodMap
 
 
@@ -327,13 +328,7 @@ def ramp_from(
 
         def solve_link(y_lin: float, j: int, apcw=apcw, e_l=e_l, k_l=k_l, f_l=f_l) -> tuple[float, float]:
             pv = y_lin + apcw * f_l[j] - e_l[j]  # δ - e with no mesh force
-            k = k_l[j]
-            cc = apcw * k
-            g = (
-                k * ((pv + cc * b) / (1 + cc) - b)
-                if pv > b
-                else (k * ((pv - cc * b) / (1 + cc) + b) if pv < -b else 0.0)
-            )
+            g = backlash_force(pv, k_l[j], b, apcw)
             g_buf[j] = g
             return pv + e_l[j] - apcw * g, g - f_l[j]
 
