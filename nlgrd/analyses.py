@@ -213,13 +213,17 @@ def sweep(
         from nlgrd.nonlinear.models.link_model import link_sweep
 
         res = link_sweep(m, omegas, H, **common, **options)
-    if time_domain and period == "auto" and stability:
-        from nlgrd.nonlinear.models.link_model import build_link_model
-        from nlgrd.timedomain.sweep_answers import with_time_answers
+    from nlgrd.timedomain.sweep_answers import answer_sweep
 
-        links = m if not _single_mesh(system) else build_link_model(system)
-        res = with_time_answers(res, links, **(time_options or {}))
-    return res
+    return answer_sweep(
+        res,
+        system=system,
+        model=None if _single_mesh(system) else m,
+        period=period,
+        stability=stability,
+        time_domain=time_domain,
+        **(time_options or {}),
+    )
 
 
 def continuation(

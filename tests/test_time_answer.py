@@ -35,7 +35,7 @@ import pytest
 import nlgrd
 from nlgrd.nonlinear.models.link_model import build_link_model
 from nlgrd.nonlinear.results.response_kinds import CHAOTIC, TIME_DOMAIN
-from nlgrd.timedomain.sweep_answers import base_harmonics, with_time_answers
+from nlgrd.timedomain.sweep_answers import answer_sweep, base_harmonics, with_time_answers
 from nlgrd.timedomain.time_answer import batch_mean, mser5, record_max, time_answer
 
 KB = "data/case_studies/kahraman_blankenship.toml"
@@ -157,6 +157,19 @@ def test_command_line_switches():
         time_answers(
             Namespace(no_time_domain=False, no_stability=False, time_periods=10), None, sentinel, "auto"
         )
+
+
+def test_one_rule_for_every_sweep():
+    """answer_sweep is the rule nlgrd.sweep, ``nlgrd sweep`` and a study's task share: the
+    result is returned untouched unless stability is on, ``period`` is "auto" and
+    ``time_domain`` is set; where it applies it needs the model or its system."""
+    from nlgrd.errors import ModelError
+
+    sentinel = object()
+    for off in ({"stability": False}, {"period": 1}, {"period": 2}, {"time_domain": False}):
+        assert answer_sweep(sentinel, **off) is sentinel, off
+    with pytest.raises(ModelError, match="system"):
+        answer_sweep(sentinel)
 
 
 @pytest.mark.slow

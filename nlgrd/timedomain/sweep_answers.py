@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from nlgrd.errors import ModelError
 from nlgrd.nonlinear.models.geared import GearedSweepResult
 from nlgrd.nonlinear.models.link_model import LinkModel
 from nlgrd.nonlinear.results.link_results import LinkSweepResult
@@ -27,7 +28,7 @@ from nlgrd.nonlinear.results.response_kinds import uncertainty_column
 from nlgrd.nonlinear.results.sweep_results import SweepResult
 from nlgrd.timedomain.time_answer import TimeAnswer, time_answer
 
-__all__ = ["answer_gaps", "base_harmonics", "with_time_answers"]
+__all__ = ["answer_gaps", "answer_sweep", "base_harmonics", "with_time_answers"]
 
 
 def base_harmonics(harmonics: NDArray, base: int) -> NDArray:
@@ -159,3 +160,60 @@ def with_time_answers(
         res, answers = answer_gaps(model, result.result, progress=progress, **options)
         return LinkSweepResult(res, _link_frame(result.links, answers), result.bearings)
     return answer_gaps(model, result, progress=progress, **options)[0]
+
+
+def answer_sweep(
+    result,
+    *,
+    system=None,
+    model: LinkModel | None = None,
+    period: int | str = "auto",
+    stability: bool = True,
+    time_domain: bool = True,
+    progress: Callable[[int, int], None] | None = None,
+    **options,
+):
+    """The one rule of every sweep (``nlgrd.sweep``, ``nlgrd sweep``, a study's task): when
+    stability is on, ``period`` is "auto" and ``time_domain`` is set, the points without a
+    stable periodic response are answered by time integration (:func:`with_time_answers`);
+    otherwise ``result`` is returned as it is.
+
+    Parameters
+    ----------
+    result : GearedSweepResult, LinkSweepResult or SweepResult
+        The sweep.
+    system : RotorSystem, optional
+        The model; its link model is built from it when ``model`` is None (a sweep of one
+        mesh, whose reduced model is not a link model).
+    model : LinkModel, optional
+        The sweep's link model (a sweep of several meshes or clearances).
+    period : int or str
+        The sweep's ``period``: only "auto" tells a period doubling from a gap.
+    stability : bool
+        Whether the sweep computed Floquet stability (without it no point is a gap).
+    time_domain : bool
+        Whether the gaps are to be answered at all.
+    progress : callable, optional
+        ``progress(done, total)`` after each point answered.
+    **options
+        Options of :func:`~nlgrd.timedomain.time_answer.time_answer` (``periods``,
+        ``max_periods``, ...).
+
+    Returns
+    -------
+    The same type as ``result``.
+
+    Raises
+    ------
+    ModelError
+        Neither ``system`` nor ``model`` given while the rule applies.
+    """
+    if not (time_domain and stability and period == "auto"):
+        return result
+    if model is None:
+        if system is None:
+            raise ModelError("system", "answer_sweep needs the model or its system")
+        from nlgrd.nonlinear.models.link_model import build_link_model
+
+        model = build_link_model(system)
+    return with_time_answers(result, model, progress=progress, **options)
