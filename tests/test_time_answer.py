@@ -107,8 +107,9 @@ def test_statistics_against_a_four_times_longer_integration(kb_sweep):
     b = time_answer(model, w, harmonics=z, periods=4 * a.periods, max_periods=4 * a.periods)
     assert b.periods == 4 * a.periods
     assert a.transient_over and b.transient_over
-    for key, e in a.links.items():
-        f = b.links[key]
+    assert len(a.bearings) == 4 * 7  # K&B's four linear bearings, seven outputs each
+    for key, e in {**a.links, **a.bearings}.items():
+        f = {**b.links, **b.bearings}[key]
         bound = 2 * e.uncertainty + 2 * f.uncertainty
         assert abs(e.value - f.value) <= bound, (key, e, f)
     assert 0 < a.links["mesh0.dte_rms [m]"].uncertainty < 0.05 * a.links["mesh0.dte_rms [m]"].value
@@ -129,7 +130,9 @@ def test_sweep_answers_its_gaps_and_draws_them_apart(kb_sweep):
     assert np.all(frame["dte_rms_uncertainty [um]"].iloc[1:] > 0)
     assert frame["period"].iloc[1:].isna().all()  # no period: not a periodic orbit
     bearing = [c for c in frame.columns if c.endswith("force_rms [N]")]
-    assert bearing and frame[bearing].iloc[1:].isna().all().all()  # not computed there
+    assert bearing and np.all(np.isfinite(frame[bearing].to_numpy()))  # every row has them
+    unc = [c.replace("force_rms [N]", "force_rms_uncertainty [N]") for c in bearing]
+    assert frame[unc].iloc[0].isna().all() and (frame[unc].iloc[1:] > 0).all().all()
     ax = out.plot("dte_rms")
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert not any("no stable periodic response" in t for t in labels)

@@ -6,8 +6,10 @@ from that unstable orbit (its mesh-periodic part), and its ``response`` becomes
 
 A point whose harmonic balance did not converge stays "not converged" (no orbit to start
 from); a point whose transient outlasts ``max_periods`` (its MSER-5 cut in the record's
-second half) stays unanswered, as it was. The bearing forces of the linear bearings are
-not computed for the time-answered points (NaN).
+second half) stays unanswered, as it was. The linear bearings' displacements and forces
+are recorded along the integration (:mod:`nlgrd.timedomain.bearing_record`), so a
+time-answered row has the same bearing columns as a periodic one, each with its
+uncertainty.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from numpy.typing import NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.models.geared import GearedSweepResult
 from nlgrd.nonlinear.models.link_model import LinkModel
+from nlgrd.nonlinear.results.bearing_loads import BearingResponse
 from nlgrd.nonlinear.results.link_results import LinkSweepResult
 from nlgrd.nonlinear.results.metrics import METRIC_NAMES
 from nlgrd.nonlinear.results.response_kinds import uncertainty_column
@@ -114,11 +117,30 @@ def answer_gaps(
     return dc.replace(result, time_kind=kind, metrics=metrics, uncertainty=unc, amplitudes=amps), answers
 
 
+def _bearing_response(result: GearedSweepResult, answers: dict[int, TimeAnswer]):
+    """A geared sweep's bearing outputs with the answered rows' values, and their
+    uncertainties (NaN at the other rows)."""
+    fields = list(BearingResponse.__dataclass_fields__)
+    values = {f: np.array(getattr(result.bearings, f), dtype=float, copy=True) for f in fields}
+    unc = {f: np.full_like(values[f], np.nan) for f in fields}
+    if result.bearing_uncertainty is not None:
+        unc = {f: np.array(getattr(result.bearing_uncertainty, f), dtype=float, copy=True) for f in fields}
+    for i, a in answers.items():
+        for j, name in enumerate(result.bearing_names):
+            for f in fields:
+                e = a.bearings.get(f"{name}.{f} [{'m' if f.startswith('displacement') else 'N'}]")
+                if e is not None:
+                    values[f][i, j], unc[f][i, j] = e.value, e.uncertainty
+    return BearingResponse(**values), BearingResponse(**unc)
+
+
 def _link_frame(links: pd.DataFrame, answers: dict[int, TimeAnswer]) -> pd.DataFrame:
-    """A link sweep's columns with the answered rows' values and their uncertainty columns."""
+    """A link sweep's columns with the answered rows' values and their uncertainty columns
+    (the linear bearings' too, where the frame has their columns)."""
     out = links.copy()
     for i, a in answers.items():
-        for key, e in a.links.items():
+        bearings = {k: e for k, e in a.bearings.items() if k in out.columns}
+        for key, e in {**a.links, **bearings}.items():
             out.loc[i, key] = e.value
             if key.rsplit(".", 1)[-1] != "back_contact":
                 col = uncertainty_column(key)
@@ -154,8 +176,11 @@ def with_time_answers(
     The same type as ``result``.
     """
     if isinstance(result, GearedSweepResult):
-        res, _ = answer_gaps(model, result.mesh, progress=progress, **options)
-        return dc.replace(result, mesh=res)
+        res, answers = answer_gaps(model, result.mesh, progress=progress, **options)
+        if not answers:
+            return dc.replace(result, mesh=res)
+        bearings, unc = _bearing_response(result, answers)
+        return dc.replace(result, mesh=res, bearings=bearings, bearing_uncertainty=unc)
     if isinstance(result, LinkSweepResult):
         res, answers = answer_gaps(model, result.result, progress=progress, **options)
         return LinkSweepResult(res, _link_frame(result.links, answers), result.bearings)
