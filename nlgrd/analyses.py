@@ -190,8 +190,10 @@ def sweep(
         ``progress(i, n)`` once per point.
     time_domain : bool
         With ``period`` "auto" and stability: every point without a stable periodic
-        response answered by time integration (:mod:`nlgrd.timedomain.sweep_answers`;
-        ``response`` "time domain" or "chaotic", values with their uncertainty).
+        response answered (:func:`nlgrd.timedomain.sweep_answers.answer_sweep`): on one
+        mesh a Neimark-Sacker point by the torus harmonic balance where it converges
+        (``response`` "quasi-periodic"), the others by time integration (``response``
+        "time domain" or "chaotic", values with their uncertainty).
     time_options : dict, optional
         Options of :func:`nlgrd.timedomain.time_answer.time_answer` (``max_periods``, ...).
     **options
@@ -222,6 +224,7 @@ def sweep(
         period=period,
         stability=stability,
         time_domain=time_domain,
+        **({"rtol": options["harmonic_rtol"]} if "harmonic_rtol" in options else {}),
         **(time_options or {}),
     )
 

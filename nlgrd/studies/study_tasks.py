@@ -258,6 +258,7 @@ def _time_answers(res, model, analysis: dict, system=None):
         period="auto",
         stability=analysis["stability"],
         time_domain=analysis.get("time_domain", True),
+        rtol=analysis["tolerance"],
     )
 
 
