@@ -34,7 +34,7 @@ import pytest
 
 import nlgrd
 from nlgrd.nonlinear.models.link_model import build_link_model
-from nlgrd.nonlinear.results.response_kinds import CHAOTIC, TIME_DOMAIN
+from nlgrd.nonlinear.results.response_kinds import CHAOTIC, TIME_DOMAIN, uncertainty_column
 from nlgrd.timedomain.sweep_answers import answer_sweep, base_harmonics, with_time_answers
 from nlgrd.timedomain.time_answer import batch_mean, mser5, record_max, time_answer
 
@@ -218,3 +218,7 @@ def test_link_sweep_answers_its_gaps():
     assert np.isfinite(frame["mesh0.dte_rms [m]"].iloc[1])
     assert frame["mesh0.dte_rms_uncertainty [m]"].iloc[1] > 0
     assert np.isnan(frame["mesh0.dte_rms_uncertainty [m]"].iloc[0])
+    # the linear bearings' columns at the answered row too, with their uncertainty
+    assert out.bearings and all(np.isfinite(frame[c].iloc[1]) for c in out.bearings)
+    unc = [uncertainty_column(c) for c in out.bearings]
+    assert all(frame[c].iloc[1] > 0 for c in unc) and frame[unc].iloc[0].isna().all()
