@@ -519,6 +519,9 @@ TORUS_MAX_H = 17
 #: critical mode or the previous torus (benchmarks/torus_kubo_reference*.csv); a start
 #: that has not converged by then is abandoned (a chaotic band costs 60 a start otherwise).
 ANSWER_MAX_ITER = 25
+#: Relative residual of a sweep's torus solve: below the default 1e-8, so that the noise
+#: its start carries (the Floquet mode's last bits) stays far below the digits written.
+ANSWER_TOL = 1e-10
 #: The starts a sweep's torus tries from the periodic orbit (the first two of
 #: :data:`START_SIZES`; the first started every Kubo torus of the reference band).
 ANSWER_START_SIZES = START_SIZES[:2]
@@ -645,6 +648,7 @@ def converged_tori(
             H=Hr,
             H2=H2,
             periodic=starts,
+            tol=ANSWER_TOL,
             max_iter=ANSWER_MAX_ITER,
             start_sizes=ANSWER_START_SIZES,
         )
