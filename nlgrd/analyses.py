@@ -190,8 +190,10 @@ def sweep(
         ``progress(i, n)`` once per point.
     time_domain : bool
         With ``period`` "auto" and stability: every point without a stable periodic
-        response answered by time integration (:mod:`nlgrd.timedomain.sweep_answers`;
-        ``response`` "time domain" or "chaotic", values with their uncertainty).
+        response answered (:func:`nlgrd.timedomain.sweep_answers.answer_sweep`): on one
+        mesh a Neimark-Sacker point by the torus harmonic balance where it converges
+        (``response`` "quasi-periodic"), the others by time integration (``response``
+        "time domain" or "chaotic", values with their uncertainty).
     time_options : dict, optional
         Options of :func:`nlgrd.timedomain.time_answer.time_answer` (``max_periods``, ...).
     **options
@@ -213,13 +215,18 @@ def sweep(
         from nlgrd.nonlinear.models.link_model import link_sweep
 
         res = link_sweep(m, omegas, H, **common, **options)
-    if time_domain and period == "auto" and stability:
-        from nlgrd.nonlinear.models.link_model import build_link_model
-        from nlgrd.timedomain.sweep_answers import with_time_answers
+    from nlgrd.timedomain.sweep_answers import answer_sweep
 
-        links = m if not _single_mesh(system) else build_link_model(system)
-        res = with_time_answers(res, links, **(time_options or {}))
-    return res
+    return answer_sweep(
+        res,
+        system=system,
+        model=None if _single_mesh(system) else m,
+        period=period,
+        stability=stability,
+        time_domain=time_domain,
+        **({"rtol": options["harmonic_rtol"]} if "harmonic_rtol" in options else {}),
+        **(time_options or {}),
+    )
 
 
 def continuation(

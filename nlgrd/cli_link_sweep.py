@@ -68,7 +68,7 @@ def link_quantity(text: str | None, model) -> tuple[str, str]:
 
 def time_answers(args, system, res, period, model=None):
     """``res`` with its points without a stable periodic response answered in the time
-    domain (:func:`nlgrd.timedomain.sweep_answers.with_time_answers`), unless
+    domain (:func:`nlgrd.timedomain.sweep_answers.answer_sweep`), unless
     ``--no-time-domain``, ``--no-stability`` or a ``--period`` other than auto.
 
     Parameters
@@ -91,23 +91,24 @@ def time_answers(args, system, res, period, model=None):
     Raises
     ------
     ModelError
-        ``--time-periods`` below 80.
+        ``--time-periods`` below 80 (also where the rule does not apply).
     """
-    if args.no_time_domain or args.no_stability or period != "auto":
-        return res
-    if args.time_periods < 80:
-        raise ModelError("--time-periods", f"must be at least 80, got {args.time_periods}")
+    cap = getattr(args, "time_periods", None)
+    if cap is not None and cap < 80:  # a bad value is reported even where unused
+        raise ModelError("--time-periods", f"must be at least 80, got {cap}")
     from nlgrd.io.command_line import ProgressBar
-    from nlgrd.nonlinear.models.link_model import build_link_model
-    from nlgrd.timedomain.sweep_answers import with_time_answers
+    from nlgrd.timedomain.sweep_answers import answer_sweep
 
-    cap = int(args.time_periods)
-    return with_time_answers(
+    periods = {} if cap is None else {"periods": min(512, int(cap)), "max_periods": int(cap)}
+    return answer_sweep(
         res,
-        model if model is not None else build_link_model(system),
+        system=system,
+        model=model,
+        period=period,
+        stability=not args.no_stability,
+        time_domain=not args.no_time_domain,
         progress=ProgressBar("time domain"),
-        periods=min(512, cap),
-        max_periods=cap,
+        **periods,
     )
 
 

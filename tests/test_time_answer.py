@@ -34,8 +34,8 @@ import pytest
 
 import nlgrd
 from nlgrd.nonlinear.models.link_model import build_link_model
-from nlgrd.nonlinear.results.response_kinds import CHAOTIC, TIME_DOMAIN
-from nlgrd.timedomain.sweep_answers import base_harmonics, with_time_answers
+from nlgrd.nonlinear.results.response_kinds import CHAOTIC, TIME_DOMAIN, uncertainty_column
+from nlgrd.timedomain.sweep_answers import answer_sweep, base_harmonics, with_time_answers
 from nlgrd.timedomain.time_answer import batch_mean, mser5, record_max, time_answer
 
 KB = "data/case_studies/kahraman_blankenship.toml"
@@ -107,8 +107,9 @@ def test_statistics_against_a_four_times_longer_integration(kb_sweep):
     b = time_answer(model, w, harmonics=z, periods=4 * a.periods, max_periods=4 * a.periods)
     assert b.periods == 4 * a.periods
     assert a.transient_over and b.transient_over
-    for key, e in a.links.items():
-        f = b.links[key]
+    assert len(a.bearings) == 4 * 7  # K&B's four linear bearings, seven outputs each
+    for key, e in {**a.links, **a.bearings}.items():
+        f = {**b.links, **b.bearings}[key]
         bound = 2 * e.uncertainty + 2 * f.uncertainty
         assert abs(e.value - f.value) <= bound, (key, e, f)
     assert 0 < a.links["mesh0.dte_rms [m]"].uncertainty < 0.05 * a.links["mesh0.dte_rms [m]"].value
@@ -129,7 +130,9 @@ def test_sweep_answers_its_gaps_and_draws_them_apart(kb_sweep):
     assert np.all(frame["dte_rms_uncertainty [um]"].iloc[1:] > 0)
     assert frame["period"].iloc[1:].isna().all()  # no period: not a periodic orbit
     bearing = [c for c in frame.columns if c.endswith("force_rms [N]")]
-    assert bearing and frame[bearing].iloc[1:].isna().all().all()  # not computed there
+    assert bearing and np.all(np.isfinite(frame[bearing].to_numpy()))  # every row has them
+    unc = [c.replace("force_rms [N]", "force_rms_uncertainty [N]") for c in bearing]
+    assert frame[unc].iloc[0].isna().all() and (frame[unc].iloc[1:] > 0).all().all()
     ax = out.plot("dte_rms")
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert not any("no stable periodic response" in t for t in labels)
@@ -157,6 +160,19 @@ def test_command_line_switches():
         time_answers(
             Namespace(no_time_domain=False, no_stability=False, time_periods=10), None, sentinel, "auto"
         )
+
+
+def test_one_rule_for_every_sweep():
+    """answer_sweep is the rule nlgrd.sweep, ``nlgrd sweep`` and a study's task share: the
+    result is returned untouched unless stability is on, ``period`` is "auto" and
+    ``time_domain`` is set; where it applies it needs the model or its system."""
+    from nlgrd.errors import ModelError
+
+    sentinel = object()
+    for off in ({"stability": False}, {"period": 1}, {"period": 2}, {"time_domain": False}):
+        assert answer_sweep(sentinel, **off) is sentinel, off
+    with pytest.raises(ModelError, match="system"):
+        answer_sweep(sentinel)
 
 
 @pytest.mark.slow
@@ -202,3 +218,7 @@ def test_link_sweep_answers_its_gaps():
     assert np.isfinite(frame["mesh0.dte_rms [m]"].iloc[1])
     assert frame["mesh0.dte_rms_uncertainty [m]"].iloc[1] > 0
     assert np.isnan(frame["mesh0.dte_rms_uncertainty [m]"].iloc[0])
+    # the linear bearings' columns at the answered row too, with their uncertainty
+    assert out.bearings and all(np.isfinite(frame[c].iloc[1]) for c in out.bearings)
+    unc = [uncertainty_column(c) for c in out.bearings]
+    assert all(frame[c].iloc[1] > 0 for c in unc) and frame[unc].iloc[0].isna().all()

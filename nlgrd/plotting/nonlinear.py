@@ -50,6 +50,11 @@ QUASI_PERIODIC = "quasi-periodic"
 NO_STABLE = "no stable mesh-periodic response"
 #: ... of points answered by time integration: (value, marker), drawn with error bars.
 TIME_ANSWERS = (("time domain", "D"), ("chaotic", "*"))
+#: The ``verdict`` of a point whose stability was not computed (a torus answer's).
+NOT_COMPUTED = "not computed"
+#: The legend's name of a quasi-periodic point answered by the torus harmonic balance (a
+#: "quasi-periodic" row whose verdict is "not computed"), drawn as an open square, not joined.
+TORUS_ANSWER = ("quasi-periodic (torus HB)", "s")
 
 
 def _stability(frame: pd.DataFrame) -> np.ndarray:
@@ -144,7 +149,10 @@ def plot_sweep_frame(
         codes = _stability(part)
         yv = np.where(conv, yv, np.nan)
         resp = part["response"].astype(str).to_numpy() if "response" in part else np.full(len(part), "")
-        timed = np.isin(resp, [k for k, _ in TIME_ANSWERS]) & conv
+        if "verdict" in part:  # a torus answer: quasi-periodic, its stability "not computed"
+            torus = (resp == QUASI_PERIODIC) & (part["verdict"].astype(str).to_numpy() == NOT_COMPUTED)
+            resp = np.where(torus & conv, TORUS_ANSWER[0], resp)
+        timed = np.isin(resp, [k for k, _ in (*TIME_ANSWERS, TORUS_ANSWER)]) & conv
         yt, yv = np.where(timed, yv, np.nan), np.where(timed, np.nan, yv)  # never drawn as periodic
         colour = colours.get(d, next(iter(colours.values())))
         name = f"{label} {d}" if label else d
@@ -186,7 +194,8 @@ def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms) -> None:
         at = conv & (resp == kind) & np.isfinite(yv)
         ax.plot(xv[at], yv[at], "o", ms=2.2 * ms, mfc="none", mec=colour, mew=0.8, ls="none",
                 label=f"{name}: {kind} ({int(at.sum())})")  # fmt: skip
-    lost = conv & ~period & ~np.isin(resp, (PERIODIC, "<NA>", "nan", *(k for k, _ in TIME_ANSWERS)))
+    answered = (*(k for k, _ in TIME_ANSWERS), TORUS_ANSWER[0])
+    lost = conv & ~period & ~np.isin(resp, (PERIODIC, "<NA>", "nan", *answered))
     quasi = resp == QUASI_PERIODIC
     mark_not_converged(ax, xv[lost & quasi], colour, name, "quasi-periodic", marker="2")
     mark_not_converged(ax, xv[lost & ~quasi], colour, name, "no stable periodic response", marker="1")
@@ -201,7 +210,12 @@ def _uncertainty_column(column: str) -> str:
 
 def _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms) -> None:
     """Time-domain answers: open diamonds ("time domain") or stars ("chaotic") at their
-    value, not joined, with error bars of 2 standard uncertainties, each kind counted."""
+    value, not joined, with error bars of 2 standard uncertainties, each kind counted; the
+    torus harmonic balance's quasi-periodic answers as open squares (no sampling error)."""
+    at = (resp == TORUS_ANSWER[0]) & np.isfinite(yt)
+    if at.any():
+        ax.plot(xv[at], yt[at], TORUS_ANSWER[1], ms=1.2 * ms, mfc="none", mec=colour, ls="none",
+                label=f"{name}: {TORUS_ANSWER[0]} ({int(at.sum())})")  # fmt: skip
     for kind, marker in TIME_ANSWERS:
         at = (resp == kind) & np.isfinite(yt)
         if not at.any():
@@ -256,7 +270,10 @@ def _responses(result) -> np.ndarray:
     """The "response" column of a sweep's table (periodic, period ν, quasi-periodic, no
     stable response), "periodic" for results without one."""
     if hasattr(result, "period") and hasattr(result, "to_frame"):
-        return result.to_frame()["response"].astype(str).to_numpy(object)
+        frame = result.to_frame()
+        resp = frame["response"].astype(str).to_numpy(object)
+        torus = (resp == QUASI_PERIODIC) & (frame["verdict"].astype(str).to_numpy() == NOT_COMPUTED)
+        return np.where(torus, TORUS_ANSWER[0], resp)
     no_stable = getattr(result, "no_stable", np.zeros(len(result.omega), dtype=bool))
     return np.where(no_stable, NO_STABLE, PERIODIC)
 

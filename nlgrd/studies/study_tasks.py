@@ -246,15 +246,20 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
 
 def _time_answers(res, model, analysis: dict, system=None):
     """``res`` with its points without a stable periodic orbit answered by time integration
-    (:func:`nlgrd.timedomain.sweep_answers.with_time_answers`, as ``nlgrd sweep`` does),
+    (:func:`nlgrd.timedomain.sweep_answers.answer_sweep`, the rule ``nlgrd sweep`` follows),
     when the analysis has stability and ``time_domain``; ``model`` the link model (None:
     built from ``system``)."""
-    if not (analysis["stability"] and analysis.get("time_domain", True)):
-        return res
-    from nlgrd.nonlinear.models.link_model import build_link_model
-    from nlgrd.timedomain.sweep_answers import with_time_answers
+    from nlgrd.timedomain.sweep_answers import answer_sweep
 
-    return with_time_answers(res, model if model is not None else build_link_model(system))
+    return answer_sweep(  # period "auto": both sweeps of a task run with it
+        res,
+        system=system,
+        model=model,
+        period="auto",
+        stability=analysis["stability"],
+        time_domain=analysis.get("time_domain", True),
+        rtol=analysis["tolerance"],
+    )
 
 
 def _peak(frame: pd.DataFrame, columns: list, scales: list | None = None) -> float:

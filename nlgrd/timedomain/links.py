@@ -530,6 +530,40 @@ class LinkIntegrator:
             return rec.y, rec.end
         return self.pmap.run(s, self._solve_link)
 
+    def period_forces(self, s: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """One period on the period map (as :meth:`period`), with the link forces it solved.
+
+        Parameters
+        ----------
+        s : ndarray (3N + d,)
+            The extended state at the start of the period.
+
+        Returns
+        -------
+        y : ndarray (d, ns)
+            Link coordinates at the start of each step [m].
+        g : ndarray (ns, d)
+            Link forces at the end of each step [N].
+        s : ndarray (3N + d,)
+            The extended state at the end of the period.
+
+        Raises
+        ------
+        ModelError
+            The model is too large for a period map (use :meth:`stepped`).
+        """
+        if self.pmap is None:
+            raise ModelError("model", f"{self.N} DOFs: no period map, step it (LinkIntegrator.stepped)")
+        g = np.empty((self.ns, self.d))
+
+        def solve(y_lin, j):
+            yj, gj = self._solve_link(y_lin, j)
+            g[j] = gj
+            return yj, gj
+
+        y, s_end = self.pmap.run(s, solve)
+        return y, g, s_end
+
 
 def settle(
     integ: LinkIntegrator,

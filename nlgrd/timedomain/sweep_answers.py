@@ -1,4 +1,8 @@
-"""A sweep's gaps answered in the time domain: every point where the harmonic balance
+"""A sweep's gaps answered: :func:`answer_sweep` is the rule every sweep follows. On a
+sweep of one mesh a point whose orbit lost stability to a complex pair is first answered
+by the torus harmonic balance where it converges within the sweep's tolerance
+(:func:`with_torus_answers`: "quasi-periodic", its stability not computed); then in the
+time domain (:func:`with_time_answers`): every point where the harmonic balance
 converged on an orbit but no stable periodic response exists (``no_stable``: quasi-periodic
 or none) gets the statistics of :func:`nlgrd.timedomain.time_answer.time_answer`, started
 from that unstable orbit (its mesh-periodic part), and its ``response`` becomes
@@ -6,8 +10,10 @@ from that unstable orbit (its mesh-periodic part), and its ``response`` becomes
 
 A point whose harmonic balance did not converge stays "not converged" (no orbit to start
 from); a point whose transient outlasts ``max_periods`` (its MSER-5 cut in the record's
-second half) stays unanswered, as it was. The bearing forces of the linear bearings are
-not computed for the time-answered points (NaN).
+second half) stays unanswered, as it was. The linear bearings' displacements and forces
+are recorded along the integration (:mod:`nlgrd.timedomain.bearing_record`), so a
+time-answered row has the same bearing columns as a periodic one, each with its
+uncertainty.
 """
 
 from __future__ import annotations
@@ -19,15 +25,18 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from nlgrd.errors import ModelError
 from nlgrd.nonlinear.models.geared import GearedSweepResult
 from nlgrd.nonlinear.models.link_model import LinkModel
+from nlgrd.nonlinear.results.bearing_loads import BearingResponse
 from nlgrd.nonlinear.results.link_results import LinkSweepResult
 from nlgrd.nonlinear.results.metrics import METRIC_NAMES
-from nlgrd.nonlinear.results.response_kinds import uncertainty_column
+from nlgrd.nonlinear.results.response_kinds import QUASI_PERIODIC, uncertainty_column
 from nlgrd.nonlinear.results.sweep_results import SweepResult
+from nlgrd.nonlinear.tracing.harmonic_convergence import OUTPUT_RTOL
 from nlgrd.timedomain.time_answer import TimeAnswer, time_answer
 
-__all__ = ["answer_gaps", "base_harmonics", "with_time_answers"]
+__all__ = ["answer_gaps", "answer_sweep", "base_harmonics", "with_time_answers", "with_torus_answers"]
 
 
 def base_harmonics(harmonics: NDArray, base: int) -> NDArray:
@@ -79,7 +88,8 @@ def answer_gaps(
     dict of int to TimeAnswer
         The answers by row.
     """
-    rows = np.nonzero(np.asarray(result.converged, bool) & np.asarray(result.no_stable, bool))[0]
+    gaps = np.asarray(result.converged, bool) & np.asarray(result.no_stable, bool)
+    rows = np.nonzero(gaps & ~np.asarray(result.time_answered, bool))[0]  # a torus's stays
     answers: dict[int, TimeAnswer] = {}
     for n, i in enumerate(rows):
         z = base_harmonics(result.harmonics[i], int(result.base))
@@ -113,11 +123,30 @@ def answer_gaps(
     return dc.replace(result, time_kind=kind, metrics=metrics, uncertainty=unc, amplitudes=amps), answers
 
 
+def _bearing_response(result: GearedSweepResult, answers: dict[int, TimeAnswer]):
+    """A geared sweep's bearing outputs with the answered rows' values, and their
+    uncertainties (NaN at the other rows)."""
+    fields = list(BearingResponse.__dataclass_fields__)
+    values = {f: np.array(getattr(result.bearings, f), dtype=float, copy=True) for f in fields}
+    unc = {f: np.full_like(values[f], np.nan) for f in fields}
+    if result.bearing_uncertainty is not None:
+        unc = {f: np.array(getattr(result.bearing_uncertainty, f), dtype=float, copy=True) for f in fields}
+    for i, a in answers.items():
+        for j, name in enumerate(result.bearing_names):
+            for f in fields:
+                e = a.bearings.get(f"{name}.{f} [{'m' if f.startswith('displacement') else 'N'}]")
+                if e is not None:
+                    values[f][i, j], unc[f][i, j] = e.value, e.uncertainty
+    return BearingResponse(**values), BearingResponse(**unc)
+
+
 def _link_frame(links: pd.DataFrame, answers: dict[int, TimeAnswer]) -> pd.DataFrame:
-    """A link sweep's columns with the answered rows' values and their uncertainty columns."""
+    """A link sweep's columns with the answered rows' values and their uncertainty columns
+    (the linear bearings' too, where the frame has their columns)."""
     out = links.copy()
     for i, a in answers.items():
-        for key, e in a.links.items():
+        bearings = {k: e for k, e in a.bearings.items() if k in out.columns}
+        for key, e in {**a.links, **bearings}.items():
             out.loc[i, key] = e.value
             if key.rsplit(".", 1)[-1] != "back_contact":
                 col = uncertainty_column(key)
@@ -153,9 +182,177 @@ def with_time_answers(
     The same type as ``result``.
     """
     if isinstance(result, GearedSweepResult):
-        res, _ = answer_gaps(model, result.mesh, progress=progress, **options)
-        return dc.replace(result, mesh=res)
+        res, answers = answer_gaps(model, result.mesh, progress=progress, **options)
+        if not answers:
+            return dc.replace(result, mesh=res)
+        bearings, unc = _bearing_response(result, answers)
+        return dc.replace(result, mesh=res, bearings=bearings, bearing_uncertainty=unc)
     if isinstance(result, LinkSweepResult):
         res, answers = answer_gaps(model, result.result, progress=progress, **options)
         return LinkSweepResult(res, _link_frame(result.links, answers), result.bearings)
     return answer_gaps(model, result, progress=progress, **options)[0]
+
+
+#: Significant digits a torus answer's values are written to: its Newton stops at a
+#: relative residual of 1e-10, and its start (the critical Floquet mode, whose last bits
+#: vary from process to process) moves the converged values by up to 3e-13 relative
+#: (measured on Kubo; at 1e-8 residual), far below the torus's own truncation estimate
+#: (>= 1e-4); 8 digits keep a rerun's table byte-identical.
+TORUS_DIGITS = 8
+
+
+def _digits(values):
+    """``values`` rounded to :data:`TORUS_DIGITS` significant digits."""
+    v = np.array(values, dtype=float, ndmin=1)
+    ok = np.isfinite(v) & (v != 0)
+    e = np.floor(np.log10(np.abs(v[ok])))
+    v[ok] = np.round(v[ok] / 10**e, TORUS_DIGITS - 1) * 10**e
+    return v if np.ndim(values) else float(v[0])
+
+
+def with_torus_answers(result: GearedSweepResult, system, *, rtol: float = OUTPUT_RTOL) -> GearedSweepResult:
+    """A geared sweep with its Neimark-Sacker points answered by the torus harmonic balance
+    where it converges within ``rtol`` (:func:`nlgrd.nonlinear.tracing.torus_sweep.converged_tori`):
+    every converged point whose mesh-periodic orbit lost stability to a complex pair
+    (finite ``secondary_frequency``), each direction's in the sweep's order so that a torus
+    is followed from the previous point's. An accepted point's ``response`` is
+    "quasi-periodic" (``time_kind``), its metrics, DTE amplitudes (the k₂ = 0 part),
+    bearing columns and ``secondary_frequency`` the torus's, ``harmonic_error`` its
+    convergence estimate; the torus's stability is not computed (``verdict`` "not
+    computed", ``stable`` not written). The other points are left as they were.
+
+    Parameters
+    ----------
+    result : GearedSweepResult
+        The sweep (one mesh).
+    system : RotorSystem
+        Its model (the torus model is built from it).
+    rtol : float
+        The sweep's tolerance on its outputs [-].
+
+    Returns
+    -------
+    GearedSweepResult
+    """
+    from nlgrd.nonlinear.models.geared import build_geared_model
+    from nlgrd.nonlinear.tracing.torus_sweep import TORUS_LADDER, TORUS_MAX_H, converged_tori
+
+    mesh = result.mesh
+    ns = (
+        np.asarray(mesh.converged, bool)
+        & np.asarray(mesh.no_stable, bool)
+        & np.asarray(mesh.verdict_converged, bool)
+        & np.isfinite(mesh.secondary_frequency)
+        & ~np.asarray(mesh.time_answered, bool)
+    )
+    if not ns.any():
+        return result
+    H = int(mesh.H)
+    top = min(max(H, TORUS_MAX_H), H + max(TORUS_LADDER))
+    model = build_geared_model(system, float(np.max(mesh.omega)) * 1.0001, H=top + 4)
+    found = {}
+    for d in dict.fromkeys(np.asarray(mesh.direction)[ns].tolist()):
+        rows = np.nonzero(ns & (np.asarray(mesh.direction) == d))[0]
+        z = np.array([base_harmonics(mesh.harmonics[i], int(mesh.base)) for i in rows])
+        for i, a in zip(rows, converged_tori(model, mesh.omega[rows], z, H=H, rtol=rtol), strict=True):
+            if a is not None:
+                found[int(i)] = a
+    if not found:
+        return result
+    kind = np.array(mesh.time_kind, dtype=object)
+    metrics = {k: np.array(v, copy=True) for k, v in mesh.metrics.items()}
+    amps = np.array(mesh.amplitudes, dtype=float, copy=True)
+    secondary = np.array(mesh.torus_frequency, dtype=float, copy=True)
+    error = np.array(mesh.harmonic_error, dtype=float, copy=True)
+    fields = list(BearingResponse.__dataclass_fields__)
+    bearings = {f: np.array(getattr(result.bearings, f), dtype=float, copy=True) for f in fields}
+    for i, a in found.items():
+        kind[i] = QUASI_PERIODIC
+        for name in metrics:
+            metrics[name][i] = a.outputs[name] if name == "back_contact" else _digits(a.outputs[name])
+        Y = a.solution.Y[0]
+        k = min(amps.shape[1] - 1, a.H)
+        amps[i] = np.nan
+        amps[i, : k + 1] = _digits(np.abs(Y[: k + 1]))
+        secondary[i] = _digits(a.solution.secondary)
+        error[i] = a.error
+        for f in fields:
+            bearings[f][i] = _digits(a.bearings[f])
+    metrics["back_contact"] = metrics["back_contact"].astype(bool)
+    mesh = dc.replace(
+        mesh,
+        time_kind=kind,
+        metrics=metrics,
+        amplitudes=amps,
+        torus_frequency=secondary,
+        harmonic_error=error,
+    )
+    return dc.replace(result, mesh=mesh, bearings=BearingResponse(**bearings))
+
+
+def answer_sweep(
+    result,
+    *,
+    system=None,
+    model: LinkModel | None = None,
+    period: int | str = "auto",
+    stability: bool = True,
+    time_domain: bool = True,
+    torus: bool = True,
+    rtol: float = OUTPUT_RTOL,
+    progress: Callable[[int, int], None] | None = None,
+    **options,
+):
+    """The one rule of every sweep (``nlgrd.sweep``, ``nlgrd sweep``, a study's task): when
+    stability is on, ``period`` is "auto" and ``time_domain`` is set, the points without a
+    stable periodic response are answered: first, on a sweep of one mesh, the points
+    whose orbit lost stability to a complex pair by the torus harmonic balance where it
+    converges within ``rtol`` (:func:`with_torus_answers`), then every other one by time
+    integration (:func:`with_time_answers`); otherwise ``result`` is returned as it is.
+
+    Parameters
+    ----------
+    result : GearedSweepResult, LinkSweepResult or SweepResult
+        The sweep.
+    system : RotorSystem, optional
+        The model; its link model is built from it when ``model`` is None (a sweep of one
+        mesh, whose reduced model is not a link model).
+    model : LinkModel, optional
+        The sweep's link model (a sweep of several meshes or clearances).
+    period : int or str
+        The sweep's ``period``: only "auto" tells a period doubling from a gap.
+    stability : bool
+        Whether the sweep computed Floquet stability (without it no point is a gap).
+    time_domain : bool
+        Whether the gaps are to be answered at all.
+    torus : bool
+        Try the torus harmonic balance first (a sweep of one mesh with its ``system``).
+    rtol : float
+        The sweep's tolerance on its outputs, which a torus's convergence estimate must
+        meet [-].
+    progress : callable, optional
+        ``progress(done, total)`` after each point answered.
+    **options
+        Options of :func:`~nlgrd.timedomain.time_answer.time_answer` (``periods``,
+        ``max_periods``, ...).
+
+    Returns
+    -------
+    The same type as ``result``.
+
+    Raises
+    ------
+    ModelError
+        Neither ``system`` nor ``model`` given while the rule applies.
+    """
+    if not (time_domain and stability and period == "auto"):
+        return result
+    if torus and system is not None and isinstance(result, GearedSweepResult):
+        result = with_torus_answers(result, system, rtol=rtol)
+    if model is None:
+        if system is None:
+            raise ModelError("system", "answer_sweep needs the model or its system")
+        from nlgrd.nonlinear.models.link_model import build_link_model
+
+        model = build_link_model(system)
+    return with_time_answers(result, model, progress=progress, **options)

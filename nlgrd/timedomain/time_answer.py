@@ -12,7 +12,11 @@ period. From the per-period values of every output:
   outputs is taken. A minimum on the bound m/2 says the record is too short.
 - **Statistics** over the kept periods: the mean DTE, the RMS of its alternating part,
   the contact fractions (means of per-sample values) and the extremes (largest mesh
-  force, DTE peak-to-peak, largest clearance force and displacement) over the record.
+  force, DTE peak-to-peak, largest clearance force and displacement) over the record;
+  every linear bearing's outputs as a harmonic-balance row has them (its node's radial
+  displacement and force, -(K_b q + C_b q'), recorded step by step:
+  :mod:`nlgrd.timedomain.bearing_record`): the largest, the RMS of the alternating
+  part, the magnitude of the mean, and the base harmonic of the synchronous average.
 - **Sampling uncertainty** (standard uncertainty, k = 1): a mean's by non-overlapping
   batch means, B = 20 batches (Schmeiser 1982, Oper. Res. 30:556: 10-30 batches), the
   standard error sd(b)/√B inflated by sqrt((1 + r)/(1 - r)) where the lag-1 correlation
@@ -38,7 +42,9 @@ exceeds ``rtol`` (absolute for fractions) or the exponent is above the floor but
 standard errors of 0, up to ``max_periods`` (``settled`` says whether the targets were
 met, ``transient_over`` whether the cut lies in the first half). The cost is 2 x the
 periods integrated (the twin): 2-4 ms a period on Kubo's 84-DOF and K&B's 60-DOF
-models at 256 steps (docs/verification.md, "Time-domain answers").
+models at 256 steps (docs/verification.md, "Time-domain answers"), and the bearing
+record on the first trajectory (about 1 ms a period for K&B's four bearings). A
+bearing's statistics do not lengthen the record; their drift raises their uncertainty.
 """
 
 from __future__ import annotations
@@ -57,6 +63,7 @@ from nlgrd.nonlinear.models.link_model import LinkModel
 from nlgrd.nonlinear.results.response_kinds import CHAOTIC, TIME_DOMAIN
 from nlgrd.rotor.rigid_body import rigid_body_modes
 from nlgrd.threads import single_blas_thread
+from nlgrd.timedomain.bearing_record import BearingRecord
 from nlgrd.timedomain.links import LinkIntegrator, start_from_harmonics
 
 #: Batches of the batch-means uncertainty (Schmeiser 1982: 10 to 30).
@@ -118,6 +125,13 @@ class TimeAnswer:
     transient_over : bool
         Every MSER-5 cut lies inside the record's first half: the transient ended within
         it (False: it outlasts the record; the statistics are not the steady ones).
+    bearings : dict of str to Estimate
+        Every linear bearing's ``<bearing>.<quantity>``: the
+        :data:`~nlgrd.nonlinear.results.bearing_loads.BEARING_OUTPUTS` of a link sweep's
+        row (radial magnitudes over the record: the largest displacement and force, the
+        RMS of their alternating parts, the mean force's magnitude) and
+        ``displacement_mean [m]`` and ``force_amplitude [N]`` (the base harmonic of the
+        synchronous average, the larger of y and z) of a geared sweep's.
     """
 
     omega: float
@@ -132,6 +146,7 @@ class TimeAnswer:
     seconds: float
     state: tuple = field(repr=False, default=())
     transient_over: bool = True
+    bearings: dict = field(default_factory=dict)
 
 
 def mser5(x: NDArray, batch: int = MSER_BATCH) -> tuple[int, bool]:
@@ -236,8 +251,45 @@ class _Recorder:
 
     def __init__(self, integ: LinkIntegrator):
         self.integ = integ
+        self.bearings = BearingRecord(integ)
         self.rows: list[dict[str, float]] = []
         self.y_sums: list[NDArray] = []
+        th = 2 * np.pi * np.arange(integ.ns) / integ.ns
+        self._c, self._s = 2 * np.cos(th) / integ.ns, 2 * np.sin(th) / integ.ns
+
+    def period(self, s: NDArray) -> NDArray:
+        """One period of the integration from ``s``, recorded; the state at its end."""
+        N = self.integ.N
+        P = self.integ.P
+        vy, ay = P.T @ s[N : 2 * N], P.T @ s[2 * N : 3 * N]
+        y, q, s_new = self.bearings.period(s)
+        self.add(y, vy, ay)
+        if q.size:
+            self._bearings(q, self.bearings.forces(q, self.bearings.velocities(q, s)))
+        return s_new
+
+    def _bearings(self, q: NDArray, f: NDArray) -> None:
+        """Each bearing's per-period values: the means, mean squares and maxima of its
+        node's radial displacement and force, and the force's base harmonic."""
+        row = self.rows[-1]
+        for j, name in enumerate(self.bearings.names):
+            qy, qz, fy, fz = q[2 * j], q[2 * j + 1], f[2 * j], f[2 * j + 1]
+            row.update(
+                {
+                    f"{name}.qy": float(np.mean(qy)),
+                    f"{name}.qz": float(np.mean(qz)),
+                    f"{name}.qsq": float(np.mean(qy * qy + qz * qz)),
+                    f"{name}.qmax": float(np.max(np.hypot(qy, qz))),
+                    f"{name}.fy": float(np.mean(fy)),
+                    f"{name}.fz": float(np.mean(fz)),
+                    f"{name}.fsq": float(np.mean(fy * fy + fz * fz)),
+                    f"{name}.fmax": float(np.max(np.hypot(fy, fz))),
+                    f"{name}.fya": float(fy @ self._c),
+                    f"{name}.fyb": float(fy @ self._s),
+                    f"{name}.fza": float(fz @ self._c),
+                    f"{name}.fzb": float(fz @ self._s),
+                }
+            )
 
     def add(self, y: NDArray, v0: NDArray, a0: NDArray) -> None:
         integ, st = self.integ, self.integ.step
@@ -323,31 +375,34 @@ def _wnorm(ds: NDArray, N: int, omega: float) -> float:
 DRIFT_FLOOR = 1e-9
 
 
-def _statistics(rec: _Recorder, cut: int) -> tuple[dict, dict, bool]:
+def _statistics(rec: _Recorder, cut: int) -> tuple[dict, dict, dict, bool]:
     """Every link's statistics over the periods after ``cut``, the first mesh's metrics,
-    and whether any drifts: the statistic over the record's first half and over its second
-    differ by more than 3 of their combined uncertainties (and :data:`DRIFT_FLOOR`
+    the linear bearings' outputs, and whether a link's drifts: the statistic over the
+    record's first half and over its second differ by more than 3 of their combined
+    uncertainties (and :data:`DRIFT_FLOOR`
     relative), a two-part stationarity test in the manner of Geweke 1992 (Bayesian
     Statistics 4:169) that catches the slow end of a transient batch means miss. A
     drifting statistic's uncertainty is raised to that difference, every one to at least
-    :data:`DRIFT_FLOOR` of its value."""
+    :data:`DRIFT_FLOOR` of its value. A bearing's drift raises its uncertainty alike but
+    does not lengthen the record (the links' statistics decide it, as before bearings
+    were recorded)."""
     n = len(rec.rows) - cut
-    links, mesh = _statistics_of(rec, cut, None)
+    links, mesh, bearings = _statistics_of(rec, cut, None)
     halves = _statistics_of(rec, cut, cut + n // 2), _statistics_of(rec, cut + n // 2, None)
     thirds = [_statistics_of(rec, cut + j * n // 3, cut + (j + 1) * n // 3) for j in range(3)]
     drift = False
-    for w, full in enumerate((links, mesh)):
+    for w, full in enumerate((links, mesh, bearings)):
         a, b = halves[0][w], halves[1][w]
         for k, e in full.items():
             gap = abs(a[k].value - b[k].value)
             floor = DRIFT_FLOOR * abs(e.value)
             drifts = gap > 3 * math.hypot(a[k].uncertainty, b[k].uncertainty) and gap > floor
-            drift = drift or drifts
+            drift = drift or (drifts and w < 2)  # the links' drift extends the record
             full[k] = Estimate(
                 e.value,
                 max(e.uncertainty, _tail(gap, [t[w][k].value for t in thirds]) if drifts else 0.0, floor),
             )
-    return links, mesh, drift
+    return links, mesh, bearings, drift
 
 
 def _tail(gap: float, thirds: list[float]) -> float:
@@ -359,8 +414,53 @@ def _tail(gap: float, thirds: list[float]) -> float:
     return max(gap, abs(d2) * r / (1 - r)) if 0 < r < 1 else gap
 
 
-def _statistics_of(rec: _Recorder, cut: int, stop: int | None) -> tuple[dict, dict]:
-    """Every link's statistics over the periods ``cut:stop``, and the first mesh's metrics."""
+def _vector_mean(x: NDArray, y: NDArray) -> Estimate:
+    """|(mean x, mean y)| of per-period means, its uncertainty that of the per-period
+    values projected on the mean's direction (the magnitude linearised there)."""
+    mx, my = batch_mean(x).value, batch_mean(y).value
+    r = math.hypot(mx, my)
+    if r == 0:
+        return Estimate(0.0, math.hypot(batch_mean(x).uncertainty, batch_mean(y).uncertainty))
+    return Estimate(r, batch_mean((mx * x + my * y) / r).uncertainty)
+
+
+def _vector_rms(x: NDArray, y: NDArray, msq: NDArray) -> Estimate:
+    """RMS of the alternating part of a plane vector from its per-period means and mean
+    squares of the magnitude (the delta method of :func:`_rms` on both components)."""
+    mx, my = batch_mean(x).value, batch_mean(y).value
+    rms = math.sqrt(max(float(np.mean(msq)) - mx * mx - my * my, 0.0))
+    u = batch_mean(np.asarray(msq) - 2 * mx * np.asarray(x) - 2 * my * np.asarray(y)).uncertainty
+    return Estimate(rms, u / (2 * rms) if rms > 0 else 0.0)
+
+
+def _bearing_statistics(rec: _Recorder, cut: int, stop: int | None) -> dict[str, Estimate]:
+    """Every linear bearing's outputs over the periods ``cut:stop``."""
+    out: dict[str, Estimate] = {}
+    if not rec.bearings.dofs.size:
+        return out
+    for name in rec.bearings.names:
+
+        def s(key, name=name):
+            return rec.series(f"{name}.{key}", cut, stop)
+
+        amps = [_vector_mean(s(f"f{c}a"), -s(f"f{c}b")) for c in "yz"]  # |a - i b| of X_1
+        out.update(
+            {
+                f"{name}.displacement_max [m]": record_max(s("qmax")),
+                f"{name}.displacement_rms [m]": _vector_rms(s("qy"), s("qz"), s("qsq")),
+                f"{name}.force_mean [N]": _vector_mean(s("fy"), s("fz")),
+                f"{name}.force_rms [N]": _vector_rms(s("fy"), s("fz"), s("fsq")),
+                f"{name}.force_max [N]": record_max(s("fmax")),
+                f"{name}.displacement_mean [m]": _vector_mean(s("qy"), s("qz")),
+                f"{name}.force_amplitude [N]": max(amps, key=lambda e: e.value),
+            }
+        )
+    return out
+
+
+def _statistics_of(rec: _Recorder, cut: int, stop: int | None) -> tuple[dict, dict, dict]:
+    """Every link's statistics over the periods ``cut:stop``, the first mesh's metrics and
+    the linear bearings' outputs."""
     links: dict[str, Estimate] = {}
     mesh: dict[str, Estimate] = {}
     for link in rec.integ.model.links:
@@ -397,7 +497,7 @@ def _statistics_of(rec: _Recorder, cut: int, stop: int | None) -> tuple[dict, di
             links[f"{n}.contact_fraction [-]"] = batch_mean(s("contact"))
             links[f"{n}.force_max [N]"] = record_max(s("fmax"))
             links[f"{n}.displacement_max [m]"] = record_max(s("rmax"))
-    return links, mesh
+    return links, mesh, _bearing_statistics(rec, cut, stop)
 
 
 def _targets_met(links: dict, rtol: float) -> bool:
@@ -470,7 +570,7 @@ def time_answer(
         raise ModelError("periods", f"needs {4 * BATCHES} <= periods <= max_periods, got {periods}")
     t0 = time.perf_counter()
     integ = LinkIntegrator(model, omega, steps_per_period=steps_per_period, alpha=alpha)
-    N, P = integ.N, integ.P
+    N = integ.N
     if state0 is None and harmonics is not None:
         z = np.asarray(harmonics, dtype=float)
         q0, v0 = start_from_harmonics(model, omega, (z.shape[-1] - 1) // 2, z)
@@ -489,9 +589,7 @@ def time_answer(
     target = int(periods)
     while True:
         while len(rec.rows) < target:
-            vy, ay = P.T @ s[N : 2 * N], P.T @ s[2 * N : 3 * N]
-            y, s_new = integ.period(s)
-            rec.add(y, vy, ay)
+            s_new = rec.period(s)
             _, s2_new = integ.period(s2)
             ds = _free_part(s2_new - s_new, R, MR, N)
             gap = _wnorm(ds, N, omega)
@@ -502,7 +600,7 @@ def time_answer(
                 progress(len(rec.rows), target)
         cuts = [mser5(x) for x in rec.cut_series()]
         cut = max(c for c, _ in cuts)
-        links, mesh, drift = _statistics(rec, cut)
+        links, mesh, bearings, drift = _statistics(rec, cut)
         lam = batch_mean(np.array(logs[max(cut, 10) :]))
         undecided = LYAPUNOV_FLOOR < lam.value <= 3 * lam.uncertainty
         settled = all(ok for _, ok in cuts) and _targets_met(links, rtol) and not (undecided or drift)
@@ -525,4 +623,5 @@ def time_answer(
         time.perf_counter() - t0,
         (s[:N].copy(), s[N : 2 * N].copy(), s[2 * N : 3 * N].copy()),
         all(ok for _, ok in cuts),
+        bearings,
     )

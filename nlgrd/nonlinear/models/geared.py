@@ -36,6 +36,7 @@ from nlgrd.nonlinear.results.bearing_loads import (
     bearing_response,
 )
 from nlgrd.nonlinear.results.metrics import PointMetrics
+from nlgrd.nonlinear.results.response_kinds import uncertainty_column
 from nlgrd.nonlinear.results.sweep_results import ContinuationResult, SweepResult
 from nlgrd.nonlinear.tracing.auto_period import beyond_period_one, check_period, rows_of
 from nlgrd.nonlinear.tracing.continuation import continuation
@@ -212,6 +213,10 @@ class GearedSweepResult:
         One name per bearing (its own, or shaft and node).
     H : int
         H of docs/conventions.md: harmonics of the mesh frequency, as ``mesh.H``.
+    bearing_uncertainty : BearingResponse, optional
+        The standard uncertainty of the bearing outputs at the time-answered points
+        (:mod:`nlgrd.timedomain.sweep_answers`; NaN elsewhere), written beside them as
+        ``<bearing> <quantity>_uncertainty [unit]``.
     """
 
     mesh: SweepResult
@@ -219,13 +224,15 @@ class GearedSweepResult:
     rpm: NDArray
     bearing_names: list[str]
     H: int
+    bearing_uncertainty: BearingResponse | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """Tidy table: the mesh columns, pinion speed, and per-bearing columns (units in names)."""
         df = self.mesh.to_frame()
         df.insert(1, "pinion_speed [rpm]", self.rpm)
-        b = self.bearings
-        ok = np.asarray(self.mesh.converged, dtype=bool) & ~self.mesh.no_stable
+        b, u = self.bearings, self.bearing_uncertainty
+        timed = self.mesh.time_answered
+        ok = np.asarray(self.mesh.converged, dtype=bool) & (~self.mesh.no_stable | timed)
         columns = (
             ("displacement_max [um]", b.displacement_max, 1e6),
             ("displacement_rms [um]", b.displacement_rms, 1e6),
@@ -237,6 +244,9 @@ class GearedSweepResult:
         for j, name in enumerate(self.bearing_names):
             for col, values, scale in columns:
                 df[f"{name} {col}"] = np.where(ok, values[:, j] * scale, np.nan)
+                if u is not None and timed.any():
+                    unc = getattr(u, col.split(" ")[0])[:, j] * scale
+                    df[f"{name} {uncertainty_column(col)}"] = np.where(timed, unc, np.nan)
         return df
 
     def jumps(self):

@@ -12,7 +12,10 @@ from numpy.typing import NDArray
 
 from nlgrd.nonlinear.results.metrics import NO_STABLE
 
-#: The response where an orbit lost stability to a complex pair (a torus): not drawn.
+#: The response where an orbit lost stability to a complex pair (a torus). Answered by the
+#: torus harmonic balance (:func:`nlgrd.timedomain.sweep_answers.with_torus_answers`:
+#: ``time_kind`` this kind, the torus's values and ``secondary_frequency``, its stability not
+#: computed, ``verdict`` "not computed"); else without values, not drawn.
 QUASI_PERIODIC = "quasi-periodic"
 #: The response of a point answered by time integration (:mod:`nlgrd.timedomain.time_answer`):
 #: its statistics carry a sampling uncertainty; "chaotic" when its largest Lyapunov
@@ -28,7 +31,8 @@ def response_kind(result) -> NDArray:
     """Per point: "periodic" (the mesh period), "period ν", "quasi-periodic" (lost to a
     complex pair, ``secondary_frequency`` known), :data:`NO_STABLE` or
     :data:`STABILITY_NOT_CONVERGED`; where a time integration answered (``time_kind``),
-    :data:`TIME_DOMAIN` or :data:`CHAOTIC`.
+    :data:`TIME_DOMAIN` or :data:`CHAOTIC`; where a torus harmonic balance did,
+    :data:`QUASI_PERIODIC` with values.
 
     Parameters
     ----------

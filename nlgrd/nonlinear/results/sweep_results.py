@@ -200,6 +200,9 @@ class SweepResult:
     verdict_converged : ndarray of bool, optional
         The stability verdict converged (:mod:`nlgrd.nonlinear.stability.verdicts`; default True);
         where False neither ``stable`` nor the response's values are written.
+    torus_frequency : ndarray, optional
+        The secondary frequency ω₂ of the torus that answered a quasi-periodic point
+        (:func:`nlgrd.timedomain.sweep_answers.with_torus_answers`) [rad/s]; NaN elsewhere.
     """
 
     omega: NDArray
@@ -225,6 +228,7 @@ class SweepResult:
     time_kind: NDArray | None = None
     uncertainty: dict | None = None
     verdict_converged: NDArray | None = None
+    torus_frequency: NDArray | None = None
 
     def __post_init__(self):
         if self.residual_kind not in RESIDUAL_COLUMNS:
@@ -239,6 +243,7 @@ class SweepResult:
             "harmonic_error": np.full(n, np.nan),
             "time_kind": np.full(n, "", dtype=object),
             "verdict_converged": np.ones(n, dtype=bool),
+            "torus_frequency": np.full(n, np.nan),
         }
         for name, default in defaults.items():
             if getattr(self, name) is None:
@@ -279,13 +284,14 @@ class SweepResult:
     def secondary_frequency(self) -> NDArray:
         """Per point without a stable response whose orbit lost stability to a complex pair
         of multipliers μ (Neimark-Sacker: the motion near it is quasi-periodic), the
-        frequency of the secondary oscillation |arg μ| ω/(2π ν), in (0, ω/2ν] [rad/s];
-        NaN elsewhere."""
+        frequency of the secondary oscillation |arg μ| ω/(2π ν), in (0, ω/2ν] [rad/s]; where
+        the torus harmonic balance answered (``torus_frequency``), its ω₂; NaN elsewhere."""
         mu = np.asarray(self.dominant_multiplier, dtype=complex)
         with np.errstate(invalid="ignore"):
             torus = self.no_stable & (np.abs(mu.imag) > 1e-6 * np.abs(mu)) & (np.abs(mu) > 1)
         f = np.abs(np.angle(mu)) * self.omega / (2 * np.pi * self.period)
-        return np.where(torus, f, np.nan)
+        solved = np.isfinite(self.torus_frequency)  # the torus balance's own ω₂ where it answered
+        return np.where(solved, self.torus_frequency, np.where(torus, f, np.nan))
 
     @property
     def stability_known(self) -> NDArray:
@@ -382,6 +388,8 @@ class SweepResult:
 
         settled = np.asarray(self.verdict_converged, dtype=bool)
         verdict = np.where(~settled, "not converged", np.where(self.stable, "stable", "unstable"))
+        torus = self.time_answered & (np.asarray(self.time_kind, dtype=object) == QUASI_PERIODIC)
+        verdict = np.where(torus, "not computed", verdict)  # a torus's stability: never computed
         iterations = pd.array(np.asarray(self.iterations), dtype="Int64")
         iterations[~ok] = pd.NA
         data = {
@@ -390,7 +398,7 @@ class SweepResult:
             "converged": ok,
             RESIDUAL_COLUMNS[self.residual_kind]: num(self.residual),
             "iterations": iterations,
-            "stable": flag(self.stable, self.stability_known & settled),
+            "stable": flag(self.stable, self.stability_known & settled & ~torus),
             "verdict": pd.array(verdict, dtype="string"),
             "floquet_max [-]": floquet_output(num(self.floquet_max)),
             "H": pd.array(np.where(ok, self.H, 0), dtype="Int64"),

@@ -13,6 +13,7 @@ averaged over the torus and their change from (H₁, H₂) to (H₁ + 4, H₂ + 
 
 from __future__ import annotations
 
+import dataclasses as dc
 from dataclasses import dataclass
 
 import numpy as np
@@ -163,10 +164,16 @@ def torus_bearing_forces(model, sol: qp.TorusSolution, n_samples: tuple[int, int
     ndarray (n_bearings,)
         max |(F_y, F_z)| per bearing [N]; NaN when not converged.
     """
-    system, rec = model.system, model.receptance
-    nb = len(system.bearings)
+    nb = len(model.system.bearings)
     if not sol.converged:
         return np.full(nb, np.nan)
+    return torus_bearing_outputs(model, sol, n_samples)["force_max"]
+
+
+def _torus_bearing_harmonics(model, sol: qp.TorusSolution) -> tuple[NDArray, NDArray, NDArray]:
+    """Each bearing node's (y, z) 2-D harmonics Q and its force's Fb (terms, 2 n_b), and
+    the combination frequencies (terms,) [rad/s] (:func:`torus_bearing_forces`)."""
+    system, rec = model.system, model.receptance
     g, w = sol.grid, sol.omega
     speed = rec.speed(w)
     Y = sol.Y[0]
@@ -182,15 +189,57 @@ def torus_bearing_forces(model, sol: qp.TorusSolution, n_samples: tuple[int, int
     for i in range(1, g.n_terms):
         x = spla.splu(rec.model.dynamic_stiffness(float(freqs[i]), speed).tocsc()).solve(W)
         Q[i] = x[dofs] @ np.linalg.solve(rec.W.T @ x, [Y[i]])
-    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
-    out = np.empty(nb)
+    Fb = np.empty_like(Q)
     for j, b in enumerate(system.bearings):
         s_b = system.shafts[b.shaft].speed_ratio * speed
         q = Q[:, 2 * j : 2 * j + 2]
-        Fb = -(q @ b.stiffness(s_b).T + (1j * freqs)[:, None] * (q @ b.damping(s_b).T))
-        fy, fz = fine.samples(Fb.T.copy())
-        out[j] = float(np.max(np.hypot(fy, fz)))
-    out[out <= BEARING_FLOOR * np.max(out)] = 0.0  # rounding of the recovery, not response
+        Fb[:, 2 * j : 2 * j + 2] = -(q @ b.stiffness(s_b).T + (1j * freqs)[:, None] * (q @ b.damping(s_b).T))
+    return Q, Fb, freqs
+
+
+def torus_bearing_outputs(model, sol: qp.TorusSolution, n_samples: tuple[int, int] = (256, 48)) -> dict:
+    """Every bearing's outputs over a torus, the quantities of a periodic sweep's bearing
+    columns (:class:`~nlgrd.nonlinear.results.bearing_loads.BearingResponse`): radial
+    displacement and force of its node sampled on the torus (their largest, the RMS of
+    the alternating part, the magnitude of the mean) and the amplitude of the force's
+    mesh harmonic (k₁ = 1, k₂ = 0; the larger of y and z). Q as
+    :func:`torus_bearing_forces` recovers it.
+
+    Parameters
+    ----------
+    model : GearedModel
+        The model solved.
+    sol : TorusSolution
+        A converged torus.
+    n_samples : tuple of int
+        Samples along θ₁ and θ₂ [-].
+
+    Returns
+    -------
+    dict of str to ndarray (n_bearings,)
+        ``displacement_mean``, ``displacement_rms``, ``displacement_max`` [m],
+        ``force_mean``, ``force_rms``, ``force_max``, ``force_amplitude`` [N].
+    """
+    nb = len(model.system.bearings)
+    fields = ("displacement_mean", "displacement_rms", "displacement_max")
+    fields += ("force_mean", "force_rms", "force_max", "force_amplitude")
+    if not sol.converged or nb == 0:
+        return {f: np.full(nb, np.nan) for f in fields}
+    Q, Fb, _ = _torus_bearing_harmonics(model, sol)
+    g = sol.grid
+    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
+    out = {f: np.empty(nb) for f in fields}
+    for name, X in (("displacement", Q), ("force", Fb)):
+        for j in range(nb):
+            y, z = fine.samples(X[:, 2 * j : 2 * j + 2].T.copy())
+            my, mz = float(np.mean(y)), float(np.mean(z))
+            out[f"{name}_mean"][j] = np.hypot(my, mz)
+            out[f"{name}_rms"][j] = np.sqrt(np.mean((y - my) ** 2 + (z - mz) ** 2))
+            out[f"{name}_max"][j] = float(np.max(np.hypot(y, z)))
+    out["force_amplitude"] = np.maximum(np.abs(Fb[1, 0::2]), np.abs(Fb[1, 1::2]))  # (k₁, k₂) = (1, 0)
+    for f in fields:  # rounding of the recovery, not response (as the sweep's columns)
+        v = out[f]
+        v[np.abs(v) <= BEARING_FLOOR * np.max(np.abs(v))] = 0.0
     return out
 
 
@@ -298,7 +347,9 @@ def _periodic(model, omega: float, H: int, start: NDArray | None) -> NDArray | N
     return sol.harmonics if sol.converged else None
 
 
-def _start_torus(tm, model, omega: float, Zp: NDArray, grid) -> tuple[qp.TorusSolution | None, complex]:
+def _start_torus(
+    tm, model, omega: float, Zp: NDArray, grid, max_iter: int = 60, sizes: tuple | None = None
+) -> tuple[qp.TorusSolution | None, complex]:
     """A torus from the periodic orbit and its critical Floquet mode, or None when the orbit
     has no complex pair outside the unit circle."""
     ss = model.reduced.linear_state_space(omega)
@@ -309,8 +360,10 @@ def _start_torus(tm, model, omega: float, Zp: NDArray, grid) -> tuple[qp.TorusSo
     Yp = real_to_complex(np.atleast_2d(Zp)[0])[None, :]
     shape = qp.critical_shape(tm, omega, Yp, w2, grid.H1)
     base = float(np.abs(Yp[0, 1:]).max())
-    for size in START_SIZES:
-        sol = qp.solve_torus(tm, omega, grid, qp.periodic_start(Yp, grid, shape, size * base), w2)
+    for size in START_SIZES if sizes is None else sizes:
+        sol = qp.solve_torus(
+            tm, omega, grid, qp.periodic_start(Yp, grid, shape, size * base), w2, max_iter=max_iter
+        )
         if sol.converged:
             return sol, mu
     return None, mu
@@ -326,6 +379,8 @@ def torus_sweep(
     periodic: NDArray | None = None,
     check: bool = True,
     tol: float = 1e-8,
+    max_iter: int = 60,
+    start_sizes: tuple | None = None,
     progress=None,
 ) -> TorusResult:
     """Tori of a geared model at the given speeds, in their order (natural continuation).
@@ -356,6 +411,10 @@ def torus_sweep(
         Also solve at (H + 4, H2 + 2) for the convergence estimate.
     tol : float
         Relative residual of the torus balance [-].
+    max_iter : int
+        Newton iterations of each solve [-].
+    start_sizes : tuple of float, optional
+        The starts tried from the periodic orbit (default :data:`START_SIZES`) [-].
     progress : callable (done, total), optional
         Called after each speed.
 
@@ -401,14 +460,14 @@ def torus_sweep(
                 (wb, sb) = hist[-2]
                 r = (w - wa) / (wa - wb)
                 Y0, w2 = sa.Y + r * (sa.Y - sb.Y), sa.secondary + r * (sa.secondary - sb.secondary)
-            sol = qp.solve_torus(tm, float(w), grid, Y0, w2, Y_ref=sa.Y, tol=tol)
+            sol = qp.solve_torus(tm, float(w), grid, Y0, w2, Y_ref=sa.Y, tol=tol, max_iter=max_iter)
             if not sol.converged and len(hist) > 1:  # without the predictor
-                sol = qp.solve_torus(tm, float(w), grid, sa.Y, sa.secondary, tol=tol)
+                sol = qp.solve_torus(tm, float(w), grid, sa.Y, sa.secondary, tol=tol, max_iter=max_iter)
         if sol is None or not sol.converged:
             start = periodic[i] if periodic is not None else Zp
             Zp = _periodic(model, float(w), H, start)
             if Zp is not None:
-                sol, mult[i] = _start_torus(tm, model, float(w), Zp, grid)
+                sol, mult[i] = _start_torus(tm, model, float(w), Zp, grid, max_iter, start_sizes)
         if sol is not None and sol.converged:
             sols[i] = sol
             hist = (hist + [(float(w), sol)])[-2:]
@@ -416,7 +475,15 @@ def torus_sweep(
             bear[i] = torus_bearing_forces(model, sol)
             res[i], its[i] = sol.residual, sol.iterations
             if fine is not None:
-                big = qp.solve_torus(tm, float(w), fine, tg.resize(sol.Y, grid, fine), sol.secondary, tol=tol)
+                big = qp.solve_torus(
+                    tm,
+                    float(w),
+                    fine,
+                    tg.resize(sol.Y, grid, fine),
+                    sol.secondary,
+                    tol=tol,
+                    max_iter=max_iter,
+                )
                 if big.converged:
                     ob = torus_outputs(big, model.mesh)
                     change[i] = ob[idx] / out[i][idx] - 1
@@ -441,6 +508,168 @@ def torus_sweep(
         names,
         sols,
     )
+
+
+#: Raises of H₁ over the sweep's H tried until a torus's convergence estimate meets the
+#: tolerance (each rung checked at H₁ + 4, H₂ + 2).
+TORUS_LADDER = (0, 4, 8)
+#: Largest H₁ of the ladder (the model is built for it + 4).
+TORUS_MAX_H = 17
+#: Newton iterations of a sweep's torus solve: Kubo's tori converge in 3-12 from the
+#: critical mode or the previous torus (benchmarks/torus_kubo_reference*.csv); a start
+#: that has not converged by then is abandoned (a chaotic band costs 60 a start otherwise).
+ANSWER_MAX_ITER = 25
+#: Relative residual of a sweep's torus solve: below the default 1e-8, so that the noise
+#: its start carries (the Floquet mode's last bits) stays far below the digits written.
+ANSWER_TOL = 1e-10
+#: The starts a sweep's torus tries from the periodic orbit (the first two of
+#: :data:`START_SIZES`; the first started every Kubo torus of the reference band).
+ANSWER_START_SIZES = START_SIZES[:2]
+
+
+def torus_back_contact(sol: qp.TorusSolution, mesh, n_samples: tuple[int, int] = (256, 48)) -> bool:
+    """Whether the back flanks touch anywhere on a torus: δ - e below -b on the sampled
+    torus (never for a one-sided stop, whose teeth have no back flank).
+
+    Parameters
+    ----------
+    sol : TorusSolution
+        A converged torus of the mesh coordinate.
+    mesh : BacklashMesh
+        The mesh law.
+    n_samples : tuple of int
+        Samples along θ₁ and θ₂ [-].
+
+    Returns
+    -------
+    bool
+    """
+    from nlgrd.nonlinear.fourier.harmonics import evaluate  # noqa: PLC0415
+    from nlgrd.nonlinear.laws.force_laws import ContactStop  # noqa: PLC0415
+
+    if not sol.converged or isinstance(mesh, ContactStop):
+        return False
+    g = sol.grid
+    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
+    d = fine.samples(sol.Y[:1])[0]
+    e = evaluate(mesh.offset(max(g.H1, (mesh.lste.size - 1) // 2))[0], fine.theta1)
+    return bool(np.any(d - e < -mesh.half_backlash))
+
+
+@dataclass(frozen=True)
+class TorusAnswer:
+    """A torus accepted as a sweep point's answer (:func:`converged_tori`).
+
+    Attributes
+    ----------
+    solution : TorusSolution
+        The torus at (H₁, H₂).
+    outputs : dict of str to float
+        :data:`TORUS_OUTPUTS` (SI) and ``back_contact``.
+    bearings : dict of str to ndarray
+        :func:`torus_bearing_outputs`.
+    error : float
+        Its convergence estimate: the largest relative change of the :data:`CHECKED`
+        outputs from (H₁, H₂) to (H₁ + 4, H₂ + 2) [-].
+    H : int
+        H₁, harmonics of the mesh frequency [-].
+    H2 : int
+        Harmonics of the secondary frequency [-].
+    seconds : float
+        Wall time of its rungs, checks included [s].
+    """
+
+    solution: qp.TorusSolution
+    outputs: dict
+    bearings: dict
+    error: float
+    H: int
+    H2: int
+    seconds: float
+
+
+def converged_tori(
+    model,
+    omegas: NDArray,
+    periodic: NDArray,
+    *,
+    H: int,
+    rtol: float,
+    H2: int = 4,
+    progress=None,
+) -> list:
+    """Tori at consecutive points of a sweep (in its order) whose convergence estimate is
+    within ``rtol``: :func:`torus_sweep` with its check at H₁ = H, then at the rungs of
+    :data:`TORUS_LADDER` for the points whose torus and its check converged but missed
+    ``rtol`` (a point without a torus at H₁ is not sought higher), each followed from the previous
+    point's torus where the points are consecutive (within ``CONTINUATION_STEP``) and
+    started from the periodic orbit's critical Floquet mode elsewhere. The torus's
+    stability is not computed.
+
+    Parameters
+    ----------
+    model : GearedModel
+        Built for at least the top rung + 4 harmonics (period 1).
+    omegas : ndarray (n,)
+        Mesh frequencies, in the sweep's order [rad/s].
+    periodic : ndarray (n, 1, 2H+1)
+        The (unstable) periodic orbits there, starts of the periodic solve [m].
+    H : int
+        The sweep's H [-].
+    rtol : float
+        The sweep's tolerance on its outputs [-].
+    H2 : int
+        Harmonics of the secondary frequency [-].
+    progress : callable (done, total), optional
+        Called after each rung.
+
+    Returns
+    -------
+    list of TorusAnswer or None
+        Per point; None where no torus converged within ``rtol`` on any rung.
+    """
+    import time  # noqa: PLC0415
+
+    n = len(omegas)
+    answers: list = [None] * n
+    spent = np.zeros(n)
+    pending = np.arange(n)
+    rungs = [H + r for r in TORUS_LADDER if H + r <= max(H, TORUS_MAX_H)]
+    for k, Hr in enumerate(rungs):
+        if not pending.size:
+            break
+        starts = np.zeros((pending.size, 1, 2 * Hr + 1))
+        z = np.asarray(periodic, dtype=float)[pending].reshape(pending.size, -1)
+        m = min(z.shape[1], 2 * Hr + 1)
+        starts[:, 0, :m] = z[:, :m]
+        res = torus_sweep(
+            model,
+            np.asarray(omegas, dtype=float)[pending],
+            H=Hr,
+            H2=H2,
+            periodic=starts,
+            tol=ANSWER_TOL,
+            max_iter=ANSWER_MAX_ITER,
+            start_sizes=ANSWER_START_SIZES,
+        )
+        spent[pending] += res.seconds
+        err = np.max(np.abs(res.change), axis=1)  # NaN: the check did not converge
+        for row, i in enumerate(pending):
+            sol = res.solutions[row]
+            if sol is not None and np.isfinite(err[row]) and err[row] <= rtol:
+                t0 = time.perf_counter()
+                out = dict(zip(TORUS_OUTPUTS, res.outputs[row], strict=True))
+                out["back_contact"] = torus_back_contact(sol, model.mesh)
+                bearings = torus_bearing_outputs(model, sol)
+                spent[i] += time.perf_counter() - t0
+                answers[i] = TorusAnswer(sol, out, bearings, float(err[row]), Hr, H2, 0.0)
+        # only a torus found but short of the tolerance climbs: one not found at H₁ (no
+        # torus near the orbit, e.g. a chaotic band) is not sought again at a higher H₁
+        climb = [i for row, i in enumerate(pending) if answers[i] is None and np.isfinite(err[row])]
+        pending = np.array(climb, dtype=int)
+        if progress is not None:
+            progress(k + 1, len(rungs))
+    return [None if a is None else dc.replace(a, seconds=float(spent[i])) for i, a in enumerate(answers)]
 
 
 def tori_of_sweep(model, result, direction: str = "down", *, H2: int = 4, check: bool = True) -> TorusResult:
