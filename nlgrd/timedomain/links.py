@@ -448,7 +448,7 @@ class LinkIntegrator:
         s : ndarray (3N + d,)
             The extended state at the start of the period.
         output_dofs : sequence of int
-            DOFs recorded.
+            Entries of the state [q, q', q''] recorded (i: DOF i; N + i: its velocity).
 
         Returns
         -------
@@ -468,7 +468,7 @@ class LinkIntegrator:
         for j in range(ns):
             u_old, v_old, acc_old = state[:N], state[N : 2 * N], state[2 * N :]
             if out.size:
-                q_hist[:, j] = u_old[out]
+                q_hist[:, j] = state[out]  # of the whole state: N + i is DOF i's velocity
             if d == 1:  # one link: floats and vectors
                 y_hist[0, j], v_hist[0, j], g_hist[0, j] = p1 @ u_old, p1 @ v_old, g1
                 q_lin = lu.solve(A @ state + loads[j % nl] + p1 * (lam[j] + alpha * g1))
