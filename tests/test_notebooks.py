@@ -51,6 +51,12 @@ overlay measurements (none is shipped). The CSV curves it writes are then checke
   the single-DOF model misses the soft-bearing jump by more than 20 %; less backlash brings
   back-side contact; bearing forces never fall below the static share.
 
+Every speed of the main sweeps (Kubo's FE sweep; K&B's as given and with the damping floor)
+is answered (periodic, period 2, or by time integration "time domain" / "chaotic" with its
+uncertainty) or marked "not found", and the counts each notebook writes per direction
+are recounted from its tables (:func:`check_answered`); the landmarks are read off the
+periodic answers only (:func:`periodic`).
+
 Each run also leaves what ``reports/index.html`` shows: a caption for every figure
 (``figures.json``) and the settings it used (``settings.json``); checked too.
 
