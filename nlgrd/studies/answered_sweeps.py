@@ -112,7 +112,10 @@ def answer_gaps_in_parallel(
     ``workers`` = 1 is :func:`~nlgrd.timedomain.sweep_answers.with_time_answers` itself;
     more split the gap rows among processes (interleaved, so that each gets points from
     every part of the range) and put every per-point field back at its rows: the same
-    numbers (module docstring; tests/test_answered_sweeps.py).
+    numbers (module docstring; tests/test_answered_sweeps.py). The workers are spawned,
+    not forked (a notebook's kernel runs threads): a script that calls this with
+    ``workers`` > 1 keeps its work under ``if __name__ == "__main__":``, as
+    :mod:`multiprocessing` requires of a spawned child's parent module.
 
     Parameters
     ----------
