@@ -177,7 +177,9 @@ def check_answered(fe: pd.DataFrame, counts: pd.DataFrame, value: str) -> None:
     assert not (timed & drawn).any()
     stem, _, unit = value.partition(" [")
     u = fe[f"{stem}_uncertainty [{unit}"][timed] if timed.any() else pd.Series(dtype=float)
-    assert (u > 0).all() and (u < fe[value][timed]).all()  # k = 1, well below the value itself
+    # finite and positive; it may exceed the value where a record drifts (its uncertainty is
+    # then the drift: nlgrd.timedomain.time_answer; K&B's full grid has one such point)
+    assert (u > 0).all() and np.isfinite(u).all()
     for d in ("up", "down", "both"):
         sel = resp if d == "both" else resp[fe["direction"] == d]
         row = counts.set_index("direction").loc[d]
