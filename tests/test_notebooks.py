@@ -51,6 +51,12 @@ overlay measurements (none is shipped). The CSV curves it writes are then checke
   the single-DOF model misses the soft-bearing jump by more than 20 %; less backlash brings
   back-side contact; bearing forces never fall below the static share.
 
+Every speed of the main sweeps (Kubo's FE sweep; K&B's as given and with the damping floor)
+is answered (periodic, period 2, or by time integration "time domain" / "chaotic" with its
+uncertainty) or marked "not found", and the counts each notebook writes per direction
+are recounted from its tables (:func:`check_answered`); the landmarks are read off the
+periodic answers only (:func:`periodic`).
+
 Each run also leaves what ``reports/index.html`` shows: a caption for every figure
 (``figures.json``) and the settings it used (``settings.json``); checked too.
 
@@ -69,6 +75,7 @@ import pytest
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.models.geared import gear_pair_mode, sdof_model
+from nlgrd.studies.answered_sweeps import HB_RESPONSE, NOT_FOUND
 from nlgrd.studies.experimental import directions_of, hysteresis_bands, local_peak, resonance_jumps
 from nlgrd.studies.notebooks import NOTEBOOKS, notebook_parameters, run_notebook
 
@@ -138,6 +145,48 @@ def outputs(tmp_path_factory):
 
 def read(out: Path, name: str) -> pd.DataFrame:
     return pd.read_csv(out / name)
+
+
+#: The answers of the time domain (nlgrd.timedomain.time_answer): values with uncertainties.
+TIME_KINDS = ("time domain", "chaotic")
+#: Value columns of the sweep tables.
+VALUE_COLUMNS = ("dslr [-]", "dte_rms [um]", "force_max [N]", "contact_loss_fraction [-]")
+
+
+def periodic(frame: pd.DataFrame) -> pd.DataFrame:
+    """A sweep table with values at its periodic (period-ν) answers only: what the landmarks
+    are read off (a time answer is a statistic of a record, not a point on a branch)."""
+    keep = frame["response"].astype(str).str.match(r"^period(ic| \d+)$")
+    cols = [c for c in VALUE_COLUMNS if c in frame]
+    return frame.assign(**{c: frame[c].where(keep) for c in cols})
+
+
+def check_answered(fe: pd.DataFrame, counts: pd.DataFrame, value: str) -> None:
+    """Every point of an answered sweep table (nlgrd.studies.answered_sweeps) is answered or
+    "not found", a value exactly where answered, the harmonic balance's verdict beside it,
+    a time answer only where it found no stable periodic orbit and always with its
+    standard uncertainty, and the counts file is the table's recount per direction."""
+    resp, hb = fe["response"].astype(str), fe[HB_RESPONSE].astype(object)
+    ok = fe["converged"].astype(bool)
+    assert resp.isin(["periodic", "period 2", *TIME_KINDS, NOT_FOUND]).all(), set(resp)
+    assert (fe[value].notna() == (resp != NOT_FOUND)).all()
+    assert (resp[~ok] == NOT_FOUND).all() and hb[~ok].isna().all()
+    drawn = hb.isin(["periodic", "period 2"]) & ok
+    assert (resp[drawn] == hb[drawn]).all()  # a stable periodic orbit is its own answer
+    timed = resp.isin(TIME_KINDS)
+    assert not (timed & drawn).any()
+    stem, _, unit = value.partition(" [")
+    u = fe[f"{stem}_uncertainty [{unit}"][timed] if timed.any() else pd.Series(dtype=float)
+    # finite and positive; it may exceed the value where a record drifts (its uncertainty is
+    # then the drift: nlgrd.timedomain.time_answer; K&B's full grid has one such point)
+    assert (u > 0).all() and np.isfinite(u).all()
+    for d in ("up", "down", "both"):
+        sel = resp if d == "both" else resp[fe["direction"] == d]
+        row = counts.set_index("direction").loc[d]
+        assert row["points"] == len(sel)
+        for k in set(resp):
+            assert row.get(k, 0) == (sel == k).sum(), (d, k)
+        assert sum(int(row[k]) for k in counts.columns if k not in ("direction", "points")) == len(sel)
 
 
 def landmark(out: Path, name: str) -> float:
@@ -334,7 +383,7 @@ def test_kubo_main_resonance_jumps(outputs, kubo):
     """Up jump 8-15 % below the resonance (FE and SDOF), hysteresis between the jumps only."""
     _, res, _ = kubo
     out = outputs(NAMES[0])
-    fe = directions_of(read(out, "dslr_fe.csv"), RPM, "dte_rms [um]")
+    fe = directions_of(periodic(read(out, "dslr_fe.csv")), RPM, "dte_rms [um]")
     up, down = resonance_jumps(fe["up"], fe["down"], res)
     assert 0.85 * res < up.omega < 0.92 * res
     assert down.omega < up.omega - 0.2 * res  # a wide band of two solutions
@@ -359,7 +408,7 @@ def test_kubo_dslr_peak_is_bent_below_the_resonance(outputs, kubo):
     """The DSLR peak is not at the linear resonance but between the up jump and it."""
     _, res, _ = kubo
     out = outputs(NAMES[0])
-    fe = read(out, "dslr_fe.csv")
+    fe = periodic(read(out, "dslr_fe.csv"))
     dte = directions_of(fe, RPM, "dte_rms [um]")
     up_jump, _ = resonance_jumps(dte["up"], dte["down"], res)
     dslr = directions_of(fe, RPM, "dslr [-]")
@@ -392,7 +441,7 @@ def test_kubo_superharmonic_and_harmonics(outputs, kubo):
     main resonance one harmonic is enough (the paper, §4.1)."""
     _, res, _ = kubo
     out = outputs(NAMES[0])
-    hc = directions_of(read(out, "dslr_fe.csv"), RPM, "dslr [-]")
+    hc = directions_of(periodic(read(out, "dslr_fe.csv")), RPM, "dslr [-]")
     x5, y5 = local_peak(*hc["up"], 0.4 * res, 0.6 * res)
     assert abs(x5 / (res / 2) - 1) < 0.05
     y1 = landmark(out, "1/2 superharmonic peak, H = 1 (FE up)")
@@ -418,9 +467,11 @@ def test_kubo_time_integration_agrees_with_harmonic_balance(outputs):
 
 @pytest.mark.notebook
 def test_kubo_every_speed_is_answered_and_the_bifurcations_listed(outputs):
-    """Issue 12 acceptance: at Table 1's damping every speed of the FE sweep has a stable
-    response (period 1 or 2) or is marked quasi-periodic / without a stable response, or is
-    listed as not converged; none is a silent gap. The period-2 orbits carry a component
+    """Issue 12 and issue 35 (item 4) acceptance: at Table 1's damping every speed of the FE
+    sweep has a stable response (period 1 or 2), a time-domain answer with its uncertainty
+    ("time domain" or "chaotic"), or is marked "not found" (check_answered), and the
+    harmonic balance's own verdict (hb_response) is periodic, period 2, quasi-periodic,
+    without a stable response or not settled; none is a silent gap. The period-2 orbits carry a component
     at half the mesh frequency; a quasi-periodic point's secondary frequency |arg μ| ω/2π
     lies in (0, f_mesh/2] (a Floquet multiplier's argument is at most π). The change list
     (bifurcations_fe.csv) is re-derived from the table: one row per change of response
@@ -428,26 +479,27 @@ def test_kubo_every_speed_is_answered_and_the_bifurcations_listed(outputs):
     against time integration in tests/test_beyond_period_one.py.)"""
     out = outputs(NAMES[0])
     fe = read(out, "dslr_fe.csv")
+    check_answered(fe, read(out, "response_counts_fe.csv"), "dslr [-]")
+    assert fe["response"].isin(TIME_KINDS).sum() >= 1  # the fast run answers some in the time domain
     kinds = {"periodic", "period 2", "quasi-periodic", "no stable mesh-periodic response"}
     ok = fe["converged"].astype(bool)
-    unsettled = fe["response"] == "stability not converged"  # marked; no change is told there
-    assert fe.loc[ok & ~unsettled, "response"].isin(kinds).all()
-    assert fe.loc[~ok, "response"].isna().all()
-    assert (fe.loc[fe["direction"] == "down", "response"] != "periodic").sum() >= 1  # multipliers > 1 there
+    unsettled = fe[HB_RESPONSE] == "stability not converged"  # marked; no change is told there
+    assert fe.loc[ok & ~unsettled, HB_RESPONSE].isin(kinds).all()
+    assert (fe.loc[fe["direction"] == "down", HB_RESPONSE] != "periodic").sum() >= 1  # multipliers > 1 there
     two = fe[fe["response"] == "period 2"]
     assert (
         (two["period"] == 2).all()
         and (two["subharmonic_amp [um]"] > 0).all()
         and two["dslr [-]"].notna().all()
     )
-    quasi = fe[fe["response"] == "quasi-periodic"]
+    quasi = fe[fe[HB_RESPONSE] == "quasi-periodic"]
     f2 = quasi["secondary_frequency [Hz]"]
     assert (f2 > 0).all() and (f2 <= quasi[HZ] / 2 * (1 + 1e-9)).all()
-    assert quasi["dslr [-]"].isna().all()  # not drawn or written as a response
+    assert quasi["response"].isin([*TIME_KINDS, NOT_FOUND]).all()  # never a periodic value
     expected = []
     for d in ("up", "down"):
         part = fe[(fe["direction"] == d) & ok & ~unsettled]
-        r = part["response"].tolist()
+        r = part[HB_RESPONSE].tolist()
         expected += [(d, a, b) for a, b in zip(r[:-1], r[1:], strict=True) if a != b]
     bif = read(out, "bifurcations_fe.csv")
     listed = list(zip(bif["direction"], bif["response before"], bif["response after"], strict=True))
@@ -507,10 +559,12 @@ def test_kb_dte_main_resonance_and_superharmonics(outputs, kb_mode):
     _, f_gp = kb_mode
     out = outputs(NAMES[1])
     fe = read(out, "dte_fe.csv")
-    flagged = ~fe["response"].isin(["periodic", "period 2"])
+    flagged = ~fe[HB_RESPONSE].isin(["periodic", "period 2"])
     assert (fe.loc[flagged & fe["converged"], "floquet_max [-]"] > 1).all()
-    assert fe.loc[~flagged, "dte_rms [um]"].notna().all() and fe.loc[flagged, "dte_rms [um]"].isna().all()
-    c = directions_of(fe, HZ, "dte_rms [um]")
+    assert fe.loc[~flagged, "dte_rms [um]"].notna().all()
+    # where flagged, a value only from the time domain
+    assert (fe.loc[flagged, "dte_rms [um]"].notna() == fe.loc[flagged, "response"].isin(TIME_KINDS)).all()
+    c = directions_of(periodic(fe), HZ, "dte_rms [um]")
     for d in ("up", "down"):
         x_pk, _ = local_peak(*c[d], 0.7 * f_gp, 1.1 * f_gp)
         assert 0.85 * f_gp < x_pk < 0.97 * f_gp, (d, x_pk)
@@ -605,23 +659,28 @@ def test_kb_third_superharmonic_constant_against_parametric(outputs, kb_mode):
 
 @pytest.mark.notebook
 def test_kb_counts_are_the_runs_and_the_floor_restores_stable_points(outputs):
-    """The counts the notebook prints (floor_counts.csv, landmarks.csv) are recounted here
-    from the sweep tables themselves; the least damped mode sharing the mesh is the 741 Hz
+    """The counts the notebook prints (floor_counts.csv, response_counts_*.csv, landmarks.csv)
+    are recounted here from the sweep tables themselves (every point answered or "not
+    found": check_answered); the least damped mode sharing the mesh is the 741 Hz
     torsional mode of the issue's independent check (ζ 1.75e-4, 1 %); the assumed floor
     (fast mode: the default 0.01) leaves strictly more stable periodic points than the
     model as given (it only adds damping; measured 2026-12-06: 101 against 61 of 120)."""
     out = outputs(NAMES[1])
     table = read(out, "floor_counts.csv").set_index("model")
-    for name, csv in (("as given", "dte_fe.csv"), (table.index[1], "dte_fe_floor.csv")):
-        fe = read(out, csv)
+    for name, csv in (("as given", "dte_fe"), (table.index[1], "dte_fe_floor")):
+        fe = read(out, f"{csv}.csv")
+        check_answered(fe, read(out, csv.replace("dte_", "response_counts_") + ".csv"), "dte_rms [um]")
         conv = fe["converged"].astype(bool)
-        ok = fe["response"].isin(["periodic", "period 2"])
+        ok = fe[HB_RESPONSE].isin(["periodic", "period 2"])
         row = table.loc[name]
         assert row["points"] == len(fe)
         assert row["stable periodic"] == (conv & ok).sum()
         assert row["no stable periodic response"] == (conv & ~ok).sum()
-        assert row["of which quasi-periodic"] == (conv & (fe["response"] == "quasi-periodic")).sum()
+        assert row["of which quasi-periodic"] == (conv & (fe[HB_RESPONSE] == "quasi-periodic")).sum()
         assert row["not converged"] == (~conv).sum()
+        for kind in (*TIME_KINDS, NOT_FOUND):
+            assert row[kind] == (fe["response"] == kind).sum(), kind
+        assert row["time domain"] + row["chaotic"] + row["not found"] == (~(conv & ok)).sum()
     assert landmark(out, "sweep points, stable periodic (FE)") == table.loc["as given", "stable periodic"]
     assert landmark(out, "least damped mode sharing the mesh") == pytest.approx(740.7, abs=1.0)
     zeta = landmark(out, "least damped mode sharing the mesh, damping ratio")
@@ -694,7 +753,9 @@ HARMONIC_RTOL = 5e-3
 def unphysical_rows(frame: pd.DataFrame, time_integration: bool = False) -> list[str]:
     """Why rows of a sweep table that carry a response value are not a physical response:
     not converged, not Floquet-stable, flagged 'no stable mesh-periodic response', or
-    with a harmonic error above the tolerance. A time-integration table
+    with a harmonic error above the tolerance; a time answer ("time domain", "chaotic":
+    the statistics of a record from an attracting state) needs its uncertainty, not
+    stability. A time-integration table
     (``time_integration``: the ``*_td.csv`` files) needs ``converged`` (periodic) only: a
     periodic steady state reached by integration is attracting, and it keeps every
     harmonic."""
@@ -710,6 +771,13 @@ def unphysical_rows(frame: pd.DataFrame, time_integration: bool = False) -> list
         return bad
     if "stable" not in frame:
         return [*bad, "no stability column"]
+    timed = rows["response"].isin(TIME_KINDS) if "response" in rows else pd.Series(False, index=rows.index)
+    for c in cols:  # a time answer's value comes with its standard uncertainty
+        stem, _, unit = c.partition(" [")
+        u = rows.get(f"{stem}_uncertainty [{unit}", pd.Series(np.nan, index=rows.index))
+        if (timed & rows[c].notna() & ~(u > 0)).any():
+            bad.append(f"time answer of {c} without its uncertainty")
+    rows = rows[~timed]  # the checks of a periodic orbit
     if not (rows["stable"] == True).all():  # noqa: E712 (NA is not stable)
         bad.append("unstable")
     if "response" in rows and (~rows["response"].isin(["periodic", "period 2"])).any():
@@ -765,4 +833,7 @@ def test_scan_catches_unstable_and_unconverged_rows():
         bad = good.copy()
         bad.loc[1, col] = value
         assert any(w.startswith(why) for w in unphysical_rows(bad)), col
+    timed = good.assign(stable=[True, False], response=["periodic", "time domain"])
+    assert unphysical_rows(timed.assign(**{"dslr_uncertainty [-]": [np.nan, 0.01]})) == []
+    assert unphysical_rows(timed) == ["time answer of dslr [-] without its uncertainty"]
     assert unphysical_rows(good.drop(columns="stable")) == ["no stability column"]

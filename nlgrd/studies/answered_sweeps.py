@@ -1,0 +1,243 @@
+"""Every speed of a report's sweep answered, or marked "not found".
+
+A harmonic-balance sweep leaves gaps where no stable periodic orbit exists. The reports
+answer them in the time domain (:func:`nlgrd.timedomain.sweep_answers.with_time_answers`:
+"time domain" or "chaotic", each value with its sampling uncertainty), here on several
+processes: each point's answer depends on that point alone (its own unstable orbit as
+the start, a fixed seed for the Lyapunov twin, one BLAS thread), so the rows are split
+among the workers and put back in place, the same numbers as one process gives.
+
+The table of a report then says for every point what answers it (its ``response``):
+"periodic", "period ν", "time domain", "chaotic" (or "quasi-periodic" where that kind
+carries values) or :data:`NOT_FOUND` where no value was found (the harmonic balance did
+not converge, or the time integration did not settle within its cap); the harmonic
+balance's own kind (its Floquet verdict) stays in :data:`HB_RESPONSE`.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import multiprocessing
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor, as_completed
+
+import numpy as np
+import pandas as pd
+
+from nlgrd.nonlinear.models.geared import GearedSweepResult
+from nlgrd.nonlinear.models.link_model import LinkModel, build_link_model
+from nlgrd.nonlinear.results.sweep_results import SweepResult
+from nlgrd.rotor.system import RotorSystem
+from nlgrd.timedomain.sweep_answers import with_time_answers
+
+__all__ = [
+    "HB_RESPONSE",
+    "NOT_FOUND",
+    "answer_gaps_in_parallel",
+    "answered_table",
+    "gap_rows",
+    "plot_answered",
+    "response_counts",
+]
+
+#: The ``response`` of a point without any answer.
+NOT_FOUND = "not found"
+#: Column of the harmonic balance's own kind of response (before the time answers).
+HB_RESPONSE = "hb_response"
+#: Order of the kinds in the counts (any "period ν" after "periodic").
+KIND_ORDER = ("periodic", "period", "quasi-periodic", "time domain", "chaotic", NOT_FOUND)
+
+
+def gap_rows(result: GearedSweepResult | SweepResult) -> np.ndarray:
+    """Rows the time domain is asked to answer: converged, no stable periodic response.
+
+    Parameters
+    ----------
+    result : GearedSweepResult or SweepResult
+        The sweep.
+
+    Returns
+    -------
+    ndarray of int
+    """
+    res = result.mesh if isinstance(result, GearedSweepResult) else result
+    return np.nonzero(np.asarray(res.converged, bool) & np.asarray(res.no_stable, bool))[0]
+
+
+def _only_rows(res: SweepResult, rows: np.ndarray) -> SweepResult:
+    """The sweep with ``no_stable`` kept at ``rows`` only: the other gaps are not asked."""
+    keep = np.zeros(len(res), bool)
+    keep[rows] = True
+    return dc.replace(res, no_stable=np.asarray(res.no_stable, bool) & keep)
+
+
+def _answer_rows(res: SweepResult, system: RotorSystem, rows: np.ndarray, options: dict) -> SweepResult:
+    """A worker's task: the time answers at ``rows`` (module docstring), on the link model
+    built here from ``system`` (a link model does not pickle; the build is deterministic)."""
+    return with_time_answers(_only_rows(res, rows), build_link_model(system), **options)
+
+
+def _put_rows(out: dict, part: SweepResult, rows: np.ndarray, n: int) -> None:
+    """Copy every per-point field of ``part`` at ``rows`` into ``out`` (field -> value)."""
+    for f in dc.fields(part):
+        if f.name == "no_stable":  # cleared outside the task's rows; the original is kept
+            continue
+        v = getattr(part, f.name)
+        if isinstance(v, dict):
+            target = dict(out[f.name] or {})
+            for k, a in v.items():
+                a = np.asarray(a)
+                base = target.get(k)
+                base = np.full(n, np.nan, dtype=a.dtype) if base is None else np.array(base, copy=True)
+                base[rows] = a[rows]
+                target[k] = base
+            out[f.name] = target
+        elif isinstance(v, np.ndarray) and v.ndim >= 1 and v.shape[0] == n:
+            a = np.array(out[f.name], copy=True)
+            a[rows] = v[rows]
+            out[f.name] = a
+
+
+def answer_gaps_in_parallel(
+    result: GearedSweepResult,
+    system: RotorSystem,
+    *,
+    model: LinkModel | None = None,
+    workers: int = 1,
+    progress: Callable[[int, int], None] | None = None,
+    **options,
+) -> GearedSweepResult:
+    """The sweep with its gaps answered in the time domain, on ``workers`` processes.
+
+    ``workers`` = 1 is :func:`~nlgrd.timedomain.sweep_answers.with_time_answers` itself;
+    more split the gap rows among processes (interleaved, so that each gets points from
+    every part of the range) and put every per-point field back at its rows: the same
+    numbers (module docstring; tests/test_answered_sweeps.py). The workers are spawned,
+    not forked (a notebook's kernel runs threads): a script that calls this with
+    ``workers`` > 1 keeps its work under ``if __name__ == "__main__":``, as
+    :mod:`multiprocessing` requires of a spawned child's parent module.
+
+    Parameters
+    ----------
+    result : GearedSweepResult
+        The one-mesh sweep.
+    system : RotorSystem
+        The rotor swept.
+    model : LinkModel, optional
+        Its link model (:func:`nlgrd.nonlinear.models.link_model.build_link_model`), if built
+        already; each worker builds its own.
+    workers : int
+        Processes [-] (1: this one).
+    progress : callable, optional
+        ``progress(done, total)``: points answered (one process) or tasks done (several).
+    **options
+        Options of :func:`nlgrd.timedomain.time_answer.time_answer` (``periods``,
+        ``max_periods``, ...).
+
+    Returns
+    -------
+    GearedSweepResult
+    """
+    rows = gap_rows(result)
+    workers = max(1, min(int(workers), rows.size))
+    if workers == 1 or rows.size == 0:
+        model = build_link_model(system) if model is None else model
+        return with_time_answers(result, model, progress=progress, **options)
+    res = result.mesh
+    tasks = [rows[i::workers] for i in range(workers)]
+    merged = {f.name: getattr(res, f.name) for f in dc.fields(res)}
+    context = multiprocessing.get_context("spawn")  # no fork of a threaded kernel
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        futures = {pool.submit(_answer_rows, res, system, t, options): t for t in tasks}
+        for done, fut in enumerate(as_completed(futures), 1):
+            _put_rows(merged, fut.result(), futures[fut], len(res))
+            if progress is not None:
+                progress(done, len(tasks))
+    return dc.replace(result, mesh=dc.replace(res, **merged))
+
+
+def answered_table(hb: pd.DataFrame, answered: pd.DataFrame, value: str = "dte_rms [um]") -> pd.DataFrame:
+    """The table of a sweep whose every point is answered or marked :data:`NOT_FOUND`.
+
+    Parameters
+    ----------
+    hb : pandas.DataFrame
+        ``to_frame()`` of the harmonic-balance sweep.
+    answered : pandas.DataFrame
+        ``to_frame()`` of the same sweep with its gaps answered (same rows, same order).
+    value : str
+        A column every answer carries a value in.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``answered`` with ``response`` :data:`NOT_FOUND` where the point has no value (or
+        did not converge) and the harmonic balance's ``response`` in :data:`HB_RESPONSE`,
+        beside it.
+    """
+    if len(hb) != len(answered) or not np.array_equal(
+        hb["mesh_frequency [Hz]"].to_numpy(float), answered["mesh_frequency [Hz]"].to_numpy(float)
+    ):
+        raise ValueError("answered_table: the two tables are not the same sweep's rows")
+    out = answered.copy()
+    ok = out["converged"].astype(bool).to_numpy() & np.isfinite(pd.to_numeric(out[value]).to_numpy(float))
+    out["response"] = np.where(ok, out["response"].astype(object), NOT_FOUND)
+    out.insert(list(out.columns).index("response") + 1, HB_RESPONSE, hb["response"].astype(object).to_numpy())
+    return out
+
+
+def _kind(response: str) -> str:
+    return "period" if response.startswith("period ") else response
+
+
+def response_counts(frame: pd.DataFrame) -> pd.DataFrame:
+    """Points of each kind of response, per direction and in all (from the table itself).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        A table of :func:`answered_table`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per direction and one "both"; a column per kind present (in the order
+        periodic, period ν, quasi-periodic, time domain, chaotic, not found) and "points".
+    """
+    resp = frame["response"].astype(str)
+    kinds = sorted(set(resp), key=lambda k: (KIND_ORDER.index(_kind(k)) if _kind(k) in KIND_ORDER else 99, k))
+    rows = []
+    for d in [*dict.fromkeys(frame["direction"].astype(str)), "both"]:
+        sel = resp if d == "both" else resp[frame["direction"].astype(str) == d]
+        rows.append({"direction": d, **{k: int((sel == k).sum()) for k in kinds}, "points": len(sel)})
+    return pd.DataFrame(rows)
+
+
+def plot_answered(frame: pd.DataFrame, x: str, y: str, ax=None, label: str | None = None, series=0, **kw):
+    """A table of :func:`answered_table` drawn by :func:`nlgrd.plotting.nonlinear.plot_sweep_frame`:
+    periodic lines, period-ν rings, time answers as diamonds or stars with ±2σ bars, and the
+    points :data:`NOT_FOUND` as crosses on the bottom edge, "not found (n)" in the legend.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table.
+    x, y : str
+        Columns of the abscissa and the values.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on.
+    label : str, optional
+        Name of the series in the legend.
+    series : int, (up, down) colours or {direction: colour}
+        Colours.
+    **kw
+        Other options of ``plot_sweep_frame``.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    from nlgrd.plotting.nonlinear import plot_sweep_frame
+
+    drawn = frame.assign(converged=frame["response"].astype(str) != NOT_FOUND)
+    return plot_sweep_frame(drawn, x, y, ax=ax, label=label, series=series, not_converged=NOT_FOUND, **kw)
