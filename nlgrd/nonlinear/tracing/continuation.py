@@ -135,3 +135,50 @@ def continuation(
     tw = np.array([p.tangent[-1] for p in pts])
     idx, tom = _turning(ws, s, tw)
     return ContinuationResult(curve, s, idx, tom, complete)
+
+
+def refine_turning_points(
+    model: ReducedModel, result: ContinuationResult, *, rtol: float = 1e-9
+) -> tuple[NDArray, NDArray]:
+    """The turning points of a continuation, on the exact flow where it is known.
+
+    A turning point of the harmonic-balance curve is a fold of the truncated problem, off
+    the exact one by the truncation. On a :func:`~nlgrd.nonlinear.stability.shooting.shootable`
+    model each is located again on the exact flow
+    (:func:`~nlgrd.nonlinear.stability.verdicts.locate_fold`: from the curve point before
+    it towards as far past it again, at least 1 % of ω), a fold whose multiplier reaches +1.
+    A turning point the exact branch does not have (a grazing corner: the branch ends
+    with every multiplier off +1) or a model without an exact flow keeps the curve's
+    parabolic estimate.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model of the continuation.
+    result : ContinuationResult
+        From :func:`continuation`.
+    rtol : float
+        Relative tolerance of a refined fold frequency [-].
+
+    Returns
+    -------
+    omegas : ndarray
+        The turning points' frequencies [rad/s], in curve order.
+    exact : ndarray of bool
+        Which were located on the exact flow (a multiplier at +1).
+    """
+    from nlgrd.nonlinear.stability.verdicts import locate_fold
+
+    w = result.omega
+    out = np.array(result.turning_omegas, dtype=float)
+    exact = np.zeros(out.size, dtype=bool)
+    for k, (i, w_turn) in enumerate(zip(result.turning_indices, result.turning_omegas, strict=True)):
+        on = max(int(i) - 1, 0)
+        ahead = w_turn - w[on]
+        margin = np.sign(ahead) * max(abs(ahead), 0.01 * abs(w_turn))
+        found = locate_fold(
+            model, result.curve.harmonics[on], float(w[on]), float(w_turn + margin), rtol=rtol
+        )
+        if found is not None:
+            out[k], exact[k] = found, True
+    return out, exact
