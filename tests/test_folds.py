@@ -27,6 +27,7 @@ from nlgrd.nonlinear.laws.force_laws import ContactStop
 from nlgrd.nonlinear.results.metrics import MeshMetrics
 from nlgrd.nonlinear.results.sweep_results import assemble_result
 from nlgrd.nonlinear.stability.verdicts import _branch_ends, _fold_test, locate_bifurcations, locate_fold
+from nlgrd.nonlinear.tracing.continuation import continuation, refine_turning_points
 from nlgrd.nonlinear.tracing.sweep import sweep
 
 #: Static force on mass 2 towards the stop [N].
@@ -87,20 +88,41 @@ def test_a_model_without_exact_flow_has_no_exact_fold():
     assert locate_bifurcations(model, _ended_sweep()) == []
 
 
-@pytest.mark.slow  # a 17-point down sweep at H = 13 (~30 s) and ~15 shots near the fold
-def test_period_one_fold_of_the_preloaded_chain():
-    """Acceptance for the period-1 fold: a down sweep that follows the lifted-off branch
-    (stability off: the branch is unstable next to its fold, where the stable-seeking
-    default sweep leaves it) ends where Newton finds no orbit (1.29 -> 1.28 rad/s); that
-    branch end is one of locate_bifurcations' candidates, and the fold located from it is
-    within 1e-8 of the reference (abs, rad/s; the locator's tolerance is 1e-9 relative,
-    the reference's 1e-9, both exact up to contact times located to 1e-13 of the period),
-    far inside the issue's 1e-3. (locate_bifurcations also tries the sweep's three jumps at
-    1.40-1.43 rad/s, ~2 min more.)"""
+@pytest.fixture(scope="module")
+def lifted_sweep():
+    """A down sweep 1.44-1.28 rad/s at H = 13 that follows the lifted-off branch (stability
+    off: the branch is unstable next to its fold, where the stable-seeking default sweep
+    leaves it) until Newton finds no orbit (1.29 -> 1.28 rad/s); ~30 s."""
     model = preloaded_chain()
-    res = sweep(model, np.arange(1.44, 1.2749, -0.01), 13, "down", stability=False)
+    return model, sweep(model, np.arange(1.44, 1.2749, -0.01), 13, "down", stability=False)
+
+
+@pytest.mark.slow  # the sweep and ~15 shots near the fold (~45 s)
+def test_period_one_fold_of_the_preloaded_chain(lifted_sweep):
+    """Acceptance for the period-1 fold: the sweep's branch end (1.29 -> 1.28 rad/s) is one
+    of locate_bifurcations' candidates, and the fold located from it is within 1e-8 of the
+    reference (abs, rad/s; the locator's tolerance is 1e-9 relative, the reference's 1e-9,
+    both exact up to contact times located to 1e-13 of the period), far inside the issue's
+    1e-3. (locate_bifurcations also tries the sweep's three jumps at 1.40-1.43 rad/s, ~2
+    min more.)"""
+    model, res = lifted_sweep
     i, w_off = _branch_ends(res, "down")[-1]
     assert res.omega[i] == pytest.approx(1.29) and w_off == pytest.approx(1.28)
     w = locate_fold(model, res.harmonics[i], float(res.omega[i]), w_off, rtol=1e-9)
     print(f"fold {w:.12f} rad/s, reference {FOLD}")
     assert abs(w - FOLD) < 1e-8
+
+
+@pytest.mark.slow  # a continuation at H = 13 (~2 s) and its refinement (~45 s)
+def test_continuation_turning_point_refined_on_the_exact_flow(lifted_sweep):
+    """The continuation at H = 13 from the lifted-off orbit at 1.30 rad/s turns at 1.2831
+    rad/s, 6.4e-3 below the exact fold (the truncation: the exact branch has no orbit
+    there); refine_turning_points locates it on the exact flow within 1e-8 of the
+    reference (abs, rad/s; tolerances as above)."""
+    model, res = lifted_sweep
+    i = int(np.argmin(np.abs(res.omega - 1.30)))
+    c = continuation(model, 1.30, 1.28, 13, res.harmonics[i], stability=False)
+    assert c.turning_omegas.size == 1 and abs(c.turning_omegas[0] - FOLD) > 1e-3  # the HB fold is off
+    w, exact = refine_turning_points(model, c)
+    print(f"H = 13 turning point {c.turning_omegas[0]:.6f}, refined {w[0]:.12f}, reference {FOLD}")
+    assert exact.tolist() == [True] and abs(w[0] - FOLD) < 1e-8
