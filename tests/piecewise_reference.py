@@ -19,6 +19,11 @@ oscillators of e.g. Shaw & Holmes 1983 (J. Sound Vib. 90:129; one DOF, a stiff s
 extended to a chain, with the excitation through the stop's seat (``ContactStop``'s
 seat motion).
 
+A variant of the stop (:class:`Stop`, the ``stop`` argument of every function; default
+the module's :data:`GAP` and :data:`PRELOAD`) has a gap g > 0 or a static force P on mass 2
+towards the stop (the preloaded chain of tests/test_folds.py: P = 12 N, whose lifted-off
+branch folds at 1.2895493815 rad/s); both enter z' = A z through its constant column.
+
 The exact flow: between contact changes the equations are linear with harmonic forcing;
 with the augmented state z = (x₁, x₂, v₁, v₂, cos ωt, sin ωt, 1) they are z' = A z, so
 z(t + τ) = expm(A τ) z(t) (scipy's expm; no time stepping error). Contact changes are

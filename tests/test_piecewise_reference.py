@@ -14,7 +14,10 @@ with a stiff one-sided spring (issue 35, part 1), before anything is compared wi
   is the linear frequency response, and the multipliers are exp(λ T) of the closed state;
 - the bifurcations located along the period-1 branch do not depend on the continuation's
   step (two step sizes agree to 1e-9 in ω, the location's own tolerance is 1e-12 in arc
-  length), and at each one the critical multiplier is on the unit circle to 1e-6.
+  length), and at each one the critical multiplier is on the unit circle to 1e-6;
+- the preloaded variant (a static force on mass 2): its closed-stop linear limit, and the
+  fold of its lifted-off branch (two steps agree to 1e-9, a multiplier at +1, the orbit
+  beside it under DOP853).
 """
 
 from __future__ import annotations
@@ -161,8 +164,9 @@ def preloaded_fold():
 def test_preloaded_fold(preloaded_fold):
     """The period-1 fold of the preloaded chain: a zero of the fold test function Π(1 - μ)
     located to 1e-12 in arc length with two steps that agree to 1e-9 in ω, a multiplier at
-    +1 to 1e-6 there; the orbit beside it (0.5 % of ω above, where the branch exists) returns under DOP853 after 3
-    periods within 1e-7 of the range (unstable, |μ| 1.2: 1e-12 grows by 1.7 over 3 periods)."""
+    +1 to 1e-6 there; the orbit beside it (0.5 % of ω above, where the branch exists)
+    returns under DOP853 after 3 periods within 1e-7 of the range (unstable, |μ| 1.2: an
+    error of 1e-12 grows by 1.7 over 3 periods)."""
     (coarse, fine) = preloaded_fold
     assert [k for k, *_ in coarse] == ["fold"] and [k for k, *_ in fine] == ["fold"]
     (_, w, mu, s_fold), (_, w2, _, _) = coarse[0], fine[0]
