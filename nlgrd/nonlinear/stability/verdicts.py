@@ -234,7 +234,9 @@ def _refresh_metrics(model: ReducedModel, result: SweepResult, no_stable: NDArra
     return replace(result, no_stable=no_stable, metrics=metrics, amplitudes=amps)
 
 
-def locate_bifurcations(model: ReducedModel, result: SweepResult, *, rtol: float = 1e-6) -> list[tuple]:
+def locate_bifurcations(
+    model: ReducedModel, result: SweepResult, *, rtol: float = 1e-6, folds: bool = True
+) -> list[tuple]:
     """The bifurcations of a sweep on a :func:`~nlgrd.nonlinear.stability.shooting.shootable`
     model, located on the exact flow.
 
@@ -253,6 +255,9 @@ def locate_bifurcations(model: ReducedModel, result: SweepResult, *, rtol: float
         A sweep with converged verdicts (:func:`converge_verdicts`).
     rtol : float
         Relative width of the final bracket [-] (a fold: to ``rtol`` x 1e-3).
+    folds : bool
+        Also locate the folds at the branch ends (each a few dozen shots: on a sweep
+        with several jumps, minutes).
 
     Returns
     -------
@@ -281,7 +286,7 @@ def locate_bifurcations(model: ReducedModel, result: SweepResult, *, rtol: float
             w = _bisect(model, result.harmonics[s], float(result.omega[s]), float(result.omega[u]), rtol)
             if w is not None:
                 found.append((d, kind, w))
-        for i, w_off in _branch_ends(result, d):
+        for i, w_off in _branch_ends(result, d) if folds else ():
             w = locate_fold(model, result.harmonics[i], float(result.omega[i]), w_off, rtol=1e-3 * rtol)
             if w is not None:
                 found.append((d, "fold", w))
