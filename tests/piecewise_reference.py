@@ -19,6 +19,11 @@ oscillators of e.g. Shaw & Holmes 1983 (J. Sound Vib. 90:129; one DOF, a stiff s
 extended to a chain, with the excitation through the stop's seat (``ContactStop``'s
 seat motion).
 
+A variant of the stop (:class:`Stop`, the ``stop`` argument of every function; default
+the module's :data:`GAP` and :data:`PRELOAD`) has a gap g > 0 or a static force P on mass 2
+towards the stop (the preloaded chain of tests/test_folds.py: P = 12 N, whose lifted-off
+branch folds at 1.2895493815 rad/s); both enter z' = A z through its constant column.
+
 The exact flow: between contact changes the equations are linear with harmonic forcing;
 with the augmented state z = (x₁, x₂, v₁, v₂, cos ωt, sin ωt, 1) they are z' = A z, so
 z(t + τ) = expm(A τ) z(t) (scipy's expm; no time stepping error). Contact changes are
@@ -40,7 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm
 
-MASS, STIFF, KC, C, SEAT, GAP = 1.0, 1.0, 100.0, 0.02, 1.0, 0.0
+MASS, STIFF, KC, C, SEAT, GAP, PRELOAD = 1.0, 1.0, 100.0, 0.02, 1.0, 0.0, 0.0
 # GAP: the stop closes where x₂ - u(t) > GAP (0 in the chain; a large negative value keeps
 # it closed all period: the linear check of test_piecewise_reference)
 M = MASS * np.eye(2)
@@ -51,7 +56,21 @@ SAMPLES = 256  # gap samples per forcing period
 EVENT_RTOL = 1e-13  # contact changes located to this fraction of the period
 
 
-def augmented(omega: float, closed: bool) -> np.ndarray:
+@dataclass(frozen=True)
+class Stop:
+    """A variant of the stop: its gap g [m] (closed where x₂ - u(t) > g) and a static
+    force P [N] on mass 2 towards the stop (a preload when g = 0)."""
+
+    gap: float = 0.0
+    preload: float = 0.0
+
+
+def _stop(stop: Stop | None) -> Stop:
+    """``stop``, or the module's :data:`GAP` and :data:`PRELOAD` when None (read at call time)."""
+    return Stop(GAP, PRELOAD) if stop is None else stop
+
+
+def augmented(omega: float, closed: bool, stop: Stop | None = None) -> np.ndarray:
     """A (7 x 7) of z' = A z, z = (x₁, x₂, v₁, v₂, cos ωt, sin ωt, 1), in one contact state."""
     Kt = K + (KC * W @ W.T if closed else 0.0)
     A = np.zeros((7, 7))
@@ -60,25 +79,32 @@ def augmented(omega: float, closed: bool) -> np.ndarray:
     A[2:4, 2:4] = -np.linalg.solve(M, D)
     if closed:
         A[2:4, 4] = np.linalg.solve(M, KC * SEAT * W[:, 0])
-        A[2:4, 6] = np.linalg.solve(M, KC * GAP * W[:, 0])
+        A[2:4, 6] = np.linalg.solve(M, KC * _stop(stop).gap * W[:, 0])
+    A[2:4, 6] += np.linalg.solve(M, _stop(stop).preload * W[:, 0])
     A[4, 5], A[5, 4] = -omega, omega
     return A
 
 
-def gap(z: np.ndarray) -> float:
+def gap(z: np.ndarray, stop: Stop | None = None) -> float:
     """h = x₂ - u(t) - g: the stop is closed where h > 0."""
-    return float(z[1] - SEAT * z[4] - GAP)
+    return float(z[1] - SEAT * z[4] - _stop(stop).gap)
 
 
 class Flow:
-    """The exact flow of the chain at one forcing frequency ω [rad/s]."""
+    """The exact flow of the chain at one forcing frequency ω [rad/s] with the gap g [m]
+    (default :data:`GAP`)."""
 
-    def __init__(self, omega: float):
+    def __init__(self, omega: float, stop: Stop | None = None):
         self.omega = float(omega)
+        self.stop = _stop(stop)
         self.T = 2 * np.pi / self.omega
         self.dt = self.T / SAMPLES
-        self.A = {c: augmented(self.omega, c) for c in (False, True)}
+        self.A = {c: augmented(self.omega, c, self.stop) for c in (False, True)}
         self.E = {c: expm(self.A[c] * self.dt) for c in (False, True)}
+
+    def h(self, z: np.ndarray) -> float:
+        """The gap function h = x₂ - u(t) - g of this flow's gap."""
+        return gap(z, self.stop)
 
     def slope(self, z: np.ndarray, closed: bool) -> float:
         dz = self.A[closed] @ z
@@ -87,11 +113,11 @@ class Flow:
     def _locate(self, z: np.ndarray, closed: bool, a: float, b: float) -> float:
         """The first zero of the gap in (a, b] after z (at τ = 0), bracketed Newton."""
         A = self.A[closed]
-        ga, gb = gap(expm(A * a) @ z), gap(expm(A * b) @ z)
+        ga, gb = self.h(expm(A * a) @ z), self.h(expm(A * b) @ z)
         tau = a + (b - a) * ga / (ga - gb) if ga != gb else 0.5 * (a + b)
         for _ in range(100):
             zt = expm(A * tau) @ z
-            g = gap(zt)
+            g = self.h(zt)
             if (g > 0) == (ga > 0):
                 a = tau
             else:
@@ -110,14 +136,14 @@ class Flow:
         Returns (s at the end, monodromy ∂s_end/∂s₀ (4 x 4), contact-change times)."""
         t_end = periods * self.T if t_end is None else t_end
         z = np.concatenate([s, [1.0, 0.0, 1.0]])
-        closed = gap(z) > 0 or (gap(z) == 0 and self.slope(z, True) > 0)
+        closed = self.h(z) > 0 or (self.h(z) == 0 and self.slope(z, True) > 0)
         Phi = np.eye(4)
         t, events = 0.0, []
         while t < t_end - 1e-15 * self.T:
             step = min(self.dt, t_end - t)
             E = self.E[closed] if step == self.dt else expm(self.A[closed] * step)
             zn = E @ z
-            h0, h1 = gap(z), gap(zn)
+            h0, h1 = self.h(z), self.h(zn)
             side = 1.0 if closed else -1.0
             crossed = side * h1 < 0
             d0 = self.slope(z, closed) * step if not crossed else 0.0
@@ -150,28 +176,35 @@ class Flow:
         return z[:4], Phi, np.array(events)
 
 
-def residual(s0: np.ndarray, omega: float, nu: int):
+def residual(s0: np.ndarray, omega: float, nu: int, stop: Stop | None = None):
     """(φ_{νT}(s₀) - s₀, Φ) at ω."""
-    s, Phi, _ = Flow(omega).advance(s0, nu)
+    s, Phi, _ = Flow(omega, stop).advance(s0, nu)
     return s - s0, Phi
 
 
-def d_omega(s0: np.ndarray, omega: float, nu: int, h: float = 1e-6) -> np.ndarray:
+def d_omega(s0: np.ndarray, omega: float, nu: int, h: float = 1e-6, stop: Stop | None = None) -> np.ndarray:
     """∂r/∂ω by a central difference (the flow is smooth in ω away from grazing)."""
-    rp = Flow(omega * (1 + h)).advance(s0, nu, jacobian=False)[0]
-    rm = Flow(omega * (1 - h)).advance(s0, nu, jacobian=False)[0]
+    rp = Flow(omega * (1 + h), stop).advance(s0, nu, jacobian=False)[0]
+    rm = Flow(omega * (1 - h), stop).advance(s0, nu, jacobian=False)[0]
     return (rp - rm) / (2 * h * omega)
 
 
-def shoot(s0: np.ndarray, omega: float, nu: int = 1, tol: float = 1e-12, max_iter: int = 40):
+def shoot(
+    s0: np.ndarray,
+    omega: float,
+    nu: int = 1,
+    tol: float = 1e-12,
+    max_iter: int = 40,
+    stop: Stop | None = None,
+):
     """Periodic orbit of period ν T at fixed ω by Newton; (s₀, Φ, converged)."""
     s0 = np.array(s0, dtype=float)
     for _ in range(max_iter):
-        r, Phi = residual(s0, omega, nu)
+        r, Phi = residual(s0, omega, nu, stop)
         if np.linalg.norm(r) <= tol * max(np.linalg.norm(s0), SEAT):
             return s0, Phi, True
         s0 = s0 - np.linalg.solve(Phi - np.eye(4), r)
-    r, Phi = residual(s0, omega, nu)
+    r, Phi = residual(s0, omega, nu, stop)
     return s0, Phi, bool(np.linalg.norm(r) <= tol * max(np.linalg.norm(s0), SEAT))
 
 
@@ -183,31 +216,31 @@ class Point:
     tangent: np.ndarray
 
 
-def _tangent(s0, omega, nu, Phi, prev=None):
-    J = np.column_stack([Phi - np.eye(4), d_omega(s0, omega, nu)])
+def _tangent(s0, omega, nu, Phi, prev=None, stop=None):
+    J = np.column_stack([Phi - np.eye(4), d_omega(s0, omega, nu, stop=stop)])
     t = np.linalg.svd(J)[2][-1]
     if prev is not None and t @ prev < 0:
         t = -t
     return t
 
 
-def _correct(u_pred, tangent, nu, tol=1e-12, max_iter=30):
+def _correct(u_pred, tangent, nu, tol=1e-12, max_iter=30, stop=None):
     u = u_pred.copy()
     for _ in range(max_iter):
-        r, Phi = residual(u[:4], u[4], nu)
+        r, Phi = residual(u[:4], u[4], nu, stop)
         g = tangent @ (u - u_pred)
         if np.linalg.norm(r) <= tol * max(np.linalg.norm(u[:4]), SEAT) and abs(g) < 1e-12:
             return u, Phi
-        J = np.vstack([np.column_stack([Phi - np.eye(4), d_omega(u[:4], u[4], nu)]), tangent])
+        J = np.vstack([np.column_stack([Phi - np.eye(4), d_omega(u[:4], u[4], nu, stop=stop)]), tangent])
         u = u - np.linalg.solve(J, np.concatenate([r, [g]]))
     return None, None
 
 
-def continue_branch(s0, omega, omega_stop, nu=1, ds=0.02, max_points=4000):
+def continue_branch(s0, omega, omega_stop, nu=1, ds=0.02, max_points=4000, stop=None):
     """Pseudo-arc-length continuation from the orbit (s₀, ω) towards ``omega_stop``."""
-    s0, Phi, ok = shoot(s0, omega, nu)
+    s0, Phi, ok = shoot(s0, omega, nu, stop=stop)
     assert ok, "no orbit to start from"
-    t = _tangent(s0, omega, nu, Phi)
+    t = _tangent(s0, omega, nu, Phi, stop=stop)
     if np.sign(t[4]) != np.sign(omega_stop - omega):
         t = -t
     pts = [Point(s0, omega, np.linalg.eigvals(Phi), t)]
@@ -216,12 +249,12 @@ def continue_branch(s0, omega, omega_stop, nu=1, ds=0.02, max_points=4000):
         u0 = np.concatenate([p.s0, [p.omega]])
         h = ds
         while True:
-            u, Phi = _correct(u0 + h * p.tangent, p.tangent, nu)
+            u, Phi = _correct(u0 + h * p.tangent, p.tangent, nu, stop=stop)
             if u is not None and np.linalg.norm(u - u0) < 3 * h:
                 break
             h /= 2
             assert h > 1e-8 * ds, "continuation stalled"
-        t = _tangent(u[:4], u[4], nu, Phi, p.tangent)
+        t = _tangent(u[:4], u[4], nu, Phi, p.tangent, stop)
         pts.append(Point(u[:4], u[4], np.linalg.eigvals(Phi), t))
         if (u[4] - omega_stop) * (omega - omega_stop) <= 0:
             break
@@ -253,7 +286,7 @@ def kind_of(mu: np.ndarray, kind: str, atol: float = 1e-6) -> bool:
     return bool(pair.size and np.min(np.abs(np.abs(pair) - 1)) < atol)
 
 
-def locate(pts: list, nu: int = 1, rtol: float = 1e-9) -> list:
+def locate(pts: list, nu: int = 1, rtol: float = 1e-9, stop: Stop | None = None) -> list:
     """Bifurcations between consecutive points of a branch: [(kind, ω, multipliers)].
 
     A sign change of a test function between two points is bisected on the arc length
@@ -271,7 +304,7 @@ def locate(pts: list, nu: int = 1, rtol: float = 1e-9) -> list:
             flo = a
             for _ in range(80):
                 mid = 0.5 * (lo + hi)
-                u, Phi = _correct(u0 + mid * p.tangent, p.tangent, nu)
+                u, Phi = _correct(u0 + mid * p.tangent, p.tangent, nu, stop=stop)
                 f = test_functions(np.linalg.eigvals(Phi))[kind]
                 if hi - lo < 1e-12:
                     break

@@ -14,7 +14,10 @@ with a stiff one-sided spring (issue 35, part 1), before anything is compared wi
   is the linear frequency response, and the multipliers are exp(λ T) of the closed state;
 - the bifurcations located along the period-1 branch do not depend on the continuation's
   step (two step sizes agree to 1e-9 in ω, the location's own tolerance is 1e-12 in arc
-  length), and at each one the critical multiplier is on the unit circle to 1e-6.
+  length), and at each one the critical multiplier is on the unit circle to 1e-6;
+- the preloaded variant (a static force on mass 2): its closed-stop linear limit, and the
+  fold of its lifted-off branch (two steps agree to 1e-9, a multiplier at +1, the orbit
+  beside it under DOP853).
 """
 
 from __future__ import annotations
@@ -25,12 +28,14 @@ import pytest
 from scipy.integrate import solve_ivp
 
 
-def rhs(omega):
+def rhs(omega, stop=None):
+    stop = pr.Stop(pr.GAP, pr.PRELOAD) if stop is None else stop
+
     def f(t, s):
         x, v = s[:2], s[2:]
         u = pr.SEAT * np.cos(omega * t)
         force = -pr.K @ x - pr.D @ v
-        force[1] -= pr.KC * max(x[1] - u - pr.GAP, 0.0)
+        force[1] += stop.preload - pr.KC * max(x[1] - u - stop.gap, 0.0)
         return np.concatenate([v, np.linalg.solve(pr.M, force)])
 
     return f
@@ -114,4 +119,63 @@ def test_orbit_stays_under_dop853(period_one):
     assert ok
     T = 2 * np.pi / w
     ref = solve_ivp(rhs(w), (0, 20 * T), s0, method="DOP853", rtol=1e-12, atol=1e-14).y[:, -1]
+    assert np.max(np.abs(ref - s0)) < 1e-7 * (np.ptp(s0[:2]) + pr.SEAT)
+
+
+#: The preloaded variant of tests/test_folds.py: a static force of 12 N presses mass 2 on
+#: the stop (0.12 of k_c a), which lifts off only near the closed chain's resonance.
+PRELOADED = pr.Stop(0.0, 12.0)
+#: A start on its lifted-off branch next to the fold (the H = 13 harmonic-balance orbit at
+#: 1.2896 rad/s, shot once; Newton converges from it): a start, not a result.
+LIFTED = (1.28958517, np.array([3.6362, -0.9591, 1.9417, 3.656]))
+
+
+def test_preloaded_linear_limit():
+    """Below the lift-off (1.0 rad/s) the preloaded stop stays closed all period: the orbit
+    is the static deflection under the preload plus the linear response of the closed chain
+    to the seat (the same algebra as test_linear_limit), and the contact force stays
+    positive. Checks the preload's place in the augmented system."""
+    w = 1.0
+    Kc = pr.K + pr.KC * pr.W @ pr.W.T
+    mean = np.linalg.solve(Kc, PRELOADED.preload * pr.W[:, 0])
+    X = np.linalg.solve(Kc - w**2 * pr.M + 1j * w * pr.D, pr.KC * pr.SEAT * pr.W[:, 0])
+    exact = np.concatenate([mean + X.real, (1j * w * X).real])
+    start = np.concatenate([mean + 0.9 * X.real, 0.9 * (1j * w * X).real])  # Newton from 10 % off
+    s0, Phi, ok = pr.shoot(start, w, stop=PRELOADED)
+    assert ok
+    np.testing.assert_allclose(s0, exact, rtol=0, atol=1e-10 * np.max(np.abs(exact)))
+    mu = np.sort_complex(np.exp(np.linalg.eigvals(pr.augmented(w, True, PRELOADED)[:4, :4]) * 2 * np.pi / w))
+    np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(Phi)), mu, rtol=0, atol=1e-10)
+    theta = np.linspace(0, 2 * np.pi, 64)
+    assert np.min(mean[1] + (X[1] * np.exp(1j * theta)).real - pr.SEAT * np.cos(theta)) > 0  # closed
+
+
+@pytest.fixture(scope="module")
+def preloaded_fold():
+    """The fold of the lifted-off branch with two continuation steps (through it)."""
+    w, s = LIFTED
+    return [
+        pr.locate(pr.continue_branch(s, w, 1.0, ds=ds, max_points=n, stop=PRELOADED), stop=PRELOADED)
+        for ds, n in ((0.1, 6), (0.07, 8))
+    ]
+
+
+@pytest.mark.slow  # two short continuations on the exact flow (~1 min)
+def test_preloaded_fold(preloaded_fold):
+    """The period-1 fold of the preloaded chain: a zero of the fold test function Π(1 - μ)
+    located to 1e-12 in arc length with two steps that agree to 1e-9 in ω, a multiplier at
+    +1 to 1e-6 there; the orbit beside it (0.5 % of ω above, where the branch exists)
+    returns under DOP853 after 3 periods within 1e-7 of the range (unstable, |μ| 1.2: an
+    error of 1e-12 grows by 1.7 over 3 periods)."""
+    (coarse, fine) = preloaded_fold
+    assert [k for k, *_ in coarse] == ["fold"] and [k for k, *_ in fine] == ["fold"]
+    (_, w, mu, s_fold), (_, w2, _, _) = coarse[0], fine[0]
+    print(f"fold: omega {w:.10f} rad/s (other step {w2:.10f}), multipliers {np.round(mu, 6)}")
+    assert abs(w - w2) < 1e-9 and pr.kind_of(mu, "fold")
+    assert abs(w - 1.2895493815) < 1e-9  # tests/test_folds.py's FOLD
+    wd = w * 1.005
+    s0, _, ok = pr.shoot(s_fold, wd, stop=PRELOADED)
+    assert ok
+    T = 2 * np.pi / wd
+    ref = solve_ivp(rhs(wd, PRELOADED), (0, 3 * T), s0, method="DOP853", rtol=1e-12, atol=1e-14).y[:, -1]
     assert np.max(np.abs(ref - s0)) < 1e-7 * (np.ptp(s0[:2]) + pr.SEAT)

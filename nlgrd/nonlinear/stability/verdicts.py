@@ -234,33 +234,44 @@ def _refresh_metrics(model: ReducedModel, result: SweepResult, no_stable: NDArra
     return replace(result, no_stable=no_stable, metrics=metrics, amplitudes=amps)
 
 
-def locate_bifurcations(model: ReducedModel, result: SweepResult, *, rtol: float = 1e-6) -> list[tuple]:
-    """Where the converged verdict changes between two consecutive points of a sweep on a
-    :func:`~nlgrd.nonlinear.stability.shooting.shootable` model, the frequency at which max |μ| of the
-    exact orbit crosses 1 + STABLE_RTOL, by bisection (each orbit shot from the
-    harmonic-balance orbit of the stable side's point).
+def locate_bifurcations(
+    model: ReducedModel, result: SweepResult, *, rtol: float = 1e-6, folds: bool = True
+) -> list[tuple]:
+    """The bifurcations of a sweep on a :func:`~nlgrd.nonlinear.stability.shooting.shootable`
+    model, located on the exact flow.
+
+    Where the converged verdict changes between two consecutive points, the frequency at
+    which max |μ| of the exact orbit crosses 1 + STABLE_RTOL, by bisection (each orbit shot
+    from the harmonic-balance orbit of the stable side's point). Where the sweep jumps
+    (:meth:`~nlgrd.nonlinear.results.sweep_results.SweepResult.jumps`) and its branch ends
+    before the next point, the fold that ends it (:func:`locate_fold`): stable or not, a
+    branch that ends is a fold, whose multiplier +1 no verdict change shows.
 
     Parameters
     ----------
     model : ReducedModel
-        The model of the sweep (period 1: its base frequency is ``result.omega``).
+        The model of the sweep (its base frequency is ``result.omega``).
     result : SweepResult
         A sweep with converged verdicts (:func:`converge_verdicts`).
     rtol : float
-        Relative width of the final bracket [-].
+        Relative width of the final bracket [-] (a fold: to ``rtol`` x 1e-3).
+    folds : bool
+        Also locate the folds at the branch ends (each a few dozen shots: on a sweep
+        with several jumps, minutes).
 
     Returns
     -------
     list of (str, str, float)
-        (direction, kind, ω [rad/s]): kind "Neimark-Sacker", "period doubling" or "fold"
-        from the dominant multiplier on the unstable side; empty when the model is not
-        shootable.
+        (direction, kind, ω [rad/s]) in sweep order per direction: kind "Neimark-Sacker",
+        "period doubling" or "fold" (the dominant multiplier on the unstable side), or
+        "fold" where a branch ends; empty when the model is not shootable.
     """
     if not shootable(model):
         return []
     out = []
     ok = result.converged & result.stability_known & result.verdict_converged
     for d in dict.fromkeys(result.direction.tolist()):
+        found = []
         idx = np.nonzero((result.direction == d) & ok)[0]
         for i, j in zip(idx[:-1], idx[1:], strict=True):
             if result.stable[i] == result.stable[j]:
@@ -274,8 +285,29 @@ def locate_bifurcations(model: ReducedModel, result: SweepResult, *, rtol: float
             )
             w = _bisect(model, result.harmonics[s], float(result.omega[s]), float(result.omega[u]), rtol)
             if w is not None:
-                out.append((d, kind, w))
+                found.append((d, kind, w))
+        for i, w_off in _branch_ends(result, d) if folds else ():
+            w = locate_fold(model, result.harmonics[i], float(result.omega[i]), w_off, rtol=1e-3 * rtol)
+            if w is not None:
+                found.append((d, "fold", w))
+        sign = 1.0 if d != "down" else -1.0
+        out += sorted(found, key=lambda f: sign * f[2])
     return out
+
+
+def _branch_ends(result: SweepResult, direction: str) -> list[tuple[int, float]]:
+    """(row, next frequency) where a sweep direction's branch may end: a jump, or a
+    converged point followed by one without an orbit."""
+    rows = np.nonzero(result.direction == direction)[0]
+    ends = {}
+    for jump in result.jumps():
+        if jump.direction == direction:
+            i = rows[np.argmin(np.abs(result.omega[rows] - jump.omega_from))]
+            ends[int(i)] = jump.omega_to
+    for i, j in zip(rows[:-1], rows[1:], strict=True):
+        if result.converged[i] and not result.converged[j]:
+            ends[int(i)] = float(result.omega[j])
+    return sorted(ends.items())
 
 
 def _bisect(model, z, w_stable, w_unstable, rtol):
@@ -290,3 +322,96 @@ def _bisect(model, z, w_stable, w_unstable, rtol):
         else:
             b = mid
     return 0.5 * (a + b)
+
+
+#: Orbits kept as harmonics between the steps of :func:`locate_fold` (the next shot's start).
+FOLD_HARMONICS = 64
+#: Steps of :func:`locate_fold` at most (secant and bisection).
+FOLD_STEPS = 60
+#: While |μ - 1|² does not fall, :func:`locate_fold` gives up below this step (relative):
+#: the branch ends without a fold (grazing).
+STEP_RTOL = 1e-6
+
+
+def _fold_test(mu: NDArray) -> float:
+    """|μ - 1|² of the multiplier closest to +1: zero at a fold, ~ linear in ω beside it
+    (μ - 1 ~ √(ω_f - ω) on either half of the branch)."""
+    mu = np.asarray(mu, dtype=complex)
+    return float(np.min(np.abs(mu - 1)) ** 2)
+
+
+def locate_fold(
+    model: ReducedModel, harmonics: NDArray, omega_on: float, omega_off: float, *, rtol: float = 1e-9
+) -> float | None:
+    """The fold (turning point) that ends the branch through an orbit, on the exact flow.
+
+    The branch is followed on the exact flow from ``omega_on`` towards ``omega_off``:
+    each orbit shot from the last one's harmonics, a step accepted when the new orbit is
+    the last one's continuation (:func:`same_orbit`), halved otherwise. At a fold one
+    multiplier is +1 and μ - 1 ~ √(ω_f - ω), so f(ω) = |μ - 1|² of the multiplier closest
+    to 1 falls ~ linearly to 0 at ω_f (Kuznetsov 2004, Elements of Applied Bifurcation
+    Theory, §10.2; Seydel 2010, Practical Bifurcation and Stability Analysis, §5.4 for
+    the square-root law). While f falls, the step goes at most to the secant zero of f
+    through the last two orbits; the fold is that zero once two successive zeros agree
+    to ``rtol``. A branch whose steps collapse while f stays away from 0 (a steep part,
+    grazing) has no fold there.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        A :func:`~nlgrd.nonlinear.stability.shooting.shootable` model.
+    harmonics : ndarray (n_nl, 2H+1)
+        A harmonic-balance orbit at ``omega_on`` [m].
+    omega_on : float
+        Base frequency where the branch exists [rad/s].
+    omega_off : float
+        Base frequency past the fold [rad/s] (above or below ``omega_on``).
+    rtol : float
+        Relative tolerance of the fold frequency [-].
+
+    Returns
+    -------
+    float or None
+        The fold's base frequency [rad/s]; None when the model is not shootable, no
+        exact orbit is found at ``omega_on``, or the branch reaches ``omega_off`` or ends
+        without a multiplier at +1.
+    """
+    if not shootable(model):
+        return None
+    first = polish(model, harmonics, omega_on)
+    if first is None:
+        return None
+    w, y = omega_on, orbit_harmonics(model, first, omega_on, FOLD_HARMONICS)
+    f = _fold_test(first.multipliers)
+    f_start, prev = f, None
+    sign = 1.0 if omega_off > omega_on else -1.0
+    h = 0.25 * abs(omega_off - omega_on)
+    estimate, fresh, ahead = None, False, None
+    for _ in range(FOLD_STEPS):
+        if fresh:  # a new orbit: where f, if falling, reaches 0
+            ahead = None
+            if prev[1] > f:
+                zero = w - f * (w - prev[0]) / (f - prev[1])
+                if estimate is not None and abs(zero - estimate) <= rtol * abs(zero):
+                    return float(zero)
+                estimate, ahead = zero, sign * (zero - w)
+        fresh = False
+        step = h if ahead is None or ahead <= 0 else min(h, ahead)
+        if step <= (rtol if estimate is not None else STEP_RTOL) * abs(w):
+            break
+        trial = w + sign * step
+        if sign * (trial - omega_off) >= 0:
+            trial = omega_off
+        orbit = polish(model, y, trial)
+        yt = None if orbit is None else orbit_harmonics(model, orbit, trial, FOLD_HARMONICS)
+        if yt is None or not same_orbit(yt, y):
+            h = 0.5 * step
+            continue
+        if trial == omega_off:
+            return None  # the branch goes on
+        prev, (w, y, f) = (w, f), (trial, yt, _fold_test(orbit.multipliers))
+        fresh, h = True, 1.5 * step
+    # the steps collapsed: a fold when its multiplier reached +1
+    if estimate is not None and f <= 1e-4 * f_start:
+        return float(estimate)
+    return None

@@ -135,3 +135,64 @@ def continuation(
     tw = np.array([p.tangent[-1] for p in pts])
     idx, tom = _turning(ws, s, tw)
     return ContinuationResult(curve, s, idx, tom, complete)
+
+
+#: Curve points tried before a turning point by :func:`refine_turning_points`: 1, 2, 4, ...
+#: 2**(BACK_STEPS - 1) back, then the first after the previous turning point (the truncation
+#: moves a fold; the exact branch may end before it).
+BACK_STEPS = 6
+
+
+def refine_turning_points(
+    model: ReducedModel, result: ContinuationResult, *, rtol: float = 1e-9
+) -> tuple[NDArray, NDArray]:
+    """The turning points of a continuation, on the exact flow where it is known.
+
+    A turning point of the harmonic-balance curve is a fold of the truncated problem, off
+    the exact one by the truncation. On a :func:`~nlgrd.nonlinear.stability.shooting.shootable`
+    model each is located again on the exact flow
+    (:func:`~nlgrd.nonlinear.stability.verdicts.locate_fold`: from a curve point before it
+    towards as far past it again, at least 1 % of ω), a fold whose multiplier reaches +1;
+    the points 1, 2, 4, ... before it and the first after the previous turning point are
+    tried in turn, since the truncated fold may lie
+    beyond the exact one, where the exact branch has no orbit (6e-3 rad/s on the preloaded
+    stiff-stop chain at H = 13).
+    A turning point the exact branch does not have (a grazing corner: the branch ends
+    with every multiplier off +1) or a model without an exact flow keeps the curve's
+    parabolic estimate.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        The model of the continuation.
+    result : ContinuationResult
+        From :func:`continuation`.
+    rtol : float
+        Relative tolerance of a refined fold frequency [-].
+
+    Returns
+    -------
+    omegas : ndarray
+        The turning points' frequencies [rad/s], in curve order.
+    exact : ndarray of bool
+        Which were located on the exact flow (a multiplier at +1).
+    """
+    from nlgrd.nonlinear.stability.verdicts import locate_fold
+
+    w = result.omega
+    out = np.array(result.turning_omegas, dtype=float)
+    exact = np.zeros(out.size, dtype=bool)
+    starts = [0, *(int(t) + 1 for t in result.turning_indices)]
+    for k, (i, w_turn) in enumerate(zip(result.turning_indices, result.turning_omegas, strict=True)):
+        # the exact fold may come before the curve's: points 1, 2, 4, ... back, then the
+        # first point after the previous turning point
+        tries = [int(i) - 2**b for b in range(BACK_STEPS) if int(i) - 2**b > starts[k]] + [starts[k]]
+        for on in tries:
+            ahead = w_turn - w[on]
+            margin = np.sign(ahead) * max(abs(ahead), 0.01 * abs(w_turn))
+            z = result.curve.harmonics[on]
+            found = locate_fold(model, z, float(w[on]), float(w_turn + margin), rtol=rtol)
+            if found is not None:
+                out[k], exact[k] = found, True
+                break
+    return out, exact

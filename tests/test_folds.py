@@ -1,0 +1,128 @@
+"""Folds located on the exact flow (issue 35 item 1, the period-1 fold of the stiff stop chain).
+
+The gap-free chain of tests/piecewise_reference.py is positively homogeneous in the seat
+amplitude and has no fold in its band; the variant here presses mass 2 on the stop with a
+static force of 12 N (0.12 of k_c a, :data:`PRELOAD`). Below about 1.38 rad/s the stop
+stays closed (the linear closed chain); near the closed chain's resonance it lifts off, and
+the lifted-off branch bends to lower frequencies (softening) and folds at :data:`FOLD`.
+
+The independent reference is tests/piecewise_reference.py on the exact flow: the fold is
+a zero of the test function Π(1 - μ) along a pseudo-arc-length continuation, bisected to
+1e-12 in arc length (tests/test_piecewise_reference.py::test_preloaded_fold: two
+continuation steps agree to 1e-9, a multiplier at +1 to 1e-6, the orbit beside it checked
+by DOP853). The library's fold locator
+(:func:`nlgrd.nonlinear.stability.verdicts.locate_fold`) follows the branch on its own
+shooting code and finds the zero of |μ - 1|² by secant steps, so the two share nothing
+but the equations.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import piecewise_reference as pr
+import pytest
+
+from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
+from nlgrd.nonlinear.laws.force_laws import ContactStop
+from nlgrd.nonlinear.results.metrics import MeshMetrics
+from nlgrd.nonlinear.results.sweep_results import assemble_result
+from nlgrd.nonlinear.stability.verdicts import _branch_ends, _fold_test, locate_bifurcations, locate_fold
+from nlgrd.nonlinear.tracing.continuation import continuation, refine_turning_points
+from nlgrd.nonlinear.tracing.sweep import sweep
+
+#: Static force on mass 2 towards the stop [N].
+PRELOAD = 12.0
+#: The reference's period-1 fold of the lifted-off branch [rad/s] (piecewise_reference.locate
+#: to 1e-9; tests/test_piecewise_reference.py::test_preloaded_fold).
+FOLD = 1.2895493815
+
+
+def preloaded_chain() -> ReducedModel:
+    """The chain of tests/piecewise_reference.py with the stop preloaded by :data:`PRELOAD`."""
+    stop = ContactStop(pr.KC, 0.0, np.array([0.0, pr.SEAT, 0.0]))
+    return ReducedModel.from_matrices(pr.M, pr.D, pr.K, pr.W, np.array([0.0, PRELOAD]), (stop,))
+
+
+def test_fold_test_function():
+    """|μ - 1|² of the multiplier nearest +1: zero at a fold, blind to flips and tori."""
+    assert _fold_test(np.array([1.0, 0.5, -0.3])) == 0.0
+    assert _fold_test(np.array([-1.0, 0.2 + 0.5j, 0.2 - 0.5j])) == pytest.approx(0.8**2 + 0.5**2)
+    assert _fold_test(np.array([1.1, 0.9])) == pytest.approx(0.01)
+
+
+def _point(H: int = 2) -> MeshMetrics:
+    return MeshMetrics(0.0, 1e-6, 2e-6, np.full(H + 1, 1e-6), 1.0, 0.0, 1.0, 0.0, False)
+
+
+def _ended_sweep():
+    """Up 1.0-1.4 rad/s converged throughout on a smooth curve; down without an orbit
+    below 1.2 rad/s."""
+    w = np.array([1.0, 1.1, 1.2, 1.3, 1.4])
+    n = w.size
+    z = np.zeros((2 * n, 1, 5))
+    z[:, 0, 0] = np.concatenate([np.linspace(0.1, 0.2, n), np.linspace(0.2, 0.1, n)])
+    conv = [True] * n + [True, True, True, False, False]
+    return assemble_result(
+        np.concatenate([w, w[::-1]]), ["up"] * n + ["down"] * n, z, conv, [0.0] * 2 * n,
+        [1] * 2 * n, [0.5] * 2 * n, [_point() for _ in range(2 * n)], "test",
+    )  # fmt: skip
+
+
+def test_branch_ends_are_jumps_and_points_without_an_orbit():
+    """The last converged point of the down sweep is a branch end towards the first point
+    without an orbit (row 7 at 1.2 rad/s, towards 1.1); the up sweep has none."""
+    res = _ended_sweep()
+    assert _branch_ends(res, "up") == []
+    assert _branch_ends(res, "down") == [(7, 1.1)]
+
+
+def test_a_model_without_exact_flow_has_no_exact_fold():
+    """locate_fold answers only on the exact flow: a smooth (AFT) law gives None."""
+    from nlgrd.nonlinear.laws.force_laws import AFTNonlinearity
+
+    cubic = AFTNonlinearity(lambda u: u**3, lambda u: 3 * u**2, 0, np.array([0.0, 0.1, 0.0]), 64)
+    model = ReducedModel.from_matrices(
+        np.eye(1), 0.02 * np.eye(1), np.eye(1), np.eye(1), np.zeros(1), (cubic,)
+    )
+    assert locate_fold(model, np.zeros((1, 5)), 1.0, 1.1) is None
+    assert locate_bifurcations(model, _ended_sweep()) == []
+
+
+@pytest.fixture(scope="module")
+def lifted_sweep():
+    """A down sweep 1.44-1.28 rad/s at H = 13 that follows the lifted-off branch (stability
+    off: the branch is unstable next to its fold, where the stable-seeking default sweep
+    leaves it) until Newton finds no orbit (1.29 -> 1.28 rad/s); ~30 s."""
+    model = preloaded_chain()
+    return model, sweep(model, np.arange(1.44, 1.2749, -0.01), 13, "down", stability=False)
+
+
+@pytest.mark.slow  # the sweep and ~15 shots near the fold (~45 s)
+def test_period_one_fold_of_the_preloaded_chain(lifted_sweep):
+    """Acceptance for the period-1 fold: the sweep's branch end (1.29 -> 1.28 rad/s) is one
+    of locate_bifurcations' candidates, and the fold located from it is within 1e-8 of the
+    reference (abs, rad/s; the locator's tolerance is 1e-9 relative, the reference's 1e-9,
+    both exact up to contact times located to 1e-13 of the period), far inside the issue's
+    1e-3. (locate_bifurcations also tries the sweep's three jumps at 1.40-1.43 rad/s, ~2
+    min more.)"""
+    model, res = lifted_sweep
+    i, w_off = _branch_ends(res, "down")[-1]
+    assert res.omega[i] == pytest.approx(1.29) and w_off == pytest.approx(1.28)
+    w = locate_fold(model, res.harmonics[i], float(res.omega[i]), w_off, rtol=1e-9)
+    print(f"fold {w:.12f} rad/s, reference {FOLD}")
+    assert abs(w - FOLD) < 1e-8
+
+
+@pytest.mark.slow  # a continuation at H = 13 (~2 s) and its refinement (~45 s)
+def test_continuation_turning_point_refined_on_the_exact_flow(lifted_sweep):
+    """The continuation at H = 13 from the lifted-off orbit at 1.30 rad/s turns at 1.2831
+    rad/s, 6.4e-3 below the exact fold (the truncation: the exact branch has no orbit
+    there); refine_turning_points locates it on the exact flow within 1e-8 of the
+    reference (abs, rad/s; tolerances as above)."""
+    model, res = lifted_sweep
+    i = int(np.argmin(np.abs(res.omega - 1.30)))
+    c = continuation(model, 1.30, 1.28, 13, res.harmonics[i], stability=False)
+    assert c.turning_omegas.size == 1 and abs(c.turning_omegas[0] - FOLD) > 1e-3  # the HB fold is off
+    w, exact = refine_turning_points(model, c)
+    print(f"H = 13 turning point {c.turning_omegas[0]:.6f}, refined {w[0]:.12f}, reference {FOLD}")
+    assert exact.tolist() == [True] and abs(w[0] - FOLD) < 1e-8
