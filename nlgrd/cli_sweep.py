@@ -19,6 +19,7 @@ from nlgrd.io.command_line import (
     snap_to_grid,
 )
 from nlgrd.io.model_checks import check_harmonics_memory, check_speed_range
+from nlgrd.nonlinear.results.response_kinds import QUASI_PERIODIC
 
 
 class _Unit:
@@ -377,6 +378,16 @@ def _summary(args, res, unit, out, png, transitions) -> int:
             )
         )
     kinds = np.asarray(res.mesh.time_kind, dtype=object)
+    solved = timed & (kinds == QUASI_PERIODIC)
+    if np.any(solved):
+        print(
+            f"quasi-periodic, answered by the torus harmonic balance (values; its stability not computed) at "
+            f"{unit.name} (secondary frequency Hz): "
+            + ", ".join(
+                f"{unit(w)} ({f / (2 * np.pi):.0f})"
+                for w, f in zip(res.mesh.omega[solved], res.mesh.secondary_frequency[solved], strict=True)
+            )
+        )
     for kind in ("time domain", "chaotic"):
         at = timed & (kinds == kind)
         if np.any(at):

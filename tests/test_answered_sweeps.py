@@ -44,12 +44,15 @@ def kb_sweep():
 def test_two_processes_give_the_numbers_of_one(kb_sweep):
     """Each point's answer depends on that point only (its start, the seeded twin, one BLAS
     thread): the rows answered on two processes and put back must be bit for bit those of
-    the serial with_time_answers, every column of the table (values, uncertainties, kinds)."""
+    the serial with_time_answers, every column of the table (values, uncertainties, kinds,
+    the linear bearings' columns)."""
     _, gaps, system = kb_sweep
     serial = with_time_answers(gaps, build_link_model(system), **PERIODS).to_frame()
-    parallel = answer_gaps_in_parallel(gaps, system, workers=2, **PERIODS).to_frame()
+    parallel = answer_gaps_in_parallel(gaps, system, workers=2, torus=False, **PERIODS).to_frame()
     assert serial["response"].isin(["time domain", "chaotic"]).sum() == 3  # answered: not vacuous
     assert "dte_rms_uncertainty [um]" in parallel
+    bearing = [c for c in parallel if c.endswith("force_max [N]") and "uncertainty" not in c]
+    assert bearing and np.isfinite(parallel[bearing].to_numpy(float)).all()  # the bearings put back too
     pd.testing.assert_frame_equal(parallel, serial, check_exact=True)
 
 

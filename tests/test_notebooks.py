@@ -149,6 +149,10 @@ def read(out: Path, name: str) -> pd.DataFrame:
 
 #: The answers of the time domain (nlgrd.timedomain.time_answer): values with uncertainties.
 TIME_KINDS = ("time domain", "chaotic")
+#: The torus harmonic balance's answer (nlgrd.timedomain.sweep_answers.with_torus_answers).
+TORUS = "quasi-periodic"
+#: Every answer of a point without a stable periodic orbit.
+ANSWER_KINDS = (TORUS, *TIME_KINDS)
 #: Value columns of the sweep tables.
 VALUE_COLUMNS = ("dslr [-]", "dte_rms [um]", "force_max [N]", "contact_loss_fraction [-]")
 
@@ -168,13 +172,18 @@ def check_answered(fe: pd.DataFrame, counts: pd.DataFrame, value: str) -> None:
     standard uncertainty, and the counts file is the table's recount per direction."""
     resp, hb = fe["response"].astype(str), fe[HB_RESPONSE].astype(object)
     ok = fe["converged"].astype(bool)
-    assert resp.isin(["periodic", "period 2", *TIME_KINDS, NOT_FOUND]).all(), set(resp)
+    assert resp.isin(["periodic", "period 2", *ANSWER_KINDS, NOT_FOUND]).all(), set(resp)
     assert (fe[value].notna() == (resp != NOT_FOUND)).all()
     assert (resp[~ok] == NOT_FOUND).all() and hb[~ok].isna().all()
     drawn = hb.isin(["periodic", "period 2"]) & ok
     assert (resp[drawn] == hb[drawn]).all()  # a stable periodic orbit is its own answer
     timed = resp.isin(TIME_KINDS)
-    assert not (timed & drawn).any()
+    assert not (resp.isin(ANSWER_KINDS) & drawn).any()
+    torus = resp == TORUS  # a torus answers a Neimark-Sacker point, with its ω₂ and its estimate
+    if torus.any():
+        assert (hb[torus] == "quasi-periodic").all()
+        assert (fe["secondary_frequency [Hz]"][torus] > 0).all()
+        assert (fe["harmonic_error [-]"][torus] <= 5e-3).all()  # the sweep's tolerance (OUTPUT_RTOL)
     stem, _, unit = value.partition(" [")
     u = fe[f"{stem}_uncertainty [{unit}"][timed] if timed.any() else pd.Series(dtype=float)
     # finite and positive; it may exceed the value where a record drifts (its uncertainty is
@@ -495,7 +504,7 @@ def test_kubo_every_speed_is_answered_and_the_bifurcations_listed(outputs):
     quasi = fe[fe[HB_RESPONSE] == "quasi-periodic"]
     f2 = quasi["secondary_frequency [Hz]"]
     assert (f2 > 0).all() and (f2 <= quasi[HZ] / 2 * (1 + 1e-9)).all()
-    assert quasi["response"].isin([*TIME_KINDS, NOT_FOUND]).all()  # never a periodic value
+    assert quasi["response"].isin([*ANSWER_KINDS, NOT_FOUND]).all()  # never a periodic value
     expected = []
     for d in ("up", "down"):
         part = fe[(fe["direction"] == d) & ok & ~unsettled]
@@ -563,7 +572,7 @@ def test_kb_dte_main_resonance_and_superharmonics(outputs, kb_mode):
     assert (fe.loc[flagged & fe["converged"], "floquet_max [-]"] > 1).all()
     assert fe.loc[~flagged, "dte_rms [um]"].notna().all()
     # where flagged, a value only from the time domain
-    assert (fe.loc[flagged, "dte_rms [um]"].notna() == fe.loc[flagged, "response"].isin(TIME_KINDS)).all()
+    assert (fe.loc[flagged, "dte_rms [um]"].notna() == fe.loc[flagged, "response"].isin(ANSWER_KINDS)).all()
     c = directions_of(periodic(fe), HZ, "dte_rms [um]")
     for d in ("up", "down"):
         x_pk, _ = local_peak(*c[d], 0.7 * f_gp, 1.1 * f_gp)
@@ -678,9 +687,9 @@ def test_kb_counts_are_the_runs_and_the_floor_restores_stable_points(outputs):
         assert row["no stable periodic response"] == (conv & ~ok).sum()
         assert row["of which quasi-periodic"] == (conv & (fe[HB_RESPONSE] == "quasi-periodic")).sum()
         assert row["not converged"] == (~conv).sum()
-        for kind in (*TIME_KINDS, NOT_FOUND):
+        for kind in (*ANSWER_KINDS, NOT_FOUND):
             assert row[kind] == (fe["response"] == kind).sum(), kind
-        assert row["time domain"] + row["chaotic"] + row["not found"] == (~(conv & ok)).sum()
+        assert row[TORUS] + row["time domain"] + row["chaotic"] + row["not found"] == (~(conv & ok)).sum()
     assert landmark(out, "sweep points, stable periodic (FE)") == table.loc["as given", "stable periodic"]
     assert landmark(out, "least damped mode sharing the mesh") == pytest.approx(740.7, abs=1.0)
     zeta = landmark(out, "least damped mode sharing the mesh, damping ratio")
@@ -755,7 +764,9 @@ def unphysical_rows(frame: pd.DataFrame, time_integration: bool = False) -> list
     not converged, not Floquet-stable, flagged 'no stable mesh-periodic response', or
     with a harmonic error above the tolerance; a time answer ("time domain", "chaotic":
     the statistics of a record from an attracting state) needs its uncertainty, not
-    stability. A time-integration table
+    stability; a torus answer ("quasi-periodic" with values) its secondary frequency and
+    its convergence estimate within the tolerance (its stability is not computed). A
+    time-integration table
     (``time_integration``: the ``*_td.csv`` files) needs ``converged`` (periodic) only: a
     periodic steady state reached by integration is attracting, and it keeps every
     harmonic."""
@@ -777,7 +788,13 @@ def unphysical_rows(frame: pd.DataFrame, time_integration: bool = False) -> list
         u = rows.get(f"{stem}_uncertainty [{unit}", pd.Series(np.nan, index=rows.index))
         if (timed & rows[c].notna() & ~(u > 0)).any():
             bad.append(f"time answer of {c} without its uncertainty")
-    rows = rows[~timed]  # the checks of a periodic orbit
+    torus = rows["response"].eq(TORUS) if "response" in rows else pd.Series(False, index=rows.index)
+    if torus.any():  # a torus answer: its ω₂ and its own convergence estimate, stability not computed
+        f2 = rows.get("secondary_frequency [Hz]", pd.Series(np.nan, index=rows.index))[torus]
+        err = rows.get("harmonic_error [-]", pd.Series(np.nan, index=rows.index))[torus]
+        if not ((f2 > 0).all() and (err <= HARMONIC_RTOL).all()):
+            bad.append("torus answer without its secondary frequency or beyond the tolerance")
+    rows = rows[~timed & ~torus]  # the checks of a periodic orbit
     if not (rows["stable"] == True).all():  # noqa: E712 (NA is not stable)
         bad.append("unstable")
     if "response" in rows and (~rows["response"].isin(["periodic", "period 2"])).any():
@@ -837,3 +854,8 @@ def test_scan_catches_unstable_and_unconverged_rows():
     assert unphysical_rows(timed.assign(**{"dslr_uncertainty [-]": [np.nan, 0.01]})) == []
     assert unphysical_rows(timed) == ["time answer of dslr [-] without its uncertainty"]
     assert unphysical_rows(good.drop(columns="stable")) == ["no stability column"]
+    torus = good.assign(stable=[True, pd.NA], response=["periodic", TORUS])
+    assert unphysical_rows(torus.assign(**{"secondary_frequency [Hz]": [np.nan, 1058.0]})) == []
+    assert unphysical_rows(torus.assign(**{"secondary_frequency [Hz]": [np.nan, np.nan]})) == [
+        "torus answer without its secondary frequency or beyond the tolerance"
+    ]

@@ -28,7 +28,7 @@ from nlgrd.nonlinear.models.geared import GearedSweepResult
 from nlgrd.nonlinear.models.link_model import LinkModel, build_link_model
 from nlgrd.nonlinear.results.sweep_results import SweepResult
 from nlgrd.rotor.system import RotorSystem
-from nlgrd.timedomain.sweep_answers import with_time_answers
+from nlgrd.timedomain.sweep_answers import OUTPUT_RTOL, with_time_answers, with_torus_answers
 
 __all__ = [
     "HB_RESPONSE",
@@ -49,7 +49,8 @@ KIND_ORDER = ("periodic", "period", "quasi-periodic", "time domain", "chaotic", 
 
 
 def gap_rows(result: GearedSweepResult | SweepResult) -> np.ndarray:
-    """Rows the time domain is asked to answer: converged, no stable periodic response.
+    """Rows the time domain is asked to answer: converged, no stable periodic response, not
+    answered by a torus.
 
     Parameters
     ----------
@@ -61,7 +62,8 @@ def gap_rows(result: GearedSweepResult | SweepResult) -> np.ndarray:
     ndarray of int
     """
     res = result.mesh if isinstance(result, GearedSweepResult) else result
-    return np.nonzero(np.asarray(res.converged, bool) & np.asarray(res.no_stable, bool))[0]
+    gaps = np.asarray(res.converged, bool) & np.asarray(res.no_stable, bool)
+    return np.nonzero(gaps & ~np.asarray(res.time_answered, bool))[0]  # a torus's answer stays
 
 
 def _only_rows(res: SweepResult, rows: np.ndarray) -> SweepResult:
@@ -71,10 +73,13 @@ def _only_rows(res: SweepResult, rows: np.ndarray) -> SweepResult:
     return dc.replace(res, no_stable=np.asarray(res.no_stable, bool) & keep)
 
 
-def _answer_rows(res: SweepResult, system: RotorSystem, rows: np.ndarray, options: dict) -> SweepResult:
+def _answer_rows(
+    result: GearedSweepResult, system: RotorSystem, rows: np.ndarray, options: dict
+) -> GearedSweepResult:
     """A worker's task: the time answers at ``rows`` (module docstring), on the link model
     built here from ``system`` (a link model does not pickle; the build is deterministic)."""
-    return with_time_answers(_only_rows(res, rows), build_link_model(system), **options)
+    part = dc.replace(result, mesh=_only_rows(result.mesh, rows))
+    return with_time_answers(part, build_link_model(system), **options)
 
 
 def _put_rows(out: dict, part: SweepResult, rows: np.ndarray, n: int) -> None:
@@ -104,13 +109,19 @@ def answer_gaps_in_parallel(
     *,
     model: LinkModel | None = None,
     workers: int = 1,
+    torus: bool = True,
+    rtol: float = OUTPUT_RTOL,
     progress: Callable[[int, int], None] | None = None,
     **options,
 ) -> GearedSweepResult:
-    """The sweep with its gaps answered in the time domain, on ``workers`` processes.
+    """The sweep with its gaps answered as every sweep answers them
+    (:func:`~nlgrd.timedomain.sweep_answers.answer_sweep`), the time answers on ``workers``
+    processes: first the Neimark-Sacker points by the torus harmonic balance where it
+    converges within ``rtol`` (:func:`~nlgrd.timedomain.sweep_answers.with_torus_answers`),
+    then every other gap in the time domain.
 
-    ``workers`` = 1 is :func:`~nlgrd.timedomain.sweep_answers.with_time_answers` itself;
-    more split the gap rows among processes (interleaved, so that each gets points from
+    ``workers`` = 1 is :func:`~nlgrd.timedomain.sweep_answers.answer_sweep` itself;
+    more split the time-domain rows among processes (interleaved, so that each gets points from
     every part of the range) and put every per-point field back at its rows: the same
     numbers (module docstring; tests/test_answered_sweeps.py). The workers are spawned,
     not forked (a notebook's kernel runs threads): a script that calls this with
@@ -128,6 +139,10 @@ def answer_gaps_in_parallel(
         already; each worker builds its own.
     workers : int
         Processes [-] (1: this one).
+    torus : bool
+        Try the torus harmonic balance first.
+    rtol : float
+        The sweep's tolerance, which a torus's convergence estimate must meet [-].
     progress : callable, optional
         ``progress(done, total)``: points answered (one process) or tasks done (several).
     **options
@@ -138,22 +153,37 @@ def answer_gaps_in_parallel(
     -------
     GearedSweepResult
     """
+    if torus:  # the torus first, along the sweep (each from its neighbour's): one process
+        result = with_torus_answers(result, system, rtol=rtol)
     rows = gap_rows(result)
     workers = max(1, min(int(workers), rows.size))
     if workers == 1 or rows.size == 0:
         model = build_link_model(system) if model is None else model
         return with_time_answers(result, model, progress=progress, **options)
-    res = result.mesh
+    res, n = result.mesh, len(result.mesh)
     tasks = [rows[i::workers] for i in range(workers)]
     merged = {f.name: getattr(res, f.name) for f in dc.fields(res)}
+    nan = {
+        f.name: np.full_like(np.asarray(getattr(result.bearings, f.name), float), np.nan)
+        for f in dc.fields(result.bearings)
+    }
+    bearings = {f.name: getattr(result.bearings, f.name) for f in dc.fields(result.bearings)}
+    unc = nan if result.bearing_uncertainty is None else dc.asdict(result.bearing_uncertainty)
     context = multiprocessing.get_context("spawn")  # no fork of a threaded kernel
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        futures = {pool.submit(_answer_rows, res, system, t, options): t for t in tasks}
+        futures = {pool.submit(_answer_rows, result, system, t, options): t for t in tasks}
         for done, fut in enumerate(as_completed(futures), 1):
-            _put_rows(merged, fut.result(), futures[fut], len(res))
+            part, t = fut.result(), futures[fut]
+            _put_rows(merged, part.mesh, t, n)
+            _put_rows(bearings, part.bearings, t, n)
+            if part.bearing_uncertainty is not None:
+                _put_rows(unc, part.bearing_uncertainty, t, n)
             if progress is not None:
                 progress(done, len(tasks))
-    return dc.replace(result, mesh=dc.replace(res, **merged))
+    cls = type(result.bearings)
+    return dc.replace(
+        result, mesh=dc.replace(res, **merged), bearings=cls(**bearings), bearing_uncertainty=cls(**unc)
+    )
 
 
 def answered_table(hb: pd.DataFrame, answered: pd.DataFrame, value: str = "dte_rms [um]") -> pd.DataFrame:
