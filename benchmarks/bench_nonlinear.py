@@ -13,7 +13,10 @@ Three cases, each printed as a table (figures and machine in ``benchmarks/README
    bearing recovery; ``stability=False`` on the full grid, ``stability=True`` on a
    2 x 15-point subsample with the full sweep extrapolated (``--full-stability`` also
    runs the full grid with stability, twice, as the library builds it: its state spaces
-   share one Floquet cache). Target: under 2 s. Then Floquet per point side
+   share one Floquet cache; ``--before FILE`` also runs it, interleaved, with the
+   ``floquet_multipliers`` of another version of ``nlgrd/nonlinear/stability/floquet.py``,
+   e.g. ``git show main:nlgrd/nonlinear/stability/floquet.py > /tmp/floquet_before.py``,
+   and compares the verdicts). Target: under 2 s. Then Floquet per point side
    by side on the sweep's harmonics: the reference ``method="expm"`` (the method before
    issue 10) against the default, verdicts compared. Target: <= 1 ms per point.
 2. Time integration (HHT-α, :func:`nlgrd.timedomain.geared.time_response`) against
@@ -48,6 +51,7 @@ import argparse
 import ctypes
 import dataclasses
 import datetime
+import importlib.util
 import os
 import platform
 import subprocess
@@ -404,10 +408,16 @@ def case_sweep(cfg) -> dict:
         plan.append((f"stability=True {nsub} [2]", True, sub, cfg.secondary))
     if cfg.full_stability:
         plan.append(("stability=True full", True, omegas, cfg.primary))
+        if cfg.before:
+            plan.append(("stability=True full, before", True, omegas, cfg.primary))
         plan.append(("stability=True full, again", True, omegas, cfg.primary))
+        if cfg.before:
+            plan.append(("stability=True full, before again", True, omegas, cfg.primary))
+            plan.append(("stability=False, again", False, omegas, cfg.primary))
+    before = _floquet_before(cfg.before) if cfg.before and cfg.full_stability else None
     runs = {}
     for label, stab, grid, threads in plan:
-        with BLAS.threads(threads):
+        with BLAS.threads(threads), _floquet_swapped(before if "before" in label else None):
             model, t_build = build()
             t_basis = None
             if stab:
@@ -490,6 +500,8 @@ def case_sweep(cfg) -> dict:
         ss_, tbs, tss = runs["stability=True full, again"]
         tot = ss_.total + tbs + tss
         print(f"  the same again: {tot:.2f} s -> {verdict(tot < 2)}")
+        if cfg.before:
+            compare_before(runs, total0)
     if cfg.secondary is not None:
         for a in ("stability=False", f"stability=True {nsub}"):
             s2 = runs[f"{a} [2]"][0]
@@ -498,6 +510,66 @@ def case_sweep(cfg) -> dict:
     with BLAS.threads(cfg.primary):
         floquet_side_by_side(build()[0], st0.result, cfg)
     return {"system": system, "omegas": omegas, "f_mode": f_mode, "sweep": st0, "build": tb0}
+
+
+def _floquet_before(path: str):
+    """The module of another version of ``floquet.py`` (``--before``)."""
+    spec = importlib.util.spec_from_file_location("floquet_before", path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod  # dataclasses look their module up there
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@contextmanager
+def _floquet_swapped(before):
+    """Every library module's ``floquet_multipliers`` replaced by ``before``'s for a block."""
+    if before is None:
+        yield
+        return
+    swapped = [
+        (mod, mod.floquet_multipliers)
+        for name, mod in list(sys.modules.items())
+        if name.startswith("nlgrd") and mod is not nl_floquet and hasattr(mod, "floquet_multipliers")
+    ]
+    for mod, _ in swapped:
+        mod.floquet_multipliers = before.floquet_multipliers
+    try:
+        yield
+    finally:
+        for mod, fn in swapped:
+            mod.floquet_multipliers = fn
+
+
+def compare_before(runs, total0: float) -> None:
+    """Before/after of ``--before``: best of two each, against the best stability=False run
+    of the same process, and the answers compared point by point."""
+
+    def total(label):
+        s, b, t = runs[label]
+        return s.total + b + (t or 0.0)
+
+    off = min(total0, total("stability=False, again"))
+    aft = min(total("stability=True full"), total("stability=True full, again"))
+    bef = min(total("stability=True full, before"), total("stability=True full, before again"))
+    print(
+        f"side by side (best of two each): stability=False {off:.2f} s; with stability: before "
+        f"{bef:.2f} s ({bef / off:.2f}x), after {aft:.2f} s ({aft / off:.2f}x) -> target <= 1.3x: "
+        f"{verdict(aft / off <= 1.3)}"
+    )
+    a, b = runs["stability=True full, before"][0].result.mesh, runs["stability=True full"][0].result.mesh
+    same = all(
+        np.array_equal(np.asarray(getattr(a, k)), np.asarray(getattr(b, k)))
+        for k in ("omega", "converged", "stable", "no_stable", "branch_switch")
+    )
+    za, zb = np.asarray(a.harmonics), np.asarray(b.harmonics)
+    dz = float(np.nanmax(np.abs(za - zb)) / np.nanmax(np.abs(za))) if za.shape == zb.shape else np.inf
+    dmu = float(np.nanmax(np.abs(np.abs(a.dominant_multiplier) - np.abs(b.dominant_multiplier))))
+    print(
+        f"  before/after: convergence, stability, no-stable and branch switches identical at every "
+        f"point: {same}; harmonics within {dz:.1e} (relative); largest change of |dominant "
+        f"multiplier| {dmu:.1e}"
+    )
 
 
 def floquet_side_by_side(model, result, cfg) -> None:
@@ -827,6 +899,10 @@ def main(argv=None) -> None:
         help="also the 2 x 500 sweep with stability (about 4 more min)",
     )
     ap.add_argument("--zeta", type=float, default=0.1, help="mesh damping ratio (file: 0.005), default 0.1")
+    ap.add_argument(
+        "--before",
+        help="with --full-stability: another floquet.py run side by side (module docstring)",
+    )
     ap.add_argument("--cases", default="123", help="which cases to run, e.g. 13 (case 1 always runs)")
     ap.add_argument(
         "--blas-default", action="store_true", help="primary figures with the default BLAS threads, not 1"
