@@ -348,3 +348,33 @@ def test_kubo_rig_verdicts_equal_the_reference_with_and_without_deflation():
     assert v.shape[0] >= 30 and 0 < np.sum(~v[:, 1]) < v.shape[0]
     np.testing.assert_array_equal(v[:, 0], v[:, 1])
     np.testing.assert_array_equal(v[:, 0], v[:, 2])
+
+
+def test_certificate_cache_sees_the_damping(swept):
+    """The certificate with a shared cache (its null space of K_t kept per K_t and M, the
+    same for all three state spaces here) answers as without one: a gyroscopic (skew)
+    change of D keeps it, a negative damping direction refuses it, in whichever order the
+    three state spaces meet the cache. A cache of the whole answer by K_t and M alone would
+    return the first one's for all (the answers are exact integers: equality is the check)."""
+    model, pts = _points(swept)
+    w, _ = pts[0]
+    ss = model.reduced.linear_state_space(w)
+    kt = np.full((1, 1), model.mesh.stiffness)
+    rng = np.random.default_rng(2)
+    S = rng.standard_normal(ss.D.shape)
+    v = np.linalg.eigh(ss.D + ss.D.T)[1][:, 0]  # the least damped direction
+    big = np.max(np.abs(ss.D))
+    spaces = [
+        LinearStateSpace(ss.M, ss.D, ss.K, ss.W),
+        LinearStateSpace(ss.M, ss.D + 0.1 * big * (S - S.T), ss.K, ss.W),  # gyroscopic: sym(D) kept
+        LinearStateSpace(ss.M, ss.D - 0.1 * big * np.outer(v, v), ss.K, ss.W),  # an active direction
+    ]
+    plain = [fl._neutral_count(s, kt, True) for s in spaces]
+    assert plain == [1, 1, None]
+    for order in ((0, 1, 2), (2, 1, 0)):
+        shared = hb_state_space.FloquetCache(maxsize=64)
+        for i in order:
+            s = spaces[i]
+            cached = LinearStateSpace(s.M, s.D, s.K, s.W, cache=shared)
+            assert fl._neutral_count(cached, kt, True) == plain[i]
+            assert fl._neutral_count(cached, kt, True) == plain[i]  # the stored answer

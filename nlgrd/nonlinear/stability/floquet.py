@@ -329,29 +329,16 @@ def _neutral_count(ss: LinearStateSpace, kt: NDArray, deflate: bool) -> int | No
     (step 1) holds for the tangent ``kt``, else None. With ``deflate`` the null vectors
     that are free rigid-body modes (K φ = D φ = Wᵀ φ = 0 to CONSTRAINT_RTOL, the test of
     ``rigid_body_modes``) are not counted. The null space of K_t and the check of M do not
-    depend on the speed: a shared cache keeps them across a sweep, with the check of
-    D, which depends on sym(D) alone (the gyroscopic part Ω G is skew), and the whole
-    count per state space and tangent (a down sweep comes back to every frequency)."""
-    store = ss.cache if ss.cache is not None else ss.floquet_cache
-    return store.get(
-        ("neutral", ss.digest, kt.tobytes(), bool(deflate)), lambda: _count(ss, kt, deflate, store)
-    )
-
-
-def _count(ss: LinearStateSpace, kt: NDArray, deflate: bool, store) -> int | None:
-    """:func:`_neutral_count` computed, its speed-independent parts kept in ``store``."""
+    depend on the speed: a shared cache keeps them across a sweep."""
     Kt = ss.K + ss.W @ kt @ ss.W.T
+    store = ss.cache if ss.cache is not None else ss.floquet_cache
 
     def null_space():
         ok, Z = psd_null_space(Kt)
         return Z if ok and _spd(ss.M) else None
 
     Z = store.get(("psd-null", Kt.tobytes(), ss.M.tobytes()), null_space)
-    if Z is None or Z.shape[1] == 0:
-        return None
-    sym = ss.D + ss.D.T  # psd_to_tolerance reads (D + Dᵀ)/2 only
-    key = ("psd-damping", hashlib.blake2b(sym.tobytes(), digest_size=20).digest())
-    if not store.get(key, lambda: psd_to_tolerance(ss.D)):
+    if Z is None or Z.shape[1] == 0 or not psd_to_tolerance(ss.D):
         return None
     r = Z.shape[1]
     if deflate:
