@@ -10,10 +10,16 @@ References, independent of the link path:
   the HHT-α integration of the full FE model in benchmarks/torus_kubo_reference.csv
   (RMS DTE and largest mesh force within the issue's 1 %, ω₂ within 0.5 %; the
   bearing force against the integration of tests/test_quasi_periodic.py, 1 %).
+- The same rig with a rub ring at the gear's node that is touched (benchmarks/
+  torus_link_reference.py: two nonsmooth links, the mesh and the rub): the torus of the
+  link model against the HHT-α integration of the same link model
+  (:class:`nlgrd.timedomain.links.LinkIntegrator`), stored in
+  benchmarks/torus_link_reference.csv (its ``ti_*`` columns), with the same tolerances.
 """
 
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +29,7 @@ import pytest
 import nlgrd
 from nlgrd.nonlinear.hb import quasi_periodic as qp
 from nlgrd.nonlinear.models.geared import build_geared_model
-from nlgrd.nonlinear.models.link_model import build_link_model
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 from nlgrd.nonlinear.results.response_kinds import QUASI_PERIODIC
 from nlgrd.nonlinear.tracing.link_torus import LinkTorus, torus_link_columns
 from nlgrd.nonlinear.tracing.torus_outputs import TORUS_OUTPUTS, geared_torus_model
@@ -32,6 +38,8 @@ from nlgrd.nonlinear.tracing.torus_sweep import torus_sweep
 ROOT = Path(__file__).resolve().parent.parent
 KUBO = ROOT / "data" / "case_studies" / "kubo.toml"
 REFERENCE = ROOT / "benchmarks" / "torus_kubo_reference.csv"
+LINK_SCRIPT = ROOT / "benchmarks" / "torus_link_reference.py"
+LINK_REFERENCE = ROOT / "benchmarks" / "torus_link_reference.csv"
 #: A radial clearance of 1 mm at the gear shaft's far bearing: never touched.
 FAR_CLEARANCE = """
 [[bearing_clearances]]
@@ -133,3 +141,66 @@ def test_a_link_sweep_answers_kubo_tori(kubo_far):
     bearings = [c for c in frame.columns if c.startswith("bearing ")]
     assert np.all(np.isfinite(frame[bearings].to_numpy(float)))
     assert frame["bearing 0 (shaft 0, node 1).force_max [N]"].iloc[0] > 0
+
+
+def _link_reference_script():
+    """benchmarks/torus_link_reference.py as a module (its model and speeds)."""
+    spec = importlib.util.spec_from_file_location("torus_link_reference", LINK_SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_two_link_torus_against_integration_of_the_link_model(tmp_path):
+    """Kubo's rig with the rub ring of benchmarks/torus_link_reference.py (touched 14-19 %
+    of the time with up to 200 N): the link sweep's periodic orbit is Neimark-Sacker
+    unstable at the reference's speeds; the torus of the link model (H₁ 13, H₂ 4, its
+    estimate at (17, 6) within the sweep's 0.5 %) at two of them, followed from one to the
+    next, against the integration of the same link model: the mesh's RMS DTE and largest
+    force within 1 %, ω₂ within 0.5 % (the issue's tolerances); the rub's contact
+    fraction within 0.05 absolute and its largest force within 10 % (a contact force
+    peak sampled on a 256 x 48 grid of the torus and on 500 recorded periods: the
+    reference's halves differ by a few per cent). Costs about 15 s CPU."""
+    ref_script = _link_reference_script()
+    system = nlgrd.load(str(ref_script.model_file(tmp_path)))
+    model = build_link_model(system)
+    ref = pd.read_csv(LINK_REFERENCE)
+    ref = ref.set_index(ref["pinion_speed [rpm]"].round(3))
+    rpm = [13825.0, 13875.0]
+    ref = ref.loc[rpm]
+    omegas = np.array(rpm) * 2 * np.pi / 60 * 25
+    sweep = link_sweep(model, omegas, H=13, directions="up", period=1).result
+    assert np.all(np.isfinite(sweep.secondary_frequency))  # a complex pair: Neimark-Sacker
+    assert not sweep.stable.any()
+    tor = torus_sweep(model, omegas, H=13, H2=4, periodic=sweep.harmonics, target=LinkTorus(model))
+    assert tor.converged.all()
+    assert (tor.error <= 5e-3).all()
+    cols = [torus_link_columns(model, sol) for sol in tor.solutions]
+    checks = (("mesh0.dte_rms [m]", 0.01), ("mesh0.force_max [N]", 0.01), ("rub.force_max [N]", 0.1))
+    for column, rtol in checks:
+        ours = np.array([c[column] for c in cols])
+        np.testing.assert_allclose(ours, ref[f"ti_{column}"].to_numpy(float), rtol=rtol, err_msg=column)
+    ours = np.array([c["rub.contact_fraction [-]"] for c in cols])
+    np.testing.assert_allclose(ours, ref["ti_rub.contact_fraction [-]"].to_numpy(float), atol=0.05)
+    assert np.all(ours > 0.1)  # the rub is touched: two active links
+    w2 = np.array([sol.secondary for sol in tor.solutions]) / (2 * np.pi)
+    np.testing.assert_allclose(w2, ref["ti_secondary_frequency [Hz]"].to_numpy(float), rtol=0.005)
+
+
+def test_a_torus_too_large_for_memory_is_not_tried(kubo_far):
+    """A link model whose mesh sits at a high base harmonic (``step`` 20, as a train whose
+    base is the shaft speed) would check its torus on ~9000 real unknowns at H₁ 100: above
+    ``TORUS_MAX_UNKNOWNS`` no rung is tried and the point is left to the time answer
+    (None), at once. The count is that of the grid itself."""
+    from nlgrd.nonlinear.hb.torus_grid import TorusGrid
+    from nlgrd.nonlinear.tracing.torus_sweep import TORUS_MAX_UNKNOWNS, converged_tori
+
+    for h1, h2 in ((13, 4), (21, 6), (3, 0)):
+        assert TorusGrid.n_real_of(h1, h2) == TorusGrid(h1, h2, 4 * h1 + 4, 4 * h2 + 4).n_real
+    model = build_link_model(kubo_far)
+    n_c = model.receptance.n_coords
+    assert n_c * TorusGrid.n_real_of(100 + 80, 6) > TORUS_MAX_UNKNOWNS
+    z = np.zeros((1, n_c, 201))
+    w = 2 * np.pi * 13750 / 60 * 25
+    out = converged_tori(model, np.array([w]), z, H=100, rtol=5e-3, target=LinkTorus(model), step=20)
+    assert out == [None]

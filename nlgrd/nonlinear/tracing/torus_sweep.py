@@ -331,6 +331,12 @@ ANSWER_MAX_ITER = 25
 #: Relative residual of a sweep's torus solve: below the default 1e-8, so that the noise
 #: its start carries (the Floquet mode's last bits) stays far below the digits written.
 ANSWER_TOL = 1e-10
+#: Largest number of real unknowns of a sweep's torus check, (H₁ + 4 step, H₂ + 2) on all
+#: coordinates: its dense Jacobian (8 bytes each, squared: 128 MB at 4000) and the
+#: O(|𝒦|²) AFT tangent blocks bound the memory; a rung above it is not tried (the point
+#: goes on to the time answer). One mesh at H₁ 17 checks 559; a two-mesh train whose base
+#: is the shaft speed (``top_order`` 20) would need ~9000.
+TORUS_MAX_UNKNOWNS = 4000
 #: The starts a sweep's torus tries from the periodic orbit (the first two of
 #: :data:`START_SIZES`; the first started every Kubo torus of the reference band).
 ANSWER_START_SIZES = START_SIZES[:2]
@@ -413,7 +419,7 @@ def converged_tori(
     step : int
         The rungs of :data:`TORUS_LADDER` are H + ``step`` x rung and the check
         H₁ + 4 ``step`` (a link model's ``top_order``: its mesh at base harmonic ``step``)
-        [-].
+        [-]; a rung whose check exceeds :data:`TORUS_MAX_UNKNOWNS` is not tried.
 
     Returns
     -------
@@ -431,6 +437,8 @@ def converged_tori(
     rungs = [H + step * r for r in TORUS_LADDER if H + step * r <= max(H, step * TORUS_MAX_H)]
     z_all = np.asarray(periodic, dtype=float)
     z_all = z_all.reshape(len(omegas), -1, z_all.shape[-1])
+    n_c = z_all.shape[1]
+    rungs = [h for h in rungs if n_c * tg.TorusGrid.n_real_of(h + 4 * step, H2 + 2) <= TORUS_MAX_UNKNOWNS]
     for k, Hr in enumerate(rungs):
         if not pending.size:
             break
