@@ -120,7 +120,7 @@ def test_a_link_sweep_answers_kubo_tori(kubo_far):
     """``nlgrd.sweep`` on the link model with its defaults (period "auto", time domain
     on): its Neimark-Sacker points are answered by the torus first, as on one mesh
     (tests/test_torus_answers.py), every link's columns and the linear bearings' written,
-    against the time integration (1 %, 0.5 %). About 20 s for the two points (the link
+    against the time integration (1 %, 0.5 %). About 29 s wall for the two points (the link
     sweep's choice of H and its torus ladder included)."""
     rpm = [13750.0, 13800.0]
     res = nlgrd.sweep(kubo_far, rpm=rpm, directions="up")
@@ -154,34 +154,39 @@ def _link_reference_script():
 def test_a_two_link_torus_against_integration_of_the_link_model(tmp_path):
     """Kubo's rig with the rub ring of benchmarks/torus_link_reference.py (touched 14-19 %
     of the time with up to 200 N): the link sweep's periodic orbit is Neimark-Sacker
-    unstable at the reference's speeds; the torus of the link model (H₁ 13, H₂ 4, its
-    estimate at (17, 6) within the sweep's 0.5 %) at two of them, followed from one to the
-    next, against the integration of the same link model: the mesh's RMS DTE and largest
-    force within 1 %, ω₂ within 0.5 % (the issue's tolerances); the rub's contact
-    fraction within 0.05 absolute and its largest force within 10 % (a contact force
-    peak sampled on a 256 x 48 grid of the torus and on 500 recorded periods: the
-    reference's halves differ by a few per cent). Costs about 15 s CPU."""
+    unstable at the reference's three speeds; the torus of the link model (H₁ 13, H₂ 4,
+    followed from one speed to the next as a sweep does) against the integration of the
+    same link model: the mesh's RMS DTE and largest force within 1 %, ω₂ within 0.5 %
+    (the issue's tolerances); the rub's contact fraction within 0.01 absolute (the
+    issue's 1 % as a fraction of the time) and its largest force within 3 % (a
+    contact-force peak, which the integration's step at contact moves by per cents:
+    docs/verification.md, Kubo at 8555 rpm). Measured: RMS DTE -0.004/+0.02/+0.009 %,
+    force -0.05/-0.09/-0.16 %, ω₂ +0.17/+0.15/+0.20 %, rub force -1.0/-1.5/-0.7 %,
+    contact fraction -0.002/-0.002/-0.001. The torus's own estimate at (17, 6) is
+    3.1e-3/1.8e-3/4.3e-3; it is asserted finite and below 1e-2 only, not against the
+    sweep's 0.5 %: started afresh at 13 825 rpm instead of followed, Newton lands on a
+    neighbouring solution of the balance whose estimate is 4.9e-3 (see the first test).
+    About 20 s CPU."""
     ref_script = _link_reference_script()
     system = nlgrd.load(str(ref_script.model_file(tmp_path)))
     model = build_link_model(system)
     ref = pd.read_csv(LINK_REFERENCE)
-    ref = ref.set_index(ref["pinion_speed [rpm]"].round(3))
-    rpm = [13825.0, 13875.0]
-    ref = ref.loc[rpm]
+    rpm = list(ref_script.RPM)
+    ref = ref.set_index(ref["pinion_speed [rpm]"].round(3)).loc[rpm]
     omegas = np.array(rpm) * 2 * np.pi / 60 * 25
     sweep = link_sweep(model, omegas, H=13, directions="up", period=1).result
     assert np.all(np.isfinite(sweep.secondary_frequency))  # a complex pair: Neimark-Sacker
     assert not sweep.stable.any()
     tor = torus_sweep(model, omegas, H=13, H2=4, periodic=sweep.harmonics, target=LinkTorus(model))
     assert tor.converged.all()
-    assert (tor.error <= 5e-3).all()
+    assert np.all(tor.error < 1e-2)
     cols = [torus_link_columns(model, sol) for sol in tor.solutions]
-    checks = (("mesh0.dte_rms [m]", 0.01), ("mesh0.force_max [N]", 0.01), ("rub.force_max [N]", 0.1))
+    checks = (("mesh0.dte_rms [m]", 0.01), ("mesh0.force_max [N]", 0.01), ("rub.force_max [N]", 0.03))
     for column, rtol in checks:
         ours = np.array([c[column] for c in cols])
         np.testing.assert_allclose(ours, ref[f"ti_{column}"].to_numpy(float), rtol=rtol, err_msg=column)
     ours = np.array([c["rub.contact_fraction [-]"] for c in cols])
-    np.testing.assert_allclose(ours, ref["ti_rub.contact_fraction [-]"].to_numpy(float), atol=0.05)
+    np.testing.assert_allclose(ours, ref["ti_rub.contact_fraction [-]"].to_numpy(float), atol=0.01)
     assert np.all(ours > 0.1)  # the rub is touched: two active links
     w2 = np.array([sol.secondary for sol in tor.solutions]) / (2 * np.pi)
     np.testing.assert_allclose(w2, ref["ti_secondary_frequency [Hz]"].to_numpy(float), rtol=0.005)
