@@ -209,3 +209,25 @@ def test_a_torus_too_large_for_memory_is_not_tried(kubo_far):
     w = 2 * np.pi * 13750 / 60 * 25
     out = converged_tori(model, np.array([w]), z, H=100, rtol=5e-3, target=LinkTorus(model), step=20)
     assert out == [None]
+
+
+@pytest.mark.slow
+def test_nlgrd_sweep_command_answers_link_tori(kubo_far, tmp_path, capsys):
+    """``nlgrd sweep`` on the link model (untouched clearance): the same rule as
+    ``nlgrd.sweep`` (``answer_sweep``), its summary counting the torus answers apart from
+    the time answers; the CSV's link columns against the FE integration (1 %, 0.5 %).
+    About 25 s wall."""
+    from nlgrd.cli import main
+
+    path = tmp_path / "kubo_far.toml"
+    path.write_text(KUBO.read_text() + FAR_CLEARANCE)
+    out = tmp_path / "t.csv"
+    assert main(["sweep", str(path), "--rpm", "13750:13800:3", "--direction", "up", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "3 answered by the torus harmonic balance, 0 answered in the time domain" in text
+    frame = pd.read_csv(out)
+    assert (frame["response"] == QUASI_PERIODIC).all() and (frame["far.force_max [N]"] == 0).all()
+    ref = _reference([13750.0, 13800.0])
+    at = frame.iloc[[0, 2]]
+    np.testing.assert_allclose(at["mesh0.force_max [N]"], ref["ti_force_max [N]"], rtol=0.01)
+    np.testing.assert_allclose(at["secondary_frequency [Hz]"], ref["ti_secondary_frequency [Hz]"], rtol=0.005)
