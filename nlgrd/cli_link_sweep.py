@@ -206,14 +206,15 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
         files.commit()
     r = res.result
     bad = int(np.sum(~r.converged))
-    timed = int(np.sum(r.time_answered))
-    lost = int(np.sum(np.asarray(r.no_stable, dtype=bool))) - timed
+    answered = int(np.sum(r.time_answered))
+    tori = int(np.sum(r.time_answered & (np.asarray(r.time_kind, dtype=object) == "quasi-periodic")))
+    lost = int(np.sum(np.asarray(r.no_stable, dtype=bool))) - answered
     print(
         f"sweep: {len(r)} points ({args.direction}), links {', '.join(lk.name for lk in model.links)}, "
         f"base frequency = {plan.name} ({1 / plan.speed_per_base:.6g} x the shaft speed), "
         f"{harmonics_line(r)}, "
-        f"{bad} not converged, {lost} without a stable periodic response, {timed} answered in the "
-        "time domain"
+        f"{bad} not converged, {lost} without a stable periodic response, {tori} answered by the "
+        f"torus harmonic balance, {answered - tori} answered in the time domain"
     )
     _periods(r, unit=(60 * plan.speed_per_base, "rpm") if args.rpm is not None else (1.0, "Hz"))
     print(f"wrote {out} and {png}" + "".join(f", {path}" for path, _ in beside))
@@ -238,16 +239,20 @@ def _periods(r, unit: tuple[float, str]) -> None:
     two = r.omega[(r.period == 2) & ~r.no_stable & r.converged]
     if two.size:
         print(f"period 2 (period doubled) at {name}: " + ", ".join(show(w) for w in two))
-    torus = np.isfinite(r.secondary_frequency)
-    if np.any(torus):
-        print(
-            f"quasi-periodic (a complex pair of multipliers left the unit circle; NaN outputs) at {name} "
-            "(secondary frequency Hz): "
-            + ", ".join(
-                f"{show(w)} ({f / (2 * np.pi):.0f})"
-                for w, f in zip(r.omega[torus], r.secondary_frequency[torus], strict=True)
+    solved = r.time_answered & (np.asarray(r.time_kind, dtype=object) == "quasi-periodic")
+    for torus, what in (
+        (np.isfinite(r.secondary_frequency) & ~solved, "NaN outputs"),
+        (solved, "answered by the torus harmonic balance"),
+    ):
+        if np.any(torus):
+            print(
+                f"quasi-periodic (a complex pair of multipliers left the unit circle; {what}) at {name} "
+                "(secondary frequency Hz): "
+                + ", ".join(
+                    f"{show(w)} ({f / (2 * np.pi):.0f})"
+                    for w, f in zip(r.omega[torus], r.secondary_frequency[torus], strict=True)
+                )
             )
-        )
     for t in transitions(r):
         print(
             f"{t.kind} ({t.direction}): {show(t.omega_from)} -> {show(t.omega_to)} {name}, "

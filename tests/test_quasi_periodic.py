@@ -204,7 +204,7 @@ def test_bearing_recovery_of_a_periodic_orbit_matches_the_sweep():
     from nlgrd.io.model_file import load_model  # noqa: PLC0415
     from nlgrd.nonlinear.fourier.harmonics import real_to_complex  # noqa: PLC0415
     from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep  # noqa: PLC0415
-    from nlgrd.nonlinear.tracing.torus_sweep import torus_bearing_forces  # noqa: PLC0415
+    from nlgrd.nonlinear.tracing.torus_outputs import torus_bearing_forces  # noqa: PLC0415
 
     kubo = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
     system = load_model(kubo)

@@ -210,84 +210,158 @@ def _digits(values):
     return v if np.ndim(values) else float(v[0])
 
 
-def with_torus_answers(result: GearedSweepResult, system, *, rtol: float = OUTPUT_RTOL) -> GearedSweepResult:
-    """A geared sweep with its Neimark-Sacker points answered by the torus harmonic balance
-    where it converges within ``rtol`` (:func:`nlgrd.nonlinear.tracing.torus_sweep.converged_tori`):
-    every converged point whose mesh-periodic orbit lost stability to a complex pair
-    (finite ``secondary_frequency``), each direction's in the sweep's order so that a torus
-    is followed from the previous point's. An accepted point's ``response`` is
-    "quasi-periodic" (``time_kind``), its metrics, DTE amplitudes (the k₂ = 0 part),
-    bearing columns and ``secondary_frequency`` the torus's, ``harmonic_error`` its
-    convergence estimate; the torus's stability is not computed (``verdict`` "not
-    computed", ``stable`` not written). The other points are left as they were.
-
-    Parameters
-    ----------
-    result : GearedSweepResult
-        The sweep (one mesh).
-    system : RotorSystem
-        Its model (the torus model is built from it).
-    rtol : float
-        The sweep's tolerance on its outputs [-].
-
-    Returns
-    -------
-    GearedSweepResult
-    """
-    from nlgrd.nonlinear.models.geared import build_geared_model
-    from nlgrd.nonlinear.tracing.torus_sweep import TORUS_LADDER, TORUS_MAX_H, converged_tori
-
-    mesh = result.mesh
-    ns = (
-        np.asarray(mesh.converged, bool)
-        & np.asarray(mesh.no_stable, bool)
-        & np.asarray(mesh.verdict_converged, bool)
-        & np.isfinite(mesh.secondary_frequency)
-        & ~np.asarray(mesh.time_answered, bool)
+def _ns_points(res: SweepResult) -> NDArray:
+    """The rows whose periodic orbit lost stability to a complex pair (finite
+    ``secondary_frequency``), converged, verdict converged, not answered yet."""
+    return (
+        np.asarray(res.converged, bool)
+        & np.asarray(res.no_stable, bool)
+        & np.asarray(res.verdict_converged, bool)
+        & np.isfinite(res.secondary_frequency)
+        & ~np.asarray(res.time_answered, bool)
     )
-    if not ns.any():
-        return result
-    H = int(mesh.H)
-    top = min(max(H, TORUS_MAX_H), H + max(TORUS_LADDER))
-    model = build_geared_model(system, float(np.max(mesh.omega)) * 1.0001, H=top + 4)
+
+
+def _tori(res: SweepResult, model, target, rtol: float, step: int) -> dict:
+    """The accepted tori (:func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori`) at the
+    Neimark-Sacker rows of ``res``, each direction's in the sweep's order, by row."""
+    from nlgrd.nonlinear.tracing.torus_sweep import converged_tori
+
+    ns = _ns_points(res)
     found = {}
-    for d in dict.fromkeys(np.asarray(mesh.direction)[ns].tolist()):
-        rows = np.nonzero(ns & (np.asarray(mesh.direction) == d))[0]
-        z = np.array([base_harmonics(mesh.harmonics[i], int(mesh.base)) for i in rows])
-        for i, a in zip(rows, converged_tori(model, mesh.omega[rows], z, H=H, rtol=rtol), strict=True):
+    for d in dict.fromkeys(np.asarray(res.direction)[ns].tolist()):
+        rows = np.nonzero(ns & (np.asarray(res.direction) == d))[0]
+        z = np.array([base_harmonics(res.harmonics[i], int(res.base)) for i in rows])
+        z = z.reshape(rows.size, -1, z.shape[-1])
+        tori = converged_tori(model, res.omega[rows], z, H=int(res.H), rtol=rtol, target=target, step=step)
+        for i, a in zip(rows, tori, strict=True):
             if a is not None:
                 found[int(i)] = a
-    if not found:
-        return result
-    kind = np.array(mesh.time_kind, dtype=object)
-    metrics = {k: np.array(v, copy=True) for k, v in mesh.metrics.items()}
-    amps = np.array(mesh.amplitudes, dtype=float, copy=True)
-    secondary = np.array(mesh.torus_frequency, dtype=float, copy=True)
-    error = np.array(mesh.harmonic_error, dtype=float, copy=True)
-    fields = list(BearingResponse.__dataclass_fields__)
-    bearings = {f: np.array(getattr(result.bearings, f), dtype=float, copy=True) for f in fields}
+    return found
+
+
+def _with_tori(res: SweepResult, found: dict, coord: int) -> SweepResult:
+    """``res`` with the accepted tori's ``response``, metrics, DTE amplitudes (the k₂ = 0
+    part of the metrics' coordinate ``coord``), ``secondary_frequency`` and
+    ``harmonic_error`` at their rows."""
+    kind = np.array(res.time_kind, dtype=object)
+    metrics = {k: np.array(v, copy=True) for k, v in res.metrics.items()}
+    amps = np.array(res.amplitudes, dtype=float, copy=True)
+    secondary = np.array(res.torus_frequency, dtype=float, copy=True)
+    error = np.array(res.harmonic_error, dtype=float, copy=True)
     for i, a in found.items():
         kind[i] = QUASI_PERIODIC
         for name in metrics:
             metrics[name][i] = a.outputs[name] if name == "back_contact" else _digits(a.outputs[name])
-        Y = a.solution.Y[0]
+        Y = a.solution.Y[coord]
         k = min(amps.shape[1] - 1, a.H)
         amps[i] = np.nan
         amps[i, : k + 1] = _digits(np.abs(Y[: k + 1]))
         secondary[i] = _digits(a.solution.secondary)
         error[i] = a.error
-        for f in fields:
-            bearings[f][i] = _digits(a.bearings[f])
     metrics["back_contact"] = metrics["back_contact"].astype(bool)
-    mesh = dc.replace(
-        mesh,
+    return dc.replace(
+        res,
         time_kind=kind,
         metrics=metrics,
         amplitudes=amps,
         torus_frequency=secondary,
         harmonic_error=error,
     )
-    return dc.replace(result, mesh=mesh, bearings=BearingResponse(**bearings))
+
+
+def with_torus_answers(result, system=None, *, model: LinkModel | None = None, rtol: float = OUTPUT_RTOL):
+    """A sweep with its Neimark-Sacker points answered by the torus harmonic balance
+    where it converges within ``rtol`` (:func:`nlgrd.nonlinear.tracing.torus_sweep.converged_tori`):
+    every converged point whose period-1 orbit lost stability to a complex pair
+    (finite ``secondary_frequency``), each direction's in the sweep's order so that a torus
+    is followed from the previous point's. An accepted point's ``response`` is
+    "quasi-periodic" (``time_kind``), its metrics (the first mesh's), DTE amplitudes (the
+    k₂ = 0 part), bearing columns, every link's columns (a link sweep's:
+    :func:`nlgrd.nonlinear.tracing.link_torus.torus_link_columns`) and
+    ``secondary_frequency`` the torus's, ``harmonic_error`` its convergence estimate; the
+    torus's stability is not computed (``verdict`` "not computed", ``stable`` not written).
+    The other points are left as they were. One mesh and a link model take the same path
+    (:func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori`), each with its torus
+    model and outputs (:class:`~nlgrd.nonlinear.tracing.torus_outputs.GearedTorus`,
+    :class:`~nlgrd.nonlinear.tracing.link_torus.LinkTorus`).
+
+    Parameters
+    ----------
+    result : GearedSweepResult or LinkSweepResult
+        The sweep.
+    system : RotorSystem, optional
+        Its model (a sweep of one mesh: the torus model is built from it).
+    model : LinkModel, optional
+        The link model a link sweep was made on (built from ``system`` when None).
+    rtol : float
+        The sweep's tolerance on its outputs [-].
+
+    Returns
+    -------
+    The same type as ``result``.
+
+    Raises
+    ------
+    ModelError
+        A link sweep without ``model`` or ``system``.
+    """
+    from nlgrd.nonlinear.tracing.torus_outputs import GearedTorus
+    from nlgrd.nonlinear.tracing.torus_sweep import TORUS_LADDER, TORUS_MAX_H
+
+    if isinstance(result, LinkSweepResult):
+        return _link_torus_answers(result, system, model, rtol)
+    system = system if system is not None else getattr(model, "system", None)
+    if not isinstance(result, GearedSweepResult) or system is None:
+        return result
+    from nlgrd.nonlinear.models.geared import build_geared_model
+
+    mesh = result.mesh
+    if not _ns_points(mesh).any():
+        return result
+    H = int(mesh.H)
+    top = min(max(H, TORUS_MAX_H), H + max(TORUS_LADDER))
+    geared = build_geared_model(system, float(np.max(mesh.omega)) * 1.0001, H=top + 4)
+    found = _tori(mesh, geared, GearedTorus(geared), rtol, 1)
+    if not found:
+        return result
+    fields = list(BearingResponse.__dataclass_fields__)
+    bearings = {f: np.array(getattr(result.bearings, f), dtype=float, copy=True) for f in fields}
+    for i, a in found.items():
+        for f in fields:
+            bearings[f][i] = _digits(a.bearings[f])
+    return dc.replace(result, mesh=_with_tori(mesh, found, 0), bearings=BearingResponse(**bearings))
+
+
+def _link_torus_answers(result: LinkSweepResult, system, model: LinkModel | None, rtol: float):
+    """:func:`with_torus_answers` of a link sweep."""
+    from nlgrd.nonlinear.tracing.link_torus import LinkTorus
+    from nlgrd.nonlinear.tracing.torus_sweep import TORUS_LADDER, TORUS_MAX_H
+
+    res = result.result
+    if not _ns_points(res).any():
+        return result
+    if model is None:
+        if system is None:
+            raise ModelError("model", "the torus answers of a link sweep need its link model or system")
+        from nlgrd.nonlinear.models.link_model import build_link_model
+
+        model = build_link_model(system)
+    step = int(model.top_order)
+    H = int(res.H)
+    top = min(max(H, step * TORUS_MAX_H), H + step * max(TORUS_LADDER)) + 4 * step
+    model.receptance.prepare(top * float(np.max(np.abs(res.omega))) * 1.0001)
+    found = _tori(res, model, LinkTorus(model), rtol, step)
+    if not found:
+        return result
+    mesh = getattr(model.reduced.metrics, "mesh", None)
+    links = result.links.copy()
+    for i, a in found.items():
+        for key, v in a.columns.items():
+            if key in links.columns:
+                links.loc[i, key] = v if key.endswith("back_contact") else _digits(v)
+    res = _with_tori(res, found, 0 if mesh is None else int(mesh.coord))
+    return LinkSweepResult(res, links, result.bearings)
 
 
 def answer_sweep(
@@ -305,10 +379,11 @@ def answer_sweep(
 ):
     """The one rule of every sweep (``nlgrd.sweep``, ``nlgrd sweep``, a study's task): when
     stability is on, ``period`` is "auto" and ``time_domain`` is set, the points without a
-    stable periodic response are answered: first, on a sweep of one mesh, the points
-    whose orbit lost stability to a complex pair by the torus harmonic balance where it
-    converges within ``rtol`` (:func:`with_torus_answers`), then every other one by time
-    integration (:func:`with_time_answers`); otherwise ``result`` is returned as it is.
+    stable periodic response are answered: first the points whose orbit lost stability
+    to a complex pair by the torus harmonic balance where it converges within ``rtol``
+    (:func:`with_torus_answers`, one mesh or a link model alike), then every other one by
+    time integration (:func:`with_time_answers`); otherwise ``result`` is returned as it
+    is.
 
     Parameters
     ----------
@@ -326,7 +401,7 @@ def answer_sweep(
     time_domain : bool
         Whether the gaps are to be answered at all.
     torus : bool
-        Try the torus harmonic balance first (a sweep of one mesh with its ``system``).
+        Try the torus harmonic balance first.
     rtol : float
         The sweep's tolerance on its outputs, which a torus's convergence estimate must
         meet [-].
@@ -347,8 +422,8 @@ def answer_sweep(
     """
     if not (time_domain and stability and period == "auto"):
         return result
-    if torus and system is not None and isinstance(result, GearedSweepResult):
-        result = with_torus_answers(result, system, rtol=rtol)
+    if torus and (system is not None or model is not None):
+        result = with_torus_answers(result, system, model=model, rtol=rtol)
     if model is None:
         if system is None:
             raise ModelError("system", "answer_sweep needs the model or its system")

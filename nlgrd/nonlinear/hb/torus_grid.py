@@ -86,6 +86,21 @@ class TorusGrid:
         weight[0] = 1.0 / (N1 * N2)
         self.forward = weight[:, None] * self.inverse.T
 
+    @staticmethod
+    def n_real_of(H1: int, H2: int) -> int:
+        """2|𝒦| - 1 of the index set (H₁, H₂) without building a grid [-].
+
+        Parameters
+        ----------
+        H1, H2 : int
+            The index set [-].
+
+        Returns
+        -------
+        int
+        """
+        return 2 * (H1 + 1 + H2 * (2 * H1 + 1)) - 1
+
     @property
     def n_terms(self) -> int:
         """|𝒦|, the number of complex terms per coordinate."""

@@ -1,14 +1,14 @@
-"""Quasi-periodic answers of a geared FE model: tori followed in speed.
+"""Quasi-periodic answers of a model: tori followed in speed.
 
-Where a mesh-periodic orbit has lost stability to a complex pair of Floquet multipliers
-μ = |μ| e^{±iθ} (a Neimark-Sacker bifurcation), the response is a torus with the mesh
-frequency ω₁ and a secondary frequency ω₂ ≈ θ ω₁ / 2π. This module computes it by the
-two-frequency harmonic balance of :mod:`nlgrd.nonlinear.hb.quasi_periodic` on the mesh
-coordinate of the receptance-reduced model (:func:`nlgrd.nonlinear.models.geared.build_geared_model`),
-the linear part entering through h(Ω) = wᵀ Z(Ω)⁻¹ w at each combination frequency Ω (Z of the
-full FE model at the shaft speed of ω₁, with the mesh damping, without k_h: the matrix of
-the periodic harmonic balance's direct receptance), and reports per point the mesh outputs
-averaged over the torus and their change from (H₁, H₂) to (H₁ + 4, H₂ + 2).
+Where a periodic orbit has lost stability to a complex pair of Floquet multipliers
+μ = |μ| e^{±iθ} (a Neimark-Sacker bifurcation), the response is a torus with the base
+frequency ω₁ and a secondary frequency ω₂ ≈ θ ω₁ / 2π. This module follows it by the
+two-frequency harmonic balance of :mod:`nlgrd.nonlinear.hb.quasi_periodic` (continuation
+in speed, starts from the critical Floquet mode, the ladder of H₁) and reports per point
+its outputs and their change from (H₁, H₂) to (H₁ + 4, H₂ + 2). What is solved and
+reported comes from a target: :class:`~nlgrd.nonlinear.tracing.torus_outputs.GearedTorus`
+(one mesh, the mesh coordinate) or :class:`~nlgrd.nonlinear.tracing.link_torus.LinkTorus`
+(all link coordinates of a link model); the sweep asks nothing else of the model.
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
@@ -27,220 +26,13 @@ from nlgrd.nonlinear.hb import quasi_periodic as qp
 from nlgrd.nonlinear.hb import torus_grid as tg
 from nlgrd.nonlinear.hb.solvers import solve
 from nlgrd.nonlinear.stability.floquet_mode import dominant_floquet_mode
+from nlgrd.nonlinear.tracing.torus_outputs import CHECKED, TORUS_OUTPUTS, GearedTorus
 
-#: Output names of a torus point, in the order of :attr:`TorusResult.outputs` (SI), with the
-#: unit and factor of their table column.
-TORUS_OUTPUTS = {
-    "dte_mean": ("um", 1e6),
-    "dte_rms": ("um", 1e6),
-    "dte_max": ("um", 1e6),
-    "dte_p2p": ("um", 1e6),
-    "force_max": ("N", 1.0),
-    "force_min": ("N", 1.0),
-    "dslr": ("-", 1.0),
-    "contact_loss_fraction": ("-", 1.0),
-    "secondary_frequency": ("Hz", 1 / (2 * np.pi)),
-}
-#: The outputs whose change with (H₁, H₂) is the convergence estimate.
-CHECKED = ("dte_rms", "force_max", "secondary_frequency")
-#: Bearing forces below this fraction of the largest are rounding of the recovery (as the
-#: sweep's :data:`nlgrd.nonlinear.models.geared` bearing columns).
-BEARING_FLOOR = 1e-9
 #: Largest relative speed step continued from the previous torus; beyond it the torus is
 #: started afresh from the periodic orbit.
 CONTINUATION_STEP = 0.02
 #: Starts tried, as fractions of the periodic orbit's first-harmonic amplitude.
 START_SIZES = (0.02, 0.1, 0.005, 0.3)
-
-
-def geared_torus_model(model) -> qp.TorusModel:
-    """The :class:`~nlgrd.nonlinear.hb.quasi_periodic.TorusModel` of a geared model.
-
-    Parameters
-    ----------
-    model : GearedModel
-        From :func:`nlgrd.nonlinear.models.geared.build_geared_model` (one mesh, period 1).
-
-    Returns
-    -------
-    TorusModel
-        κ(Ω) = (wᵀ Z(Ω)⁻¹ w)⁻¹ by a sparse LU of the full FE Z per frequency, at the speed of ω₁;
-        the periodic κ_k and F_k of ``model.reduced``.
-
-    Raises
-    ------
-    ModelError
-        When the model is of period ν > 1.
-    """
-    rec = model.receptance
-    if rec.period != 1:
-        raise ModelError("period", f"the torus balance needs a period-1 model, got period {rec.period}")
-    W = rec.W
-
-    def kappa_at(freqs: NDArray, omega: float) -> NDArray:
-        speed = rec.speed(omega)
-        out = np.empty((len(freqs), W.shape[1], W.shape[1]), dtype=complex)
-        for i, f in enumerate(freqs):
-            Z = rec.model.dynamic_stiffness(float(f), speed).tocsc()
-            out[i] = np.linalg.inv(W.T @ spla.splu(Z).solve(W.astype(complex)))
-        return out
-
-    return qp.TorusModel(kappa_at, model.reduced.kappa, model.reduced.force, model.reduced.nonlinearities)
-
-
-def torus_outputs(sol: qp.TorusSolution, mesh, n_samples: tuple[int, int] = (256, 48)) -> NDArray:
-    """The outputs :data:`TORUS_OUTPUTS` of a torus, on an ``n_samples`` grid of it (SI).
-
-    DTE δ (mean, RMS of the alternating part, maximum, peak-to-peak), the mesh force
-    W = k_h f(δ - e) + c_m (δ' - e') (extremes; DSLR = max W / W_0), the fraction of the torus
-    without contact and ω₂ [rad/s]; averages over the torus are time averages of a
-    quasi-periodic motion (ergodic on the torus when ω₂/ω₁ is irrational).
-
-    Parameters
-    ----------
-    sol : TorusSolution
-        A converged torus.
-    mesh : BacklashMesh
-        The mesh law (k_h, b, e, c_m, W_0).
-    n_samples : tuple of int
-        Samples along θ₁ and θ₂ [-].
-
-    Returns
-    -------
-    ndarray (len(TORUS_OUTPUTS),)
-        In the order of :data:`TORUS_OUTPUTS`; NaN when not converged.
-    """
-    if not sol.converged:
-        return np.full(len(TORUS_OUTPUTS), np.nan)
-    g = sol.grid
-    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
-    Y = sol.Y[:1]
-    d = fine.samples(Y)[0]
-    dd = fine.samples(Y, derivative=(sol.omega, sol.secondary))[0]
-    th = fine.theta1
-    e = mesh.offset(max(g.H1, (mesh.lste.size - 1) // 2))[0]
-    from nlgrd.nonlinear.fourier.harmonics import differentiate, evaluate  # noqa: PLC0415
-
-    ev, ed = evaluate(e, th), sol.omega * evaluate(differentiate(e), th)
-    x = d - ev
-    elastic = mesh.force_time(d[None, :], th)[0]
-    W = elastic + mesh.damping * (dd - ed)
-    W0 = float(mesh.static_load) if mesh.static_load else float(np.mean(W))
-    return np.array(
-        [
-            np.mean(d),
-            np.std(d),
-            np.max(d),
-            np.ptp(d),
-            np.max(W),
-            np.min(W),
-            np.max(W) / W0,
-            float(np.mean(np.abs(x) <= mesh.half_backlash)),
-            sol.secondary,
-        ]
-    )
-
-
-def torus_bearing_forces(model, sol: qp.TorusSolution, n_samples: tuple[int, int] = (256, 48)) -> NDArray:
-    """The largest radial force of every bearing over a torus [N].
-
-    All the forcing a mesh-reduced model has at k ≠ 0 acts along w (the mesh force and the
-    LSTE's damping force), so each node follows δ: Q_k = (Z(Ω_k)⁻¹ w) h(Ω_k)⁻¹ Y_k at every
-    combination frequency Ω_k; the mean Q_0 is the periodic recovery's
-    (:meth:`~nlgrd.nonlinear.reduction.receptance.MeshReceptance.recover`). The force of bearing b on
-    its node, -(K_b + i Ω_k C_b) q_k in (y, z), is sampled on the torus.
-
-    Parameters
-    ----------
-    model : GearedModel
-        The model solved.
-    sol : TorusSolution
-        A converged torus.
-    n_samples : tuple of int
-        Samples along θ₁ and θ₂ [-].
-
-    Returns
-    -------
-    ndarray (n_bearings,)
-        max |(F_y, F_z)| per bearing [N]; NaN when not converged.
-    """
-    nb = len(model.system.bearings)
-    if not sol.converged:
-        return np.full(nb, np.nan)
-    return torus_bearing_outputs(model, sol, n_samples)["force_max"]
-
-
-def _torus_bearing_harmonics(model, sol: qp.TorusSolution) -> tuple[NDArray, NDArray, NDArray]:
-    """Each bearing node's (y, z) 2-D harmonics Q and its force's Fb (terms, 2 n_b), and
-    the combination frequencies (terms,) [rad/s] (:func:`torus_bearing_forces`)."""
-    system, rec = model.system, model.receptance
-    g, w = sol.grid, sol.omega
-    speed = rec.speed(w)
-    Y = sol.Y[0]
-    W = rec.W.astype(complex)
-    dofs = model.bearing_dofs
-    Q = np.zeros((g.n_terms, dofs.size), dtype=complex)
-    H1 = g.H1
-    F = np.asarray(model.reduced.force(w, H1), dtype=complex).reshape(H1 + 1, -1)
-    kap = np.asarray(model.reduced.kappa(w, H1), dtype=complex).reshape(H1 + 1, -1)
-    Yr = Y[: H1 + 1, None]
-    Q[0] = rec.recover(w, Yr[:1], F[:1] - kap[:1] * Yr[:1], F[:1], dofs)[0]
-    freqs = g.k1 * w + g.k2 * sol.secondary
-    for i in range(1, g.n_terms):
-        x = spla.splu(rec.model.dynamic_stiffness(float(freqs[i]), speed).tocsc()).solve(W)
-        Q[i] = x[dofs] @ np.linalg.solve(rec.W.T @ x, [Y[i]])
-    Fb = np.empty_like(Q)
-    for j, b in enumerate(system.bearings):
-        s_b = system.shafts[b.shaft].speed_ratio * speed
-        q = Q[:, 2 * j : 2 * j + 2]
-        Fb[:, 2 * j : 2 * j + 2] = -(q @ b.stiffness(s_b).T + (1j * freqs)[:, None] * (q @ b.damping(s_b).T))
-    return Q, Fb, freqs
-
-
-def torus_bearing_outputs(model, sol: qp.TorusSolution, n_samples: tuple[int, int] = (256, 48)) -> dict:
-    """Every bearing's outputs over a torus, the quantities of a periodic sweep's bearing
-    columns (:class:`~nlgrd.nonlinear.results.bearing_loads.BearingResponse`): radial
-    displacement and force of its node sampled on the torus (their largest, the RMS of
-    the alternating part, the magnitude of the mean) and the amplitude of the force's
-    mesh harmonic (k₁ = 1, k₂ = 0; the larger of y and z). Q as
-    :func:`torus_bearing_forces` recovers it.
-
-    Parameters
-    ----------
-    model : GearedModel
-        The model solved.
-    sol : TorusSolution
-        A converged torus.
-    n_samples : tuple of int
-        Samples along θ₁ and θ₂ [-].
-
-    Returns
-    -------
-    dict of str to ndarray (n_bearings,)
-        ``displacement_mean``, ``displacement_rms``, ``displacement_max`` [m],
-        ``force_mean``, ``force_rms``, ``force_max``, ``force_amplitude`` [N].
-    """
-    nb = len(model.system.bearings)
-    fields = ("displacement_mean", "displacement_rms", "displacement_max")
-    fields += ("force_mean", "force_rms", "force_max", "force_amplitude")
-    if not sol.converged or nb == 0:
-        return {f: np.full(nb, np.nan) for f in fields}
-    Q, Fb, _ = _torus_bearing_harmonics(model, sol)
-    g = sol.grid
-    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
-    out = {f: np.empty(nb) for f in fields}
-    for name, X in (("displacement", Q), ("force", Fb)):
-        for j in range(nb):
-            y, z = fine.samples(X[:, 2 * j : 2 * j + 2].T.copy())
-            my, mz = float(np.mean(y)), float(np.mean(z))
-            out[f"{name}_mean"][j] = np.hypot(my, mz)
-            out[f"{name}_rms"][j] = np.sqrt(np.mean((y - my) ** 2 + (z - mz) ** 2))
-            out[f"{name}_max"][j] = float(np.max(np.hypot(y, z)))
-    out["force_amplitude"] = np.maximum(np.abs(Fb[1, 0::2]), np.abs(Fb[1, 1::2]))  # (k₁, k₂) = (1, 0)
-    for f in fields:  # rounding of the recovery, not response (as the sweep's columns)
-        v = out[f]
-        v[np.abs(v) <= BEARING_FLOOR * np.max(np.abs(v))] = 0.0
-    return out
 
 
 @dataclass(frozen=True)
@@ -278,6 +70,10 @@ class TorusResult:
     solutions : list
         The :class:`~nlgrd.nonlinear.hb.quasi_periodic.TorusSolution` per point (None where
         not converged).
+    error : ndarray (n,), optional
+        The convergence estimate per point: the largest of ``change`` for one mesh, the
+        largest over every link's checked outputs and ω₂ for a link model [-]; NaN where
+        not checked (default: the largest of ``change``).
     """
 
     omega: NDArray
@@ -294,6 +90,11 @@ class TorusResult:
     bearing_force_max: NDArray
     bearing_names: list
     solutions: list
+    error: NDArray | None = None
+
+    def __post_init__(self):
+        if self.error is None:
+            object.__setattr__(self, "error", np.max(np.abs(self.change), axis=1))
 
     def output(self, name: str) -> NDArray:
         """One output column (SI).
@@ -333,7 +134,7 @@ class TorusResult:
             cols[f"{name} [{unit}]"] = self.outputs[:, j] * factor
         for j, name in enumerate(CHECKED):
             cols[f"{name}_change [-]"] = self.change[:, j]
-        cols["torus_error [-]"] = np.max(np.abs(self.change), axis=1)
+        cols["torus_error [-]"] = self.error
         for j, name in enumerate(self.bearing_names):
             cols[f"{name} force_max [N]"] = self.bearing_force_max[:, j]
         cols["floquet_multiplier_abs [-]"] = np.abs(self.multiplier)
@@ -341,25 +142,25 @@ class TorusResult:
         return pd.DataFrame(cols)
 
 
-def _periodic(model, omega: float, H: int, start: NDArray | None) -> NDArray | None:
-    """Real harmonics (1, 2H+1) of the periodic orbit at ``omega`` from ``start``."""
-    sol = solve(model.reduced.at(omega, H), start)
+def _periodic(reduced, omega: float, H: int, start: NDArray | None) -> NDArray | None:
+    """Real harmonics (n_c, 2H+1) of the periodic orbit at ``omega`` from ``start``."""
+    sol = solve(reduced.at(omega, H), start)
     return sol.harmonics if sol.converged else None
 
 
 def _start_torus(
-    tm, model, omega: float, Zp: NDArray, grid, max_iter: int = 60, sizes: tuple | None = None
+    tm, reduced, omega: float, Zp: NDArray, grid, max_iter: int = 60, sizes: tuple | None = None
 ) -> tuple[qp.TorusSolution | None, complex]:
     """A torus from the periodic orbit and its critical Floquet mode, or None when the orbit
     has no complex pair outside the unit circle."""
-    ss = model.reduced.linear_state_space(omega)
-    mu = dominant_floquet_mode(ss, model.reduced.nonlinearities, Zp, omega).multiplier
+    ss = reduced.linear_state_space(omega)
+    mu = dominant_floquet_mode(ss, reduced.nonlinearities, Zp, omega).multiplier
     if abs(mu) <= 1 + 1e-6 or abs(mu.imag) <= 1e-6 * abs(mu):
         return None, mu
     w2 = qp.secondary_from_multiplier(mu, omega)
-    Yp = real_to_complex(np.atleast_2d(Zp)[0])[None, :]
+    Yp = np.stack([real_to_complex(z) for z in np.atleast_2d(Zp)])
     shape = qp.critical_shape(tm, omega, Yp, w2, grid.H1)
-    base = float(np.abs(Yp[0, 1:]).max())
+    base = float(np.abs(Yp[:, 1:]).max())
     for size in START_SIZES if sizes is None else sizes:
         sol = qp.solve_torus(
             tm, omega, grid, qp.periodic_start(Yp, grid, shape, size * base), w2, max_iter=max_iter
@@ -382,6 +183,8 @@ def torus_sweep(
     max_iter: int = 60,
     start_sizes: tuple | None = None,
     progress=None,
+    target=None,
+    check_step: int = 1,
 ) -> TorusResult:
     """Tori of a geared model at the given speeds, in their order (natural continuation).
 
@@ -417,6 +220,11 @@ def torus_sweep(
         The starts tried from the periodic orbit (default :data:`START_SIZES`) [-].
     progress : callable (done, total), optional
         Called after each speed.
+    target : GearedTorus or LinkTorus, optional
+        What is solved and reported (default ``GearedTorus(model)``; a link model's:
+        :class:`nlgrd.nonlinear.tracing.link_torus.LinkTorus`).
+    check_step : int
+        The check is at (H + 4 ``check_step``, H2 + 2): a link model's ``top_order`` [-].
 
     Returns
     -------
@@ -432,22 +240,23 @@ def torus_sweep(
 
     if (omegas is None) == (rpm is None):
         raise ModelError("rpm", "give exactly one of omegas [rad/s] and rpm")
-    omegas = np.atleast_1d(np.asarray(model.mesh_frequency(rpm) if omegas is None else omegas, dtype=float))
-    tm = geared_torus_model(model)
+    target = GearedTorus(model) if target is None else target
+    omegas = np.atleast_1d(np.asarray(target.omegas(rpm) if omegas is None else omegas, dtype=float))
+    tm = target.torus_model
     grid = tg.TorusGrid(H, H2, *tg.default_grid(H, H2))
-    fine = tg.TorusGrid(H + 4, H2 + 2, *tg.default_grid(H + 4, H2 + 2)) if check else None
+    Hc = H + 4 * int(check_step)
+    fine = tg.TorusGrid(Hc, H2 + 2, *tg.default_grid(Hc, H2 + 2)) if check else None
     n = omegas.size
     out = np.full((n, len(TORUS_OUTPUTS)), np.nan)
     change = np.full((n, len(CHECKED)), np.nan)
     mult = np.full(n, np.nan + 0j)
     res, its, secs = np.full(n, np.nan), np.zeros(n, dtype=int), np.zeros(n)
     sols: list = [None] * n
-    bears = model.system.bearings
-    bear = np.full((n, len(bears)), np.nan)
-    names = [b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(bears)]
+    names = target.bearing_names
+    bear = np.full((n, len(names)), np.nan)
+    error = np.full(n, np.nan)
     hist: list[tuple[float, qp.TorusSolution]] = []
     Zp = None
-    idx = [list(TORUS_OUTPUTS).index(c) for c in CHECKED]
     for i, w in enumerate(omegas):
         t0 = time.perf_counter()
         sol = None
@@ -465,14 +274,14 @@ def torus_sweep(
                 sol = qp.solve_torus(tm, float(w), grid, sa.Y, sa.secondary, tol=tol, max_iter=max_iter)
         if sol is None or not sol.converged:
             start = periodic[i] if periodic is not None else Zp
-            Zp = _periodic(model, float(w), H, start)
+            Zp = _periodic(target.reduced, float(w), H, start)
             if Zp is not None:
-                sol, mult[i] = _start_torus(tm, model, float(w), Zp, grid, max_iter, start_sizes)
+                sol, mult[i] = _start_torus(tm, target.reduced, float(w), Zp, grid, max_iter, start_sizes)
         if sol is not None and sol.converged:
             sols[i] = sol
             hist = (hist + [(float(w), sol)])[-2:]
-            out[i] = torus_outputs(sol, model.mesh)
-            bear[i] = torus_bearing_forces(model, sol)
+            out[i] = target.outputs(sol)
+            bear[i] = target.bearing_force_max(sol)
             res[i], its[i] = sol.residual, sol.iterations
             if fine is not None:
                 big = qp.solve_torus(
@@ -485,8 +294,7 @@ def torus_sweep(
                     max_iter=max_iter,
                 )
                 if big.converged:
-                    ob = torus_outputs(big, model.mesh)
-                    change[i] = ob[idx] / out[i][idx] - 1
+                    change[i], error[i] = target.change(out[i], sol, big)
         else:
             hist = []
         secs[i] = time.perf_counter() - t0
@@ -494,7 +302,7 @@ def torus_sweep(
             progress(i + 1, n)
     return TorusResult(
         omegas,
-        model.pinion_rpm(omegas),
+        target.rpm(omegas),
         np.array([s is not None for s in sols]),
         out,
         change,
@@ -507,6 +315,7 @@ def torus_sweep(
         bear,
         names,
         sols,
+        error,
     )
 
 
@@ -522,38 +331,15 @@ ANSWER_MAX_ITER = 25
 #: Relative residual of a sweep's torus solve: below the default 1e-8, so that the noise
 #: its start carries (the Floquet mode's last bits) stays far below the digits written.
 ANSWER_TOL = 1e-10
+#: Largest number of real unknowns of a sweep's torus check, (H₁ + 4 step, H₂ + 2) on all
+#: coordinates: its dense Jacobian (8 bytes each, squared: 128 MB at 4000) and the
+#: O(|𝒦|²) AFT tangent blocks bound the memory; a rung above it is not tried (the point
+#: goes on to the time answer). One mesh at H₁ 17 checks 559; a two-mesh train whose base
+#: is the shaft speed (``top_order`` 20) would need ~9000.
+TORUS_MAX_UNKNOWNS = 4000
 #: The starts a sweep's torus tries from the periodic orbit (the first two of
 #: :data:`START_SIZES`; the first started every Kubo torus of the reference band).
 ANSWER_START_SIZES = START_SIZES[:2]
-
-
-def torus_back_contact(sol: qp.TorusSolution, mesh, n_samples: tuple[int, int] = (256, 48)) -> bool:
-    """Whether the back flanks touch anywhere on a torus: δ - e below -b on the sampled
-    torus (never for a one-sided stop, whose teeth have no back flank).
-
-    Parameters
-    ----------
-    sol : TorusSolution
-        A converged torus of the mesh coordinate.
-    mesh : BacklashMesh
-        The mesh law.
-    n_samples : tuple of int
-        Samples along θ₁ and θ₂ [-].
-
-    Returns
-    -------
-    bool
-    """
-    from nlgrd.nonlinear.fourier.harmonics import evaluate  # noqa: PLC0415
-    from nlgrd.nonlinear.laws.force_laws import ContactStop  # noqa: PLC0415
-
-    if not sol.converged or isinstance(mesh, ContactStop):
-        return False
-    g = sol.grid
-    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
-    d = fine.samples(sol.Y[:1])[0]
-    e = evaluate(mesh.offset(max(g.H1, (mesh.lste.size - 1) // 2))[0], fine.theta1)
-    return bool(np.any(d - e < -mesh.half_backlash))
 
 
 @dataclass(frozen=True)
@@ -577,6 +363,9 @@ class TorusAnswer:
         Harmonics of the secondary frequency [-].
     seconds : float
         Wall time of its rungs, checks included [s].
+    columns : dict of str to float
+        A link model's columns ``<link>.<quantity> [unit]`` and its linear bearings'
+        (:func:`nlgrd.nonlinear.tracing.link_torus.torus_link_columns`); empty for one mesh.
     """
 
     solution: qp.TorusSolution
@@ -586,6 +375,7 @@ class TorusAnswer:
     H: int
     H2: int
     seconds: float
+    columns: dict = dc.field(default_factory=dict)
 
 
 def converged_tori(
@@ -597,6 +387,8 @@ def converged_tori(
     rtol: float,
     H2: int = 4,
     progress=None,
+    target=None,
+    step: int = 1,
 ) -> list:
     """Tori at consecutive points of a sweep (in its order) whose convergence estimate is
     within ``rtol``: :func:`torus_sweep` with its check at H₁ = H, then at the rungs of
@@ -608,11 +400,11 @@ def converged_tori(
 
     Parameters
     ----------
-    model : GearedModel
+    model : GearedModel or LinkModel
         Built for at least the top rung + 4 harmonics (period 1).
     omegas : ndarray (n,)
-        Mesh frequencies, in the sweep's order [rad/s].
-    periodic : ndarray (n, 1, 2H+1)
+        Base frequencies, in the sweep's order [rad/s].
+    periodic : ndarray (n, n_c, 2H+1)
         The (unstable) periodic orbits there, starts of the periodic solve [m].
     H : int
         The sweep's H [-].
@@ -622,6 +414,12 @@ def converged_tori(
         Harmonics of the secondary frequency [-].
     progress : callable (done, total), optional
         Called after each rung.
+    target : GearedTorus or LinkTorus, optional
+        What is solved and reported (:func:`torus_sweep`; default ``GearedTorus(model)``).
+    step : int
+        The rungs of :data:`TORUS_LADDER` are H + ``step`` x rung and the check
+        H₁ + 4 ``step`` (a link model's ``top_order``: its mesh at base harmonic ``step``)
+        [-]; a rung whose check exceeds :data:`TORUS_MAX_UNKNOWNS` is not tried.
 
     Returns
     -------
@@ -634,14 +432,20 @@ def converged_tori(
     answers: list = [None] * n
     spent = np.zeros(n)
     pending = np.arange(n)
-    rungs = [H + r for r in TORUS_LADDER if H + r <= max(H, TORUS_MAX_H)]
+    target = GearedTorus(model) if target is None else target
+    step = int(step)
+    rungs = [H + step * r for r in TORUS_LADDER if H + step * r <= max(H, step * TORUS_MAX_H)]
+    z_all = np.asarray(periodic, dtype=float)
+    z_all = z_all.reshape(len(omegas), -1, z_all.shape[-1])
+    n_c = z_all.shape[1]
+    rungs = [h for h in rungs if n_c * tg.TorusGrid.n_real_of(h + 4 * step, H2 + 2) <= TORUS_MAX_UNKNOWNS]
     for k, Hr in enumerate(rungs):
         if not pending.size:
             break
-        starts = np.zeros((pending.size, 1, 2 * Hr + 1))
-        z = np.asarray(periodic, dtype=float)[pending].reshape(pending.size, -1)
-        m = min(z.shape[1], 2 * Hr + 1)
-        starts[:, 0, :m] = z[:, :m]
+        z = z_all[pending]
+        starts = np.zeros((pending.size, z.shape[1], 2 * Hr + 1))
+        m = min(z.shape[2], 2 * Hr + 1)
+        starts[:, :, :m] = z[:, :, :m]
         res = torus_sweep(
             model,
             np.asarray(omegas, dtype=float)[pending],
@@ -651,18 +455,18 @@ def converged_tori(
             tol=ANSWER_TOL,
             max_iter=ANSWER_MAX_ITER,
             start_sizes=ANSWER_START_SIZES,
+            target=target,
+            check_step=step,
         )
         spent[pending] += res.seconds
-        err = np.max(np.abs(res.change), axis=1)  # NaN: the check did not converge
+        err = res.error  # NaN: the check did not converge
         for row, i in enumerate(pending):
             sol = res.solutions[row]
             if sol is not None and np.isfinite(err[row]) and err[row] <= rtol:
                 t0 = time.perf_counter()
-                out = dict(zip(TORUS_OUTPUTS, res.outputs[row], strict=True))
-                out["back_contact"] = torus_back_contact(sol, model.mesh)
-                bearings = torus_bearing_outputs(model, sol)
+                out, bearings, columns = target.answer(sol, res.outputs[row])
                 spent[i] += time.perf_counter() - t0
-                answers[i] = TorusAnswer(sol, out, bearings, float(err[row]), Hr, H2, 0.0)
+                answers[i] = TorusAnswer(sol, out, bearings, float(err[row]), Hr, H2, 0.0, columns)
         # only a torus found but short of the tolerance climbs: one not found at H₁ (no
         # torus near the orbit, e.g. a chaotic band) is not sought again at a higher H₁
         climb = [i for row, i in enumerate(pending) if answers[i] is None and np.isfinite(err[row])]
