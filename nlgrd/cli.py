@@ -35,16 +35,15 @@ from nlgrd.cli_orbits import DEFAULT_PERIODS
 from nlgrd.cli_study import add_parsers as add_study_parsers
 from nlgrd.cli_sweep import cmd_sweep
 from nlgrd.errors import ModelError
+from nlgrd.io.analysis_files import write_campbell, write_lste, write_modes
 from nlgrd.io.command_line import (
     MAX_POINTS,
-    Outputs,
     check_at_least,
     output_folder,
     parse_orders,
     parse_range,
     parse_span,
     parse_speed,
-    pyplot,
 )
 
 __all__ = [
@@ -119,20 +118,7 @@ def cmd_modes(args) -> int:
     )
     cols = ["mode", "natural_frequency [Hz]", "damping_ratio [-]", "kind", "whirl"]
     print(df[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    csv, png = folder / f"{_stem(args.model)}_modes.csv", folder / f"{_stem(args.model)}_modes.png"
-    plt = pyplot()
-    with Outputs() as out:
-        out.csv(df, csv)
-        n = min(6, len(res.eigenvalues))
-        fig, axes = plt.subplots((n + 1) // 2, 2, figsize=(11, 3 * ((n + 1) // 2)), squeeze=False)
-        for i, ax in enumerate(axes.ravel()):
-            if i < n:
-                res.plot(i, ax=ax)
-            else:
-                ax.set_visible(False)
-        fig.tight_layout()
-        out.figure(fig, png)
-        out.commit()
+    csv, png = write_modes(res, folder, _stem(args.model))
     print(f"wrote {csv} and {png}")
     return 0
 
@@ -171,16 +157,7 @@ def cmd_campbell(args) -> int:
             print(f"\rcampbell: {i}/{n} speeds", end="\n" if i == n else "", file=sys.stderr, flush=True)
 
     res = campbell(system, rpm * np.pi / 30, n_modes=args.n_modes, orders=orders, progress=progress)
-    stem = _stem(args.model)
-    csv, crit, png = (folder / f"{stem}_{s}" for s in ("campbell.csv", "critical_speeds.csv", "campbell.png"))
-    pyplot()
-    with Outputs() as out:
-        out.csv(res.to_frame(), csv)
-        out.csv(res.critical_frame(), crit)
-        ax = res.plot()
-        ax.figure.tight_layout()
-        out.figure(ax.figure, png)
-        out.commit()
+    csv, crit, png = write_campbell(res, folder, _stem(args.model))
     print(res.critical_frame().to_string(index=False, float_format=lambda v: f"{v:.5g}"))
     print(f"wrote {csv}, {crit} and {png}")
     return 0
@@ -214,27 +191,8 @@ def cmd_lste(args) -> int:
         raise ModelError("--pair", f"gear pair {args.pair} out of range 0..{len(system.gear_pairs) - 1}")
     mesh = system.gear_pairs[args.pair]
     k_h = mesh.stiffness()
-    stem = _stem(args.model)
-    csv, png = folder / f"{stem}_lste.csv", folder / f"{stem}_lste.png"
-    plt = pyplot()
-    with Outputs() as out:
-        if mesh.lste_file:
-            summary, computed = _lste_from_file(mesh, out, csv, png, plt)
-        else:
-            res = mesh.lste_result()
-            computed = res.k_mean
-            out.csv(res.to_frame(), csv)
-            fig, axes = plt.subplots(3, 1, figsize=(7, 9))
-            res.plot(axes[0], kind="lste")
-            res.plot(axes[1], kind="stiffness")
-            res.plot(axes[2], kind="load_sharing")
-            fig.tight_layout()
-            out.figure(fig, png)
-            summary = (
-                f"LSTE computed from the geometry, peak-to-peak {res.fluctuation_pp * 1e6:.3f} um, "
-                f"mean mesh stiffness {res.k_mean:.4g} N/m"
-            )
-        out.commit()
+    files = write_lste(mesh, folder, _stem(args.model))
+    summary, computed = files.summary, files.computed
     print(
         f"gear pair {args.pair}: W_0 = {mesh.static_load:.1f} N, "
         f"contact ratio {mesh.geometry.contact_ratio:.4f}, {summary}"
@@ -251,47 +209,8 @@ def cmd_lste(args) -> int:
         print(
             f"and k(θ) = k_h ρ(θ), ρ {lo:.3f} to {hi:.3f} from the stiffness_file {mesh.stiffness_file}{mean}"
         )
-    print(f"wrote {csv} and {png}")
+    print(f"wrote {files.csv} and {files.png}")
     return 0
-
-
-def _lste_from_file(mesh, out: Outputs, csv: Path, png: Path, plt) -> tuple[str, float | None]:
-    """CSV and plot of the LSTE of the gear pair's ``lste_file`` (the one the dynamics use)."""
-    import numpy as np
-    import pandas as pd
-
-    from nlgrd.gear.lste_file import read_excitation
-
-    ex = read_excitation(mesh.lste_file, teeth_pinion=mesh.geometry.teeth_pinion)
-    phase = np.arange(mesh.lste_points) / mesh.lste_points
-    lste = np.asarray(ex.value(phase))
-    out.csv(
-        pd.DataFrame(
-            {
-                "phase [cycles]": phase,
-                "pinion rotation [rad]": 2 * np.pi * phase / mesh.geometry.teeth_pinion,
-                "lste [um]": lste * 1e6,
-            }
-        ),
-        csv,
-    )
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    ax.plot(phase, lste * 1e6, "k-", label=f"lste_file {Path(mesh.lste_file).name} (used)")
-    computed = None
-    if mesh.static_load > 0:
-        res = mesh.lste_result()
-        computed = res.k_mean
-        ax.plot(res.phase, res.lste * 1e6, "C0--", lw=1, label="computed from the geometry (not used)")
-    ax.set_xlabel("mesh phase [cycles]")
-    ax.set_ylabel("LSTE [µm]")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    out.figure(fig, png)
-    summary = (
-        f"LSTE from the lste_file {mesh.lste_file} (the dynamics remove its mean), "
-        f"peak-to-peak {ex.peak_to_peak * 1e6:.3f} um"
-    )
-    return summary, computed
 
 
 class _Parser(argparse.ArgumentParser):

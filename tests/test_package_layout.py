@@ -31,8 +31,8 @@ ALLOWED = {
     "plotting": set(),
     "nonlinear": {"rotor", "gear", "plotting"},
     "timedomain": {"rotor", "gear", "nonlinear", "plotting"},  # plotting: RampResult.plot
-    "io": {"rotor", "gear", "nonlinear"},
-    "studies": {"rotor", "gear", "nonlinear", "timedomain", "io", "plotting", "cli", "nlgrd"},
+    "io": {"rotor", "gear", "nonlinear", "plotting"},  # plotting: the linear analyses' figures
+    "studies": {"rotor", "gear", "nonlinear", "timedomain", "io", "plotting", "analyses", "nlgrd"},
 }
 
 
