@@ -207,7 +207,7 @@ def search_and_follow(model_of, omegas, at, periods, H, unit, known, words, view
         ``known(orbit, omega, followed)``: whether the sweep (or a branch already followed) has it.
     words : str
         How a known orbit is described in the printed line.
-    view : GearOrbits or nlgrd.cli_link_sweep.LinkOrbits
+    view : GearOrbits or nlgrd.cli.link_sweep.LinkOrbits
         Each orbit's and branch's columns.
     every : bool
         The ``--period N`` search: follow unstable orbits too, period-N orbits only (one of a
@@ -436,7 +436,7 @@ def period_response(model_of, fine_of, omegas, at, nu: int, H: int, unit, direct
         Frequency [rad/s] to text in the range's unit; ``unit.omega`` the inverse.
     directions : {"both", "up", "down"}
         Sweep directions of the response.
-    view : GearOrbits or nlgrd.cli_link_sweep.LinkOrbits
+    view : GearOrbits or nlgrd.cli.link_sweep.LinkOrbits
         Each orbit's and branch's columns.
 
     Returns
