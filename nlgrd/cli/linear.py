@@ -4,12 +4,12 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from nlgrd.errors import ModelError
 from nlgrd.io.analysis_files import write_campbell, write_lste, write_modes
 from nlgrd.io.command_line import (
+    ProgressBar,
     check_at_least,
     output_folder,
     parse_orders,
@@ -98,12 +98,8 @@ def cmd_campbell(args) -> int:
     check_at_least("--n-modes", args.n_modes, 1)
     folder = output_folder("--out", args.out)
     system = load_model(args.model)
-
-    def progress(i, n):
-        if sys.stderr.isatty() or i == n:
-            print(f"\rcampbell: {i}/{n} speeds", end="\n" if i == n else "", file=sys.stderr, flush=True)
-
-    res = campbell(system, rpm * np.pi / 30, n_modes=args.n_modes, orders=orders, progress=progress)
+    bar = ProgressBar("campbell")  # tqdm on a terminal
+    res = campbell(system, rpm * np.pi / 30, n_modes=args.n_modes, orders=orders, progress=bar)
     csv, crit, png = write_campbell(res, folder, _stem(args.model))
     print(res.critical_frame().to_string(index=False, float_format=lambda v: f"{v:.5g}"))
     print(f"wrote {csv}, {crit} and {png}")

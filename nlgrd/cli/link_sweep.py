@@ -178,23 +178,13 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
     frame.insert(1, "shaft_speed [rpm]", frame["base_frequency [Hz]"] * plan.speed_per_base * 60)
     x_col = "shaft_speed [rpm]" if args.rpm is not None else "base_frequency [Hz]"
     snap_to_grid(frame, x_col, values)  # the speeds as typed, not their round trip through rad/s
-    plt = pyplot()
-    from nlgrd.plotting.common import axis_label, place_legend
-    from nlgrd.plotting.nonlinear import plot_sweep_frame
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    plot_sweep_frame(frame, x_col, column, ax, label="sweep")
-    ax.set_xlabel(axis_label(x_col))
-    ax.set_ylabel(axis_label(column))
-    ax.set_title(f"{(system.name or 'model')[:60]}\nbase frequency: {plan.name}, H = {H}", fontsize=9)
     if search is not None:
         found = link_search(model, res, omegas, *search, unit_of(plan), column)
-    if found is not None:
-        from nlgrd.cli.orbits import draw_branches
+    pyplot()
+    from nlgrd.plotting.sweep_figures import plot_link_sweep
 
-        draw_branches(ax, found[1], x_col, column.split(" [")[0])
-    place_legend(ax, fontsize=7)
-    fig.tight_layout()
+    title = f"{(system.name or 'model')[:60]}\nbase frequency: {plan.name}, H = {H}"
+    fig = plot_link_sweep(frame, x_col, column, title, None if found is None else found[1]).figure
     names = ("orbits", "branches") if found is not None else ()
     beside = [(out.with_name(f"{out.stem}_{n}.csv"), f) for n, f in zip(names, found or (), strict=True)]
     with Outputs() as files:

@@ -541,26 +541,3 @@ def _concat(results: list):
     return dc.replace(
         results[0], **{f.name: cat([getattr(r, f.name) for r in results]) for f in dc.fields(results[0])}
     )
-
-
-def draw_branches(ax, branches: pd.DataFrame, x: str, quantity: str) -> None:
-    """The followed branches on the sweep's axes (one colour pair per branch).
-
-    Parameters
-    ----------
-    ax : matplotlib.axes.Axes
-        The sweep's axes.
-    branches : DataFrame
-        From :func:`search_command`.
-    x : str
-        Abscissa column ("mesh_frequency [Hz]" or "pinion_speed [rpm]").
-    quantity : str
-        The plotted metric (its column is named "<quantity> [unit]").
-    """
-    from nlgrd.plotting.nonlinear import plot_sweep_frame
-
-    column = next((c for c in branches.columns if c.split(" [")[0] == quantity), None)
-    if column is None:
-        return
-    for k, (name, part) in enumerate(branches.groupby("branch", sort=False)):
-        plot_sweep_frame(part, x, column, ax=ax, label=name, series=2 + k % 3)

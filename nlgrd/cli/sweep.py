@@ -272,7 +272,7 @@ def _write_sweep(res, quantity, out, png, extra=None, found=None, unit=None, tit
             title = f"{title}\nH = {res.mesh.H} harmonics of the mesh frequency"
         ax = plot_sweep(res.mesh, quantity=quantity, xaxis=xaxis, title=title)
         if found is not None:
-            from nlgrd.cli.orbits import draw_branches
+            from nlgrd.plotting.sweep_figures import draw_branches
 
             for table in found if unit is not None and unit.grid is not None else ():
                 snap_to_grid(table, unit.column, unit.grid)
@@ -291,7 +291,6 @@ def _write_sweep(res, quantity, out, png, extra=None, found=None, unit=None, tit
 
 def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
     """The sweep over the error period, and the spectra of its largest response."""
-    import matplotlib.pyplot as plt
     import numpy as np
 
     from nlgrd.nonlinear.models.shaft_orders import (
@@ -302,7 +301,7 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
         shaft_order_sweep,
     )
     from nlgrd.nonlinear.tracing.auto_period import transitions
-    from nlgrd.plotting.nonlinear import plot_spectrum
+    from nlgrd.plotting.sweep_figures import plot_spectra
 
     model = shaft_order_model(system, float(omegas.max()), args.harmonics or SHAFT_ORDER_LADDER[-1])
     res = shaft_order_sweep(
@@ -319,21 +318,11 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
     if np.isfinite(rms.max()):
         i = int(np.argmax(rms))
         w_mesh = float(res.mesh.omega[i])
-        fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-        plot_spectrum(*dte_spectrum(res, i), w_mesh, ax=a1)
         fb, ab = bearing_force_spectrum(model, float(res.mesh.omega[i]), res.mesh.harmonics[i])
         j = int(np.argmax(ab.max(axis=0)))
-        plot_spectrum(
-            fb,
-            ab[:, j],
-            w_mesh,
-            ax=a2,
-            ylabel="bearing force amplitude [N]",
-            scale=1.0,
-            label=res.bearing_names[j],
-        )
-        a1.set_title(f"spectra at {unit(res.mesh.omega[i])} {unit.name} (the largest RMS DTE)")
-        fig.tight_layout()
+        title = f"spectra at {unit(res.mesh.omega[i])} {unit.name} (the largest RMS DTE)"
+        bearing = (fb, ab[:, j], res.bearing_names[j])
+        fig = plot_spectra(dte_spectrum(res, i), bearing, w_mesh, title)[0].figure
         extra = (fig, out.with_name(out.stem + "_spectrum.png"))
     _write_sweep(res, quantity, out, png, extra, unit=unit, title=_title(system, args))
     if extra is not None:
