@@ -799,10 +799,12 @@ def test_cancelled_task_is_counted_as_cancelled(tmp_path, capsys, monkeypatch):
 def test_report_build_names_the_final_paths(tmp_path, capsys):
     """``make reports`` builds in a staging folder renamed at the end: its ``wrote`` lines
     name the published path."""
-    from nlgrd.studies.reports import _cli
+    from nlgrd.analyses import load, modes
+    from nlgrd.io.analysis_files import write_modes
+    from nlgrd.studies.reports import _wrote
 
     build = SimpleNamespace(stage=tmp_path / ".reports.staging-1", out=tmp_path / "reports")
-    _cli(["modes", str(TWO), "--out", str(build.stage / "models")], build)
+    _wrote(build, *write_modes(modes(load(TWO), n_modes=2), build.stage / "models", "two_shaft"))
     out = capsys.readouterr().out
     assert f"wrote {build.out / 'models' / 'two_shaft_modes.csv'}" in out
     assert str(build.stage) not in out

@@ -65,6 +65,17 @@ def test_no_traceback_from_the_installed_command(tmp_path):
     assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
 
 
+def test_the_console_script_is_the_command():
+    """pyproject's ``nlgrd`` script names the ``main`` that ``python -m nlgrd.cli`` runs."""
+    import importlib
+    import tomllib
+
+    scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
+    module, _, name = scripts["nlgrd"].partition(":")
+    assert getattr(importlib.import_module(module), name) is main
+    assert "main()" in (ROOT / "nlgrd" / "cli" / "__main__.py").read_text()
+
+
 def test_bad_range_is_one_line(capsys, tmp_path):
     """A malformed --rpm range is a one-line error too."""
     assert main(["campbell", str(TWO_SHAFT), "--rpm", "0:10", "--out", str(tmp_path)]) == 2

@@ -24,7 +24,7 @@ import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 from test_link_period_doubling import MODEL as DRIVE  # noqa: E402
 
-import nlgrd.cli_sweep as cli_sweep  # noqa: E402
+import nlgrd.cli.sweep as cli_sweep  # noqa: E402
 from nlgrd.cli import main  # noqa: E402
 from nlgrd.io.command_line import Outputs, harmonics_line  # noqa: E402
 from nlgrd.nonlinear.results.sweep_results import SweepResult  # noqa: E402

@@ -24,15 +24,17 @@ LONG_MODULES: dict[str, tuple[int, str]] = {}
 
 #: What each subpackage may import from nlgrd (besides itself and the top-level helpers
 #: nlgrd.errors, nlgrd.cache and nlgrd.threads): the
-#: layers, lowest first. Plotting draws results and imports no analysis module.
+#: layers, lowest first. Plotting draws results and imports no analysis module; the command
+#: line is the top layer (:func:`test_the_command_line_is_the_top_layer`).
 ALLOWED = {
     "rotor": {"plotting"},
     "gear": {"plotting"},
     "plotting": set(),
     "nonlinear": {"rotor", "gear", "plotting"},
     "timedomain": {"rotor", "gear", "nonlinear", "plotting"},  # plotting: RampResult.plot
-    "io": {"rotor", "gear", "nonlinear"},
-    "studies": {"rotor", "gear", "nonlinear", "timedomain", "io", "plotting", "cli", "nlgrd"},
+    "io": {"rotor", "gear", "nonlinear", "plotting"},  # plotting: the linear analyses' figures
+    "studies": {"rotor", "gear", "nonlinear", "timedomain", "io", "plotting", "analyses", "nlgrd"},
+    "cli": {"rotor", "gear", "nonlinear", "timedomain", "io", "plotting", "analyses", "studies", "nlgrd"},
 }
 
 
@@ -182,6 +184,21 @@ def test_subpackages_import_only_lower_layers():
             other = _package(dep) if dep != "nlgrd" else "nlgrd"
             if other not in (pkg, "errors", "cache", "threads") and other not in ALLOWED[pkg]:
                 bad.append(f"{mod} imports {dep}")
+    assert bad == []
+
+
+def test_the_command_line_is_the_top_layer():
+    """``nlgrd.cli`` is one package, and nothing in nlgrd imports it but itself, counting
+    imports inside functions and under ``if TYPE_CHECKING:``: the library (the report job
+    too) calls the library, never a command."""
+    assert (PACKAGE / "cli" / "__init__.py").is_file()
+    assert sorted(p.name for p in PACKAGE.glob("cli*.py")) == []
+    bad = [
+        f"{mod} imports {dep}"
+        for mod, deps in import_graph(type_checking=True).items()
+        for dep in deps
+        if _package(dep) == "cli" and _package(mod) != "cli"
+    ]
     assert bad == []
 
 

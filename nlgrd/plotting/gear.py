@@ -160,3 +160,61 @@ def plot_tip_relief_sweep(sweep, ax=None, design_deflection: float | None = None
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     return ax
+
+
+def plot_lste_panels(result):
+    """The LSTE, the mesh stiffness and the load sharing of a gear pair, one above the
+    other: the figure of ``nlgrd lste``.
+
+    Parameters
+    ----------
+    result : nlgrd.gear.transmission_error.LSTEResult
+        The LSTE over one period of the mesh.
+
+    Returns
+    -------
+    numpy.ndarray of matplotlib.axes.Axes
+        The three axes of the new figure.
+    """
+    fig, axes = plt.subplots(3, 1, figsize=(7, 9))
+    plot_lste(result, ax=axes[0])
+    plot_mesh_stiffness(result, ax=axes[1])
+    plot_load_sharing(result, ax=axes[2])
+    fig.tight_layout()
+    return axes
+
+
+def plot_lste_file(phase, lste, name: str, computed=None, ax=None):
+    """The LSTE of a gear pair's ``lste_file`` (the one the dynamics use) over one mesh
+    cycle, with the LSTE computed from the geometry dashed beside it.
+
+    Parameters
+    ----------
+    phase : array_like
+        Mesh phase [cycles].
+    lste : array_like
+        The file's LSTE at ``phase`` [m].
+    name : str
+        The file's name, for the legend.
+    computed : nlgrd.gear.transmission_error.LSTEResult, optional
+        The LSTE computed from the geometry (not used by the dynamics).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 3.5))
+    ax.plot(phase, np.asarray(lste) * 1e6, "k-", label=f"lste_file {name} (used)")
+    if computed is not None:
+        ax.plot(
+            computed.phase, computed.lste * 1e6, "C0--", lw=1, label="computed from the geometry (not used)"
+        )
+    ax.set_xlabel("mesh phase [cycles]")
+    ax.set_ylabel("LSTE [µm]")
+    ax.legend(fontsize=8)
+    ax.figure.tight_layout()
+    return ax

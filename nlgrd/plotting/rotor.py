@@ -287,3 +287,33 @@ def plot_static(result, ax=None):
     ax.set_ylabel("deflection [m]")
     ax.legend(fontsize=7)
     return ax
+
+
+def plot_mode_shapes(result, n: int = 6):
+    """The first ``n`` mode shapes, two to a row (:func:`plot_mode_shape` each): the figure
+    of ``nlgrd modes``.
+
+    Parameters
+    ----------
+    result : nlgrd.rotor.modal.ModalResult
+        Modes of a model with a rotor system (``result.model`` set).
+    n : int
+        Most modes drawn [-].
+
+    Returns
+    -------
+    numpy.ndarray of matplotlib.axes.Axes
+        The axes of the new figure, (rows, 2); those past the last mode hidden.
+    """
+    import matplotlib.pyplot as plt
+
+    n = min(n, len(result.eigenvalues))
+    rows = (n + 1) // 2
+    fig, axes = plt.subplots(rows, 2, figsize=(11, 3 * rows), squeeze=False)
+    for i, ax in enumerate(axes.ravel()):
+        if i < n:
+            plot_mode_shape(result, i, ax=ax)
+        else:
+            ax.set_visible(False)
+    fig.tight_layout()
+    return axes

@@ -21,8 +21,6 @@ parameter, checked against every notebook run before anything is built), ``--out
 from __future__ import annotations
 
 import argparse
-import contextlib
-import io
 import os
 import shutil
 import signal
@@ -34,7 +32,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from nlgrd.cli import main as cli_main
 from nlgrd.errors import ModelError
 from nlgrd.studies.index_page import SETTINGS_FILE, read_json, record_settings, write_json
 from nlgrd.studies.notebooks import (
@@ -83,24 +80,11 @@ def _captions(folder: Path, captions: Mapping[str, str]) -> None:
         record_caption(folder / name, text)
 
 
-def _cli(argv: list[str], build: Build | None = None) -> None:
-    """Run an ``nlgrd`` command; its Ctrl-C (status 130, stderr dropped) interrupts the build.
-
-    Its output names the files where they will be once published (``build.out``), not in
+def _wrote(build: Build, *paths: Path) -> None:
+    """Name the files written where they will be once published (``build.out``), not in
     the stage, which is gone when the run ends."""
-    buffer, printed = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stderr(buffer), contextlib.redirect_stdout(printed):
-        status = cli_main(argv)
-    if status == INTERRUPTED:
-        raise KeyboardInterrupt(f"nlgrd {argv[0]}")
-    text = printed.getvalue()
-    if build is not None:
-        text = text.replace(str(build.stage), str(build.out))
-    sys.stdout.write(text)
-    sys.stdout.flush()
-    sys.stderr.write(buffer.getvalue())
-    if status:
-        raise ReportError(f"nlgrd {argv[0]} {Path(argv[1]).name} exited with status {status}")
+    shown = [str(build.out / p.relative_to(build.stage)) for p in paths]
+    print(f"wrote {', '.join(shown[:-1])} and {shown[-1]}", flush=True)
 
 
 def build_model_reports(build: Build) -> None:
@@ -113,19 +97,23 @@ def build_model_reports(build: Build) -> None:
 
     Raises
     ------
-    ReportError
-        When an ``nlgrd`` command failed.
-    KeyboardInterrupt
-        When an ``nlgrd`` command was interrupted.
+    ModelError
+        When a model file cannot be read.
     """
+    from nlgrd.analyses import campbell, load, modes
+    from nlgrd.io.analysis_files import write_campbell, write_modes
+    from nlgrd.io.command_line import parse_orders, parse_range
+
     models = sorted((ROOT / "data" / "models").glob("*.toml"))
     target = build.stage / "models"
     rpm = CAMPBELL_RPM[build.fast]
     captions = {}
     for i, model in enumerate(models, 1):
         print(f"[{i}/{len(models)}] {model.name}: modes and Campbell diagram", flush=True)
-        _cli(["modes", str(model), "--out", str(target)], build)
-        _cli(["campbell", str(model), "--rpm", rpm, "--orders", "1", "--out", str(target)], build)
+        system = load(model)
+        _wrote(build, *write_modes(modes(system, 0.0, n_modes=12), target, model.stem))
+        diagram = campbell(system, parse_range(rpm), n_modes=10, orders=parse_orders("1"))
+        _wrote(build, *write_campbell(diagram, target, model.stem))
         captions[f"{model.stem}_modes.png"] = (
             f"The first six modes of {model.name} at standstill: amplitude along each shaft of each "
             "DOF family (lateral, torsional, axial) holding at least 5 % of the mode's kinetic "
@@ -160,15 +148,15 @@ def build_gear_reports(build: Build) -> None:
 
     Raises
     ------
-    ReportError
-        When an ``nlgrd lste`` command failed.
-    KeyboardInterrupt
-        When an ``nlgrd`` command was interrupted.
+    ModelError
+        When a model file cannot be read.
     """
     import numpy as np
 
+    from nlgrd.analyses import load
     from nlgrd.gear.geometry import GearGeometry
     from nlgrd.gear.transmission_error import single_pair_deflection, tip_relief_sweep
+    from nlgrd.io.analysis_files import write_lste
     from nlgrd.plotting import headless, save_figure
 
     headless()
@@ -178,7 +166,8 @@ def build_gear_reports(build: Build) -> None:
     for model in sorted((ROOT / "data" / "models").glob("*.toml")):
         if "[[gear_pairs]]" in model.read_text():
             print(f"{model.name}: loaded static transmission error", flush=True)
-            _cli(["lste", str(model), "--out", str(target)], build)
+            files = write_lste(load(model).gear_pairs[0], target, model.stem)
+            _wrote(build, files.csv, files.png)
             geared.append(model.name)
             captions[f"{model.stem}_lste.png"] = (
                 f"The gear pair of {model.name} at its static load over two mesh cycles: loaded static "

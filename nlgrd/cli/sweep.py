@@ -98,7 +98,7 @@ def cmd_sweep(args) -> int:
     png = output_file("--plot", args.plot, "sweep.png") if args.plot else out.with_suffix(".png")
     if png.resolve() == out.resolve():
         raise ModelError("--plot", f"the plot would overwrite the CSV {out}; give --out a .csv name")
-    from nlgrd.cli_orbits import default_search, parse_period, parse_search
+    from nlgrd.cli.orbits import default_search, parse_period, parse_search
 
     period, search = parse_period(args.period), None
     if args.search_at is not None:
@@ -113,7 +113,7 @@ def cmd_sweep(args) -> int:
         check_harmonics_memory(system, args.harmonics, "--harmonics")
     except ModelError as err:
         raise err.within(file=str(args.model)) from None
-    from nlgrd.cli_link_sweep import link_sweep_command, needs_links
+    from nlgrd.cli.link_sweep import link_sweep_command, needs_links
 
     if search is not None and not needs_links(system) and system.gear_pairs[0].error_period > 1:
         key = "--search-at" if args.search_at is not None else "--period"
@@ -180,12 +180,12 @@ def cmd_sweep(args) -> int:
         progress=ProgressBar("sweep"),
         period=period,
     )
-    from nlgrd.cli_link_sweep import time_answers
+    from nlgrd.cli.link_sweep import time_answers
 
     res = time_answers(args, system, res, period)
     found = None
     if search is not None:
-        from nlgrd.cli_orbits import search_command
+        from nlgrd.cli.orbits import search_command
 
         found = search_command(model, res, omegas, *search, unit)
     _write_sweep(res, quantity, out, png, found=found, unit=unit, title=_title(system, args))
@@ -211,10 +211,10 @@ def _check_period_options(args, period: int) -> None:
 
 def _period_command(args, system, omegas, unit, quantity, out, png, search) -> int:
     """``--period N``, N >= 3: the period-N orbits searched for, followed over the grid and
-    written as the sweep (:func:`nlgrd.cli_orbits.period_search`); exit 1 when none is found."""
+    written as the sweep (:func:`nlgrd.cli.orbits.period_search`); exit 1 when none is found."""
     import numpy as np
 
-    from nlgrd.cli_orbits import PERIOD_HARMONICS, period_search
+    from nlgrd.cli.orbits import PERIOD_HARMONICS, period_search
     from nlgrd.nonlinear.models.geared import build_geared_model
     from nlgrd.nonlinear.tracing.harmonic_convergence import OUTPUT_RTOL
     from nlgrd.nonlinear.tracing.orbit_search import N_STARTS
@@ -272,7 +272,7 @@ def _write_sweep(res, quantity, out, png, extra=None, found=None, unit=None, tit
             title = f"{title}\nH = {res.mesh.H} harmonics of the mesh frequency"
         ax = plot_sweep(res.mesh, quantity=quantity, xaxis=xaxis, title=title)
         if found is not None:
-            from nlgrd.cli_orbits import draw_branches
+            from nlgrd.plotting.sweep_figures import draw_branches
 
             for table in found if unit is not None and unit.grid is not None else ():
                 snap_to_grid(table, unit.column, unit.grid)
@@ -291,7 +291,6 @@ def _write_sweep(res, quantity, out, png, extra=None, found=None, unit=None, tit
 
 def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
     """The sweep over the error period, and the spectra of its largest response."""
-    import matplotlib.pyplot as plt
     import numpy as np
 
     from nlgrd.nonlinear.models.shaft_orders import (
@@ -302,7 +301,7 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
         shaft_order_sweep,
     )
     from nlgrd.nonlinear.tracing.auto_period import transitions
-    from nlgrd.plotting.nonlinear import plot_spectrum
+    from nlgrd.plotting.sweep_figures import plot_spectra
 
     model = shaft_order_model(system, float(omegas.max()), args.harmonics or SHAFT_ORDER_LADDER[-1])
     res = shaft_order_sweep(
@@ -319,21 +318,11 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
     if np.isfinite(rms.max()):
         i = int(np.argmax(rms))
         w_mesh = float(res.mesh.omega[i])
-        fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-        plot_spectrum(*dte_spectrum(res, i), w_mesh, ax=a1)
         fb, ab = bearing_force_spectrum(model, float(res.mesh.omega[i]), res.mesh.harmonics[i])
         j = int(np.argmax(ab.max(axis=0)))
-        plot_spectrum(
-            fb,
-            ab[:, j],
-            w_mesh,
-            ax=a2,
-            ylabel="bearing force amplitude [N]",
-            scale=1.0,
-            label=res.bearing_names[j],
-        )
-        a1.set_title(f"spectra at {unit(res.mesh.omega[i])} {unit.name} (the largest RMS DTE)")
-        fig.tight_layout()
+        title = f"spectra at {unit(res.mesh.omega[i])} {unit.name} (the largest RMS DTE)"
+        bearing = (fb, ab[:, j], res.bearing_names[j])
+        fig = plot_spectra(dte_spectrum(res, i), bearing, w_mesh, title)[0].figure
         extra = (fig, out.with_name(out.stem + "_spectrum.png"))
     _write_sweep(res, quantity, out, png, extra, unit=unit, title=_title(system, args))
     if extra is not None:
@@ -344,7 +333,7 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
 def _summary(args, res, unit, out, png, transitions) -> int:
     import numpy as np
 
-    from nlgrd.cli_orbits import none_of
+    from nlgrd.cli.orbits import none_of
 
     bad = np.atleast_1d(res.mesh.omega[~res.mesh.converged])
     print(
@@ -420,10 +409,10 @@ def _summary(args, res, unit, out, png, transitions) -> int:
 
 def _link_continuation(args, system, values, count, out, png) -> int:
     """``--continuation`` of a link model: the curve of every link's outputs, the figure
-    of ``--quantity`` (:func:`nlgrd.cli_link_sweep.link_quantity`) along it."""
+    of ``--quantity`` (:func:`nlgrd.cli.link_sweep.link_quantity`) along it."""
     import dataclasses
 
-    from nlgrd.cli_link_sweep import link_quantity
+    from nlgrd.cli.link_sweep import link_quantity
     from nlgrd.nonlinear.models.link_model import build_link_model, link_continuation
 
     model = build_link_model(system)

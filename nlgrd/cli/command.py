@@ -19,7 +19,9 @@ The command line never prints a traceback:
   environment variable ``NLGRD_DEBUG=1`` its traceback is printed first.
 
 The option checks, the range parsing and the atomic output writer are in
-:mod:`nlgrd.io.command_line`; this module has the sub-commands, the parser and :func:`main`.
+:mod:`nlgrd.io.command_line`; this module has the parser and :func:`main`, which hands each
+sub-command to its module: :mod:`nlgrd.cli.linear` (``modes``, ``campbell``, ``lste``),
+:mod:`nlgrd.cli.sweep` (``sweep``) and :mod:`nlgrd.cli.study` (``study``, ``report``).
 """
 
 from __future__ import annotations
@@ -29,23 +31,13 @@ import os
 import sys
 import traceback
 import warnings
-from pathlib import Path
 
-from nlgrd.cli_orbits import DEFAULT_PERIODS
-from nlgrd.cli_study import add_parsers as add_study_parsers
-from nlgrd.cli_sweep import cmd_sweep
+from nlgrd.cli.linear import cmd_campbell, cmd_lste, cmd_modes
+from nlgrd.cli.orbits import DEFAULT_PERIODS
+from nlgrd.cli.study import add_parsers as add_study_parsers
+from nlgrd.cli.sweep import cmd_sweep
 from nlgrd.errors import ModelError
-from nlgrd.io.command_line import (
-    MAX_POINTS,
-    Outputs,
-    check_at_least,
-    output_folder,
-    parse_orders,
-    parse_range,
-    parse_span,
-    parse_speed,
-    pyplot,
-)
+from nlgrd.io.command_line import MAX_POINTS, parse_range, parse_span
 
 __all__ = [
     "EPILOG",
@@ -75,223 +67,6 @@ Units: speeds in rpm on the command line, everything in the model file in SI
 Exit status: 0 done, 1 computation failed or incomplete, 2 bad input, 130 Ctrl-C.
 NLGRD_DEBUG=1 prints the traceback of an unexpected error.
 """
-
-
-def _stem(model: str) -> str:
-    return Path(model).stem
-
-
-# ---------------------------------------------------------------------------- commands
-
-
-def cmd_modes(args) -> int:
-    """Modal analysis: table on screen, CSV and mode-shape PNG.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed options of ``nlgrd modes`` (:func:`build_parser`).
-
-    Returns
-    -------
-    int
-        The exit status: 0 when done.
-
-    Raises
-    ------
-    ModelError
-        For a bad option or model (:func:`main` prints it and exits with status 2).
-    """
-    import numpy as np
-
-    from nlgrd.io.model_file import load_model
-    from nlgrd.rotor.modal import modal_analysis
-
-    rpm = parse_speed(args.rpm)
-    check_at_least("--n-modes", args.n_modes, 1)
-    folder = output_folder("--out", args.out)
-    system = load_model(args.model)
-    res = modal_analysis(system, speed=rpm * np.pi / 30, n_modes=args.n_modes, damped=not args.undamped)
-    df = res.to_frame()
-    print(
-        f"{args.model}: {system.n_dofs} DOFs, speed {rpm:g} rpm, "
-        f"{res.n_rigid_body} rigid-body mode(s) not listed"
-    )
-    cols = ["mode", "natural_frequency [Hz]", "damping_ratio [-]", "kind", "whirl"]
-    print(df[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    csv, png = folder / f"{_stem(args.model)}_modes.csv", folder / f"{_stem(args.model)}_modes.png"
-    plt = pyplot()
-    with Outputs() as out:
-        out.csv(df, csv)
-        n = min(6, len(res.eigenvalues))
-        fig, axes = plt.subplots((n + 1) // 2, 2, figsize=(11, 3 * ((n + 1) // 2)), squeeze=False)
-        for i, ax in enumerate(axes.ravel()):
-            if i < n:
-                res.plot(i, ax=ax)
-            else:
-                ax.set_visible(False)
-        fig.tight_layout()
-        out.figure(fig, png)
-        out.commit()
-    print(f"wrote {csv} and {png}")
-    return 0
-
-
-def cmd_campbell(args) -> int:
-    """Campbell diagram: CSV of frequencies, CSV of critical speeds, PNG.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed options of ``nlgrd campbell`` (:func:`build_parser`).
-
-    Returns
-    -------
-    int
-        The exit status: 0 when done.
-
-    Raises
-    ------
-    ModelError
-        For a bad option or model (:func:`main` prints it and exits with status 2).
-    """
-    import numpy as np
-
-    from nlgrd.io.model_file import load_model
-    from nlgrd.rotor.modal import campbell
-
-    rpm = parse_range(args.rpm, "--rpm")
-    orders = parse_orders(args.orders)
-    check_at_least("--n-modes", args.n_modes, 1)
-    folder = output_folder("--out", args.out)
-    system = load_model(args.model)
-
-    def progress(i, n):
-        if sys.stderr.isatty() or i == n:
-            print(f"\rcampbell: {i}/{n} speeds", end="\n" if i == n else "", file=sys.stderr, flush=True)
-
-    res = campbell(system, rpm * np.pi / 30, n_modes=args.n_modes, orders=orders, progress=progress)
-    stem = _stem(args.model)
-    csv, crit, png = (folder / f"{stem}_{s}" for s in ("campbell.csv", "critical_speeds.csv", "campbell.png"))
-    pyplot()
-    with Outputs() as out:
-        out.csv(res.to_frame(), csv)
-        out.csv(res.critical_frame(), crit)
-        ax = res.plot()
-        ax.figure.tight_layout()
-        out.figure(ax.figure, png)
-        out.commit()
-    print(res.critical_frame().to_string(index=False, float_format=lambda v: f"{v:.5g}"))
-    print(f"wrote {csv}, {crit} and {png}")
-    return 0
-
-
-def cmd_lste(args) -> int:
-    """Loaded static transmission error of a gear pair: CSV and PNG; the k_h of the dynamics.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed options of ``nlgrd lste`` (:func:`build_parser`).
-
-    Returns
-    -------
-    int
-        The exit status: 0 when done.
-
-    Raises
-    ------
-    ModelError
-        For a bad option or model (:func:`main` prints it and exits with status 2).
-    """
-    from nlgrd.io.model_file import load_model
-
-    folder = output_folder("--out", args.out)
-    system = load_model(args.model)
-    if not system.gear_pairs:
-        raise ModelError("gear_pairs", "the model has no gear pair", args.model)
-    if not 0 <= args.pair < len(system.gear_pairs):
-        raise ModelError("--pair", f"gear pair {args.pair} out of range 0..{len(system.gear_pairs) - 1}")
-    mesh = system.gear_pairs[args.pair]
-    k_h = mesh.stiffness()
-    stem = _stem(args.model)
-    csv, png = folder / f"{stem}_lste.csv", folder / f"{stem}_lste.png"
-    plt = pyplot()
-    with Outputs() as out:
-        if mesh.lste_file:
-            summary, computed = _lste_from_file(mesh, out, csv, png, plt)
-        else:
-            res = mesh.lste_result()
-            computed = res.k_mean
-            out.csv(res.to_frame(), csv)
-            fig, axes = plt.subplots(3, 1, figsize=(7, 9))
-            res.plot(axes[0], kind="lste")
-            res.plot(axes[1], kind="stiffness")
-            res.plot(axes[2], kind="load_sharing")
-            fig.tight_layout()
-            out.figure(fig, png)
-            summary = (
-                f"LSTE computed from the geometry, peak-to-peak {res.fluctuation_pp * 1e6:.3f} um, "
-                f"mean mesh stiffness {res.k_mean:.4g} N/m"
-            )
-        out.commit()
-    print(
-        f"gear pair {args.pair}: W_0 = {mesh.static_load:.1f} N, "
-        f"contact ratio {mesh.geometry.contact_ratio:.4f}, {summary}"
-    )
-    if mesh.mesh_stiffness is not None:
-        note = f"; the geometry gives {computed:.4g} N/m" if computed is not None else ""
-        print(f"the dynamics use k_h = {k_h:.4g} N/m (the model's mesh_stiffness{note})")
-    else:
-        print(f"the dynamics use k_h = {k_h:.4g} N/m (computed from the geometry at W_0)")
-    if mesh.stiffness_file:
-        shape = mesh.stiffness_shape()
-        lo, hi = shape.extremes
-        mean = "" if shape.mean is None else f"; the file's mean {shape.mean:.4g} N/m is not used"
-        print(
-            f"and k(θ) = k_h ρ(θ), ρ {lo:.3f} to {hi:.3f} from the stiffness_file {mesh.stiffness_file}{mean}"
-        )
-    print(f"wrote {csv} and {png}")
-    return 0
-
-
-def _lste_from_file(mesh, out: Outputs, csv: Path, png: Path, plt) -> tuple[str, float | None]:
-    """CSV and plot of the LSTE of the gear pair's ``lste_file`` (the one the dynamics use)."""
-    import numpy as np
-    import pandas as pd
-
-    from nlgrd.gear.lste_file import read_excitation
-
-    ex = read_excitation(mesh.lste_file, teeth_pinion=mesh.geometry.teeth_pinion)
-    phase = np.arange(mesh.lste_points) / mesh.lste_points
-    lste = np.asarray(ex.value(phase))
-    out.csv(
-        pd.DataFrame(
-            {
-                "phase [cycles]": phase,
-                "pinion rotation [rad]": 2 * np.pi * phase / mesh.geometry.teeth_pinion,
-                "lste [um]": lste * 1e6,
-            }
-        ),
-        csv,
-    )
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    ax.plot(phase, lste * 1e6, "k-", label=f"lste_file {Path(mesh.lste_file).name} (used)")
-    computed = None
-    if mesh.static_load > 0:
-        res = mesh.lste_result()
-        computed = res.k_mean
-        ax.plot(res.phase, res.lste * 1e6, "C0--", lw=1, label="computed from the geometry (not used)")
-    ax.set_xlabel("mesh phase [cycles]")
-    ax.set_ylabel("LSTE [µm]")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    out.figure(fig, png)
-    summary = (
-        f"LSTE from the lste_file {mesh.lste_file} (the dynamics remove its mean), "
-        f"peak-to-peak {ex.peak_to_peak * 1e6:.3f} um"
-    )
-    return summary, computed
 
 
 class _Parser(argparse.ArgumentParser):

@@ -207,7 +207,7 @@ def search_and_follow(model_of, omegas, at, periods, H, unit, known, words, view
         ``known(orbit, omega, followed)``: whether the sweep (or a branch already followed) has it.
     words : str
         How a known orbit is described in the printed line.
-    view : GearOrbits or nlgrd.cli_link_sweep.LinkOrbits
+    view : GearOrbits or nlgrd.cli.link_sweep.LinkOrbits
         Each orbit's and branch's columns.
     every : bool
         The ``--period N`` search: follow unstable orbits too, period-N orbits only (one of a
@@ -436,7 +436,7 @@ def period_response(model_of, fine_of, omegas, at, nu: int, H: int, unit, direct
         Frequency [rad/s] to text in the range's unit; ``unit.omega`` the inverse.
     directions : {"both", "up", "down"}
         Sweep directions of the response.
-    view : GearOrbits or nlgrd.cli_link_sweep.LinkOrbits
+    view : GearOrbits or nlgrd.cli.link_sweep.LinkOrbits
         Each orbit's and branch's columns.
 
     Returns
@@ -541,26 +541,3 @@ def _concat(results: list):
     return dc.replace(
         results[0], **{f.name: cat([getattr(r, f.name) for r in results]) for f in dc.fields(results[0])}
     )
-
-
-def draw_branches(ax, branches: pd.DataFrame, x: str, quantity: str) -> None:
-    """The followed branches on the sweep's axes (one colour pair per branch).
-
-    Parameters
-    ----------
-    ax : matplotlib.axes.Axes
-        The sweep's axes.
-    branches : DataFrame
-        From :func:`search_command`.
-    x : str
-        Abscissa column ("mesh_frequency [Hz]" or "pinion_speed [rpm]").
-    quantity : str
-        The plotted metric (its column is named "<quantity> [unit]").
-    """
-    from nlgrd.plotting.nonlinear import plot_sweep_frame
-
-    column = next((c for c in branches.columns if c.split(" [")[0] == quantity), None)
-    if column is None:
-        return
-    for k, (name, part) in enumerate(branches.groupby("branch", sort=False)):
-        plot_sweep_frame(part, x, column, ax=ax, label=name, series=2 + k % 3)

@@ -137,7 +137,7 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
     int
         0, or 1 when no point converged.
     """
-    from nlgrd.cli_orbits import none_of, parse_period
+    from nlgrd.cli.orbits import none_of, parse_period
     from nlgrd.io.command_line import ProgressBar, pyplot
     from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 
@@ -178,23 +178,13 @@ def link_sweep_command(args, system, values, out, png, search=None, unit_of=None
     frame.insert(1, "shaft_speed [rpm]", frame["base_frequency [Hz]"] * plan.speed_per_base * 60)
     x_col = "shaft_speed [rpm]" if args.rpm is not None else "base_frequency [Hz]"
     snap_to_grid(frame, x_col, values)  # the speeds as typed, not their round trip through rad/s
-    plt = pyplot()
-    from nlgrd.plotting.common import axis_label, place_legend
-    from nlgrd.plotting.nonlinear import plot_sweep_frame
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    plot_sweep_frame(frame, x_col, column, ax, label="sweep")
-    ax.set_xlabel(axis_label(x_col))
-    ax.set_ylabel(axis_label(column))
-    ax.set_title(f"{(system.name or 'model')[:60]}\nbase frequency: {plan.name}, H = {H}", fontsize=9)
     if search is not None:
         found = link_search(model, res, omegas, *search, unit_of(plan), column)
-    if found is not None:
-        from nlgrd.cli_orbits import draw_branches
+    pyplot()
+    from nlgrd.plotting.sweep_figures import plot_link_sweep
 
-        draw_branches(ax, found[1], x_col, column.split(" [")[0])
-    place_legend(ax, fontsize=7)
-    fig.tight_layout()
+    title = f"{(system.name or 'model')[:60]}\nbase frequency: {plan.name}, H = {H}"
+    fig = plot_link_sweep(frame, x_col, column, title, None if found is None else found[1]).figure
     names = ("orbits", "branches") if found is not None else ()
     beside = [(out.with_name(f"{out.stem}_{n}.csv"), f) for n, f in zip(names, found or (), strict=True)]
     with Outputs() as files:
@@ -261,7 +251,7 @@ def _periods(r, unit: tuple[float, str]) -> None:
 
 
 class LinkOrbits:
-    """What :func:`nlgrd.cli_orbits.search_and_follow` writes of a link model's orbits: the
+    """What :func:`nlgrd.cli.orbits.search_and_follow` writes of a link model's orbits: the
     base frequency, the reference shaft speed and every link's outputs over the orbit's
     whole period (as :func:`~nlgrd.nonlinear.models.link_model.link_sweep`'s columns).
 
@@ -336,7 +326,7 @@ class LinkOrbits:
         return f
 
     def model_of(self, H: int, top: float):
-        """``model_of(nu)`` for :func:`nlgrd.cli_orbits.search_and_follow`: the period-ν
+        """``model_of(nu)`` for :func:`nlgrd.cli.orbits.search_and_follow`: the period-ν
         reduced model, its basis serving H harmonics of the base up to ``top`` [rad/s]."""
 
         def model_of(nu: int):
@@ -350,7 +340,7 @@ class LinkOrbits:
 def link_search(model, res, omegas, at, periods, unit, column: str):
     """``--search-at`` on a link model: search at each speed, print what was found, follow
     the stable orbits the sweep does not have over its grid
-    (:func:`nlgrd.cli_orbits.search_and_follow` with :class:`LinkOrbits`).
+    (:func:`nlgrd.cli.orbits.search_and_follow` with :class:`LinkOrbits`).
 
     Parameters
     ----------
@@ -374,7 +364,7 @@ def link_search(model, res, omegas, at, periods, unit, column: str):
     (DataFrame, DataFrame)
         The orbits found and the followed branches.
     """
-    from nlgrd.cli_orbits import search_and_follow
+    from nlgrd.cli.orbits import search_and_follow
 
     r, view = res.result, LinkOrbits(model, column)
     H = r.H
@@ -402,8 +392,8 @@ def link_search(model, res, omegas, at, periods, unit, column: str):
 def link_period_response(model, omegas, at, nu: int, H: int | None, directions: str, unit, column: str):
     """``--period N`` (N >= 3) on a link model: period-N orbits searched at ``at``, each new
     one followed over the grid, the branches merged into one response per grid point and
-    direction (:func:`nlgrd.cli_orbits.merge_branches`), its harmonic error estimated at
-    the next rung, as :func:`nlgrd.cli_orbits.period_search` does for one mesh.
+    direction (:func:`nlgrd.cli.orbits.merge_branches`), its harmonic error estimated at
+    the next rung, as :func:`nlgrd.cli.orbits.period_search` does for one mesh.
 
     Parameters
     ----------
@@ -416,7 +406,7 @@ def link_period_response(model, omegas, at, nu: int, H: int | None, directions: 
     nu : int
         The period sought [base periods].
     H : int or None
-        Harmonics of the base (ν H of ω/ν); None: :data:`nlgrd.cli_orbits.PERIOD_HARMONICS`.
+        Harmonics of the base (ν H of ω/ν); None: :data:`nlgrd.cli.orbits.PERIOD_HARMONICS`.
     directions : {"both", "up", "down"}
         Sweep directions of the response.
     unit : callable
@@ -430,7 +420,7 @@ def link_period_response(model, omegas, at, nu: int, H: int | None, directions: 
         The response (None when no period-ν orbit was found), the orbits found and the
         followed branches.
     """
-    from nlgrd.cli_orbits import PERIOD_HARMONICS, period_response
+    from nlgrd.cli.orbits import PERIOD_HARMONICS, period_response
     from nlgrd.nonlinear.tracing.orbit_search import N_STARTS
 
     H = H or PERIOD_HARMONICS

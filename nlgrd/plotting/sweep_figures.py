@@ -1,0 +1,102 @@
+"""The composed figures of ``nlgrd sweep``: a link model's sweep with the branches its orbit
+search followed, and the spectra of one point of a sweep over a gear revolution."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import pandas as pd
+
+from nlgrd.plotting.common import axis_label, place_legend
+from nlgrd.plotting.nonlinear import plot_spectrum, plot_sweep_frame
+
+__all__ = ["draw_branches", "plot_link_sweep", "plot_spectra"]
+
+
+def draw_branches(ax, branches: pd.DataFrame, x: str, quantity: str) -> None:
+    """The followed branches on the sweep's axes (one colour pair per branch).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The sweep's axes.
+    branches : DataFrame
+        The followed branches, a column "branch" naming each (``nlgrd sweep --search-at``).
+    x : str
+        Abscissa column ("mesh_frequency [Hz]" or "pinion_speed [rpm]").
+    quantity : str
+        The plotted metric (its column is named "<quantity> [unit]").
+    """
+    column = next((c for c in branches.columns if c.split(" [")[0] == quantity), None)
+    if column is None:
+        return
+    for k, (name, part) in enumerate(branches.groupby("branch", sort=False)):
+        plot_sweep_frame(part, x, column, ax=ax, label=name, series=2 + k % 3)
+
+
+def plot_link_sweep(frame: pd.DataFrame, x: str, column: str, title: str, branches=None):
+    """A link sweep's ``column`` against ``x``, with the followed branches when given.
+
+    Parameters
+    ----------
+    frame : DataFrame
+        The sweep's table (``LinkSweepResult.to_frame()`` with the range's column ``x``).
+    x : str
+        Abscissa column ("shaft_speed [rpm]" or "base_frequency [Hz]").
+    column : str
+        The drawn column ``<link>.<quantity> [unit]``.
+    title : str
+        The figure's title.
+    branches : DataFrame, optional
+        Branches followed by an orbit search (:func:`draw_branches`).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes of the new figure.
+    """
+    fig, ax = plt.subplots(figsize=(7, 4))
+    plot_sweep_frame(frame, x, column, ax, label="sweep")
+    ax.set_xlabel(axis_label(x))
+    ax.set_ylabel(axis_label(column))
+    ax.set_title(title, fontsize=9)
+    if branches is not None:
+        draw_branches(ax, branches, x, column.split(" [")[0])
+    place_legend(ax, fontsize=7)
+    fig.tight_layout()
+    return ax
+
+
+def plot_spectra(dte, bearing, omega: float, title: str):
+    """The DTE spectrum above a bearing's force spectrum, at one point of a sweep.
+
+    Parameters
+    ----------
+    dte : (array_like, array_like)
+        The DTE lines: frequencies [rad/s] and amplitudes [m].
+    bearing : (array_like, array_like, str)
+        The bearing force lines: frequencies [rad/s], amplitudes [N] and the bearing's name.
+    omega : float
+        The mesh frequency of the point [rad/s].
+    title : str
+        The upper axes' title.
+
+    Returns
+    -------
+    numpy.ndarray of matplotlib.axes.Axes
+        The two axes of the new figure.
+    """
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    plot_spectrum(*dte, omega, ax=axes[0])
+    frequencies, amplitudes, name = bearing
+    plot_spectrum(
+        frequencies,
+        amplitudes,
+        omega,
+        ax=axes[1],
+        ylabel="bearing force amplitude [N]",
+        scale=1.0,
+        label=name,
+    )
+    axes[0].set_title(title)
+    fig.tight_layout()
+    return axes
