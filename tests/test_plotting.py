@@ -26,11 +26,15 @@ from matplotlib.colors import to_rgba  # noqa: E402
 from nlgrd.plotting import save_figure  # noqa: E402
 from nlgrd.plotting.common import (  # noqa: E402
     LEGEND_INSIDE,
+    LEGEND_MARKER_MIN,
     NC_HEIGHT,
     NO_MEASUREMENT_TEXT,
+    SERIES_COLOURS,
     axis_label,
+    drawn_entries,
     note_no_measurement,
     place_legend,
+    plot_counted,
     stability_codes,
 )
 from nlgrd.plotting.nonlinear import plot_continuation, plot_sweep, plot_sweep_frame  # noqa: E402
@@ -583,3 +587,145 @@ def test_a_short_legend_that_would_cover_points_goes_outside():
     ax.figure.canvas.draw()
     assert len(legend.get_texts()) == 1
     assert _extent(legend, ax.figure).x0 >= _extent(ax, ax.figure).x1 - 1e-6
+
+
+# Issue 35, item 4: every figure of the answered sweeps legible (the reports and `nlgrd sweep`
+# share these helpers). The first test looks at pixels: whether a marker can be seen is a
+# property of the rendered image, not of one artist.
+
+UP_RGB, DOWN_RGB = (to_rgba(c)[:3] for c in SERIES_COLOURS[0])
+
+
+def answered_frame(kinds, ms_y=1.0):
+    """Up and down rows at the same speeds, one per kind, with the same value in both
+    directions (the coincidence a report shows where both sweeps reach the same attractor).
+    Torus rows carry the verdict "not computed", as SweepResult.to_frame writes it."""
+    f = 1000.0 + 100.0 * np.arange(len(kinds))
+    rows = []
+    for d in ("up", "down"):
+        for x, kind in zip(f, kinds, strict=True):
+            torus = kind == "torus"
+            rows.append(
+                {X: x, "direction": d, "converged": True, "stable": pd.NA, "floquet_max [-]": np.nan,
+                 Y: ms_y + x / 1000, "response": "quasi-periodic" if torus else kind,
+                 "verdict": "not computed" if torus else "unstable"}
+            )  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def colour_pixels(fig, ax, x, y, rgb, half=25, tol=0.12):
+    """Pixels within ``half`` px of the data point (x, y) whose colour is within ``tol`` of
+    ``rgb`` in every channel (antialiased edges blend with white, so they do not count)."""
+    fig.canvas.draw()
+    img = np.asarray(fig.canvas.buffer_rgba(), dtype=float)[..., :3] / 255
+    px, py = ax.transData.transform((x, y))
+    row, col = int(round(img.shape[0] - py)), int(round(px))
+    patch = img[max(row - half, 0) : row + half, max(col - half, 0) : col + half]
+    return int(np.all(np.abs(patch - np.asarray(rgb)) < tol, axis=-1).sum())
+
+
+@pytest.mark.parametrize("kind", ["time domain", "chaotic", "torus"])
+def test_up_and_down_answers_at_one_speed_are_both_visible(kind):
+    """Issue 35, item 4: where the up and down sweeps are answered at the same speed with the
+    same value, the down marker used to be drawn over the up one, the same open shape: the
+    up answer disappeared. Now the up marker is open and large, the down one filled, smaller
+    and above it: at the point the rendered image must show both colours, each over at least
+    15 px (the up outline of a 1.4 x 10 pt diamond at 100 dpi is ~80 px; a hidden one leaves
+    only antialiased fringes, which the colour tolerance excludes). A point where only the
+    down answer lies must show no up colour (the check can fail)."""
+    frame = answered_frame([kind, kind])
+    frame = frame[~((frame["direction"] == "up") & (frame[X] == 1100.0))]  # down alone at 1100 Hz
+    fig, ax = plt.subplots(figsize=(4, 3), dpi=100)
+    plot_sweep_frame(frame, X, Y, ax=ax, label="FE", ms=10)
+    ax.set_xlim(900, 1200)
+    ax.set_ylim(1.8, 2.3)
+    assert colour_pixels(fig, ax, 1000.0, 2.0, UP_RGB) >= 15
+    assert colour_pixels(fig, ax, 1000.0, 2.0, DOWN_RGB) >= 15
+    assert colour_pixels(fig, ax, 1100.0, 2.1, UP_RGB) == 0
+    assert colour_pixels(fig, ax, 1100.0, 2.1, DOWN_RGB) >= 15
+
+
+def test_period_two_rings_of_up_and_down_are_concentric():
+    """Up and down period-2 rings at one speed: the up ring is the larger, so that the down
+    ring (drawn on top) lies inside it instead of over it; both open (the orbit's marker
+    shows through)."""
+    frame = sweep_frame(n=4)
+    frame["response"] = "period 2"
+    ax = plot_sweep_frame(frame, X, Y, label="FE")
+    (up,) = by_label(ax, "FE up: period 2 (4)")
+    (down,) = by_label(ax, "FE down: period 2 (4)")
+    assert up.get_markersize() > down.get_markersize() + 1.0  # pt: the down ring clear inside
+    assert up.get_markerfacecolor() == "none" and down.get_markerfacecolor() == "none"
+
+
+def test_chaotic_stars_are_larger_than_the_other_answers():
+    """Issue 35, item 4: the chaotic stars read too small at the default size (1.3 ms, as the
+    diamonds); a star's ink is thin, so it is drawn at 1.8 x the marker size of the stable
+    points, the up star (the open, outer one) at exactly that size."""
+    frame = answered_frame(["chaotic", "time domain"])
+    for ms in (3.5, 5.0):
+        _, ax = plt.subplots()
+        plot_sweep_frame(frame, X, Y, ax=ax, label="FE", ms=ms)
+        bars = {c.get_label(): c[0] for c in ax.containers}  # error bars: (data line, caps, bars)
+        star, diamond = bars["FE up: chaotic (1; ±2σ)"], bars["FE up: time domain (1; ±2σ)"]
+        assert star.get_marker() == "*" and diamond.get_marker() == "D"
+        assert star.get_markersize() == pytest.approx(1.8 * ms)
+        assert star.get_markersize() > diamond.get_markersize()
+
+
+def test_a_legend_names_only_the_kinds_drawn_with_their_counts():
+    """Issue 35, item 4: Kubo's fig5b listed "up: period-2 orbits" where no period-2 orbit
+    was drawn. place_legend leaves out every artist without a finite point (keeping the
+    text-only note that no measurement is shipped); plot_counted draws nothing for an empty
+    kind and counts the points it draws; a period-2 kind wholly beyond the scale gets no
+    ring entry (its carets say it)."""
+    _, ax = plt.subplots()
+    note_no_measurement(ax)
+    ax.plot([], [], "^", label="up: period-2 orbits")  # what the notebook drew
+    ax.plot([np.nan], [np.nan], "v", label="down: nothing finite")
+    assert plot_counted(ax, [1.0, 2.0], [np.nan, np.nan], "^", "up: empty") is None
+    plot_counted(ax, [1.0, 2.0, 3.0], [1.0, np.nan, 3.0], "v", "down: period-2 orbits")
+    texts = [t.get_text() for t in place_legend(ax).get_texts()]
+    assert texts == [NO_MEASUREMENT_TEXT, "down: period-2 orbits (2)"]
+    assert drawn_entries(ax)[1] == texts
+    frame = sweep_frame(n=4)
+    frame["response"] = "period 2"
+    ax = plot_sweep_frame(frame, X, Y, label="FE", ylim=(0, 1))  # every value above 1
+    labels = [ln.get_label() for ln in ax.get_lines()]
+    assert not any("period 2" in t for t in labels)
+    assert any("above the scale" in t for t in labels)
+
+
+def test_legend_lists_error_bar_kinds_in_drawing_order():
+    """matplotlib lists error-bar containers after every line, so the time answers' entries
+    came after the landmarks drawn later (fig5 of notebook 01): the legend follows the order
+    in which the kinds were drawn."""
+    ax = plot_sweep_frame(answered_frame(["time domain"]), X, Y, label="FE")
+    ax.axvline(1000.0, label="gear-pair mode")
+    texts = drawn_entries(ax)[1]
+    assert texts.index("FE up: time domain (1; ±2σ)") < texts.index("gear-pair mode")
+    assert texts.index("FE down: time domain (1; ±2σ)") < texts.index("gear-pair mode")
+
+
+def test_legend_markers_are_readable_while_the_curve_keeps_its_dots():
+    """The damping-band figures draw their thin curves with 1.5 pt markers, unreadable as
+    legend keys: the legend's copies are drawn at LEGEND_MARKER_MIN at least, the axes'
+    markers keep their size."""
+    ax = plot_sweep_frame(sweep_frame(), X, Y, label="thin", ms=1.5)
+    legend = place_legend(ax)
+    sizes = [h.get_markersize() for h in legend.legend_handles if h.get_marker() not in ("", "None", None)]
+    assert sizes and min(sizes) >= LEGEND_MARKER_MIN
+    assert {ln.get_markersize() for ln in by_label(ax, "thin up")} == {1.5}
+
+
+def test_outside_legends_of_stacked_panels_widen_the_figure_once():
+    """A stacked figure (K&B's fig8 with the floor, two panels, each legend outside) was
+    widened by every panel's legend: the axes shrank to make room for legends that share
+    one column. The figure grows by the widest legend of the column only."""
+    fig, axs = plt.subplots(2, 1, figsize=(6.0, 6.0))
+    widths = []
+    for k, ax in enumerate(axs):
+        ax.plot([0, 1], [0, 1], "o-", label="a label of some length " + "x" * (10 * k))
+        legend = place_legend(ax, inside=0)
+        widths.append(legend.get_window_extent(fig.canvas.get_renderer()).width / fig.dpi)
+    assert fig.get_figwidth() == pytest.approx(6.0 + max(widths) + 0.3, rel=1e-6)
