@@ -245,8 +245,10 @@ def response_counts(frame: pd.DataFrame) -> pd.DataFrame:
 
 def plot_answered(frame: pd.DataFrame, x: str, y: str, ax=None, label: str | None = None, series=0, **kw):
     """A table of :func:`answered_table` drawn by :func:`nlgrd.plotting.nonlinear.plot_sweep_frame`:
-    periodic lines, period-ν rings, time answers as diamonds or stars with ±2σ bars, and the
-    points :data:`NOT_FOUND` as crosses on the bottom edge, "not found (n)" in the legend.
+    periodic lines, period-ν rings, torus answers as squares, time answers as diamonds or
+    stars with ±2σ bars (the up sweep's open, the down sweep's filled inside them: both show
+    where they coincide), and the points :data:`NOT_FOUND` as crosses on the bottom edge,
+    "not found (n)" in the legend.
 
     Parameters
     ----------
