@@ -729,3 +729,19 @@ def test_outside_legends_of_stacked_panels_widen_the_figure_once():
         legend = place_legend(ax, inside=0)
         widths.append(legend.get_window_extent(fig.canvas.get_renderer()).width / fig.dpi)
     assert fig.get_figwidth() == pytest.approx(6.0 + max(widths) + 0.3, rel=1e-6)
+
+
+def test_a_written_table_without_the_verdict_draws_its_torus_answers_apart(tmp_path):
+    """The reports write their answered tables without the ``verdict`` column (dte_fe.csv,
+    dslr_fe.csv). Read back and drawn, a quasi-periodic row with a value (a torus answer:
+    an unanswered quasi-periodic row has none, docs/conventions.md) was drawn as a periodic
+    point, joined to the lines. It must be a square of its own, counted, and on no line."""
+    frame = answered_frame(["torus", "time domain"]).drop(columns="verdict")
+    frame.to_csv(tmp_path / "t.csv", index=False)
+    back = pd.read_csv(tmp_path / "t.csv")
+    ax = plot_sweep_frame(back, X, Y, label="FE")
+    (square,) = by_label(ax, "FE up: quasi-periodic (torus HB) (1)")
+    assert square.get_marker() == "s" and list(square.get_xdata()) == [1000.0]
+    joined = [ln for ln in data_lines(ax) if ln.get_linestyle() not in ("None", "none")]
+    assert not any(np.isfinite(ln.get_ydata()).any() for ln in joined)  # no line: nothing periodic
+    assert not any("stability not computed" in ln.get_label() for ln in ax.get_lines())

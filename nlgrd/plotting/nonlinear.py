@@ -155,9 +155,13 @@ def plot_sweep_frame(
         codes = _stability(part)
         yv = np.where(conv, yv, np.nan)
         resp = part["response"].astype(str).to_numpy() if "response" in part else np.full(len(part), "")
-        if "verdict" in part:  # a torus answer: quasi-periodic, its stability "not computed"
+        # a torus answer: quasi-periodic, its stability "not computed"; in a table written
+        # without the verdict (the reports' CSVs), a quasi-periodic row with a value
+        if "verdict" in part:
             torus = (resp == QUASI_PERIODIC) & (part["verdict"].astype(str).to_numpy() == NOT_COMPUTED)
-            resp = np.where(torus & conv, TORUS_ANSWER[0], resp)
+        else:
+            torus = (resp == QUASI_PERIODIC) & np.isfinite(yv)
+        resp = np.where(torus & conv, TORUS_ANSWER[0], resp)
         timed = np.isin(resp, [k for k, _ in (*TIME_ANSWERS, TORUS_ANSWER)]) & conv
         yt, yv = np.where(timed, yv, np.nan), np.where(timed, np.nan, yv)  # never drawn as periodic
         colour = colours.get(d, next(iter(colours.values())))
