@@ -745,3 +745,18 @@ def test_a_written_table_without_the_verdict_draws_its_torus_answers_apart(tmp_p
     joined = [ln for ln in data_lines(ax) if ln.get_linestyle() not in ("None", "none")]
     assert not any(np.isfinite(ln.get_ydata()).any() for ln in joined)  # no line: nothing periodic
     assert not any("stability not computed" in ln.get_label() for ln in ax.get_lines())
+
+
+def test_a_legend_placed_before_the_first_draw_sees_the_data_where_it_is_drawn():
+    """Kubo's fig5b (fast run) had its 8-entry legend over the curve: before the first draw
+    matplotlib's axes still have their (0, 1) limits, so the data of a real sweep (speeds in
+    rpm, DSLR 1-5) lay off the axes when place_legend asked whether the legend covers a
+    point. Points filling the axes at such values, the legend must still leave the axes
+    (renderer extents after the layout, in pixels)."""
+    _, ax = plt.subplots()
+    xx, yy = np.meshgrid(np.linspace(2000.0, 14000.0, 30), np.linspace(1.5, 4.5, 30))
+    ax.plot(xx.ravel(), yy.ravel(), ".", ls="none", label="points")
+    legend = place_legend(ax)
+    ax.figure.tight_layout()
+    ax.figure.canvas.draw()
+    assert _extent(legend, ax.figure).x0 >= _extent(ax, ax.figure).x1 - 1e-6

@@ -278,6 +278,7 @@ def place_legend(ax, fontsize: float = 8, inside: int = LEGEND_INSIDE, **kwargs)
         labels = [h.get_label() for h in handles]
     if not handles:
         return None
+    ax.get_xlim(), ax.get_ylim()  # autoscale now: the data's pixels below are those drawn, not (0, 1)'s
     if len(handles) <= inside:
         legend = ax.legend(handles, labels, fontsize=fontsize, **kwargs)
         if kwargs.get("loc", "best") in ("best", 0) and "bbox_to_anchor" not in kwargs:
