@@ -55,7 +55,7 @@ LEGEND_INSIDE = 8
 #: Smallest marker size in a legend [pt] (:func:`readable_markers`).
 LEGEND_MARKER_MIN = 4.5
 #: Size of the down sweep's answer markers per the up sweep's (:func:`answer_marker_style`).
-DOWN_INSET = 0.55
+DOWN_INSET = 0.65
 #: Note of :func:`note_no_measurement`.
 NO_MEASUREMENT_TEXT = "no measured curve shipped\n(to add one: data/experimental/README.md)"
 

@@ -53,7 +53,7 @@ NO_STABLE = "no stable mesh-periodic response"
 TIME_ANSWERS = (("time domain", "D"), ("chaotic", "*"))
 #: Marker size of each kind drawn apart, per marker size of the stable points: a star's ink
 #: is thin, so it is drawn larger than a diamond or a square to read as well.
-ANSWER_SIZES = {"quasi-periodic (torus HB)": 1.3, "time domain": 1.4, "chaotic": 1.8}
+ANSWER_SIZES = {"quasi-periodic (torus HB)": 1.4, "time domain": 1.5, "chaotic": 1.8}
 #: Diameters of the period-ν rings per marker size: up outside, down inside it.
 RING_SIZES = {"up": 2.4, "down": 1.7}
 #: The ``verdict`` of a point whose stability was not computed (a torus answer's).
