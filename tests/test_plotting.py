@@ -28,6 +28,7 @@ from nlgrd.plotting.common import (  # noqa: E402
     LEGEND_INSIDE,
     LEGEND_MARKER_MIN,
     NC_HEIGHT,
+    NC_ROW,
     NO_MEASUREMENT_TEXT,
     SERIES_COLOURS,
     axis_label,
@@ -760,3 +761,26 @@ def test_a_legend_placed_before_the_first_draw_sees_the_data_where_it_is_drawn()
     ax.figure.tight_layout()
     ax.figure.canvas.draw()
     assert _extent(legend, ax.figure).x0 >= _extent(ax, ax.figure).x1 - 1e-6
+
+
+def test_up_and_down_points_not_found_at_one_speed_both_show():
+    """K&B's fig8 with the floor (fast run): the up and down sweeps' "not found" crosses at
+    the same speeds lay on one another, the down's red over the up's blue, though the
+    legend counted both. The down sweep's crosses lie a row (NC_ROW points) above; in the
+    rendered image both colours show at that speed, each over at least 10 px (a 5 pt cross
+    of 1.2 pt strokes at 100 dpi is ~40 px)."""
+    frame = sweep_frame(n=4)
+    frame["converged"] = [True, False, True, True, True, True, False, True]  # 333 Hz, both
+    fig, ax = plt.subplots(figsize=(4, 3), dpi=100)
+    plot_sweep_frame(frame, X, Y, ax=ax, label="FE", not_converged="not found")
+    (up,) = by_label(ax, "FE up: not found (1)")
+    (down,) = by_label(ax, "FE down: not found (1)")
+    fig.canvas.draw()
+    y_up, y_down = (ln.get_transform().transform((333.0, NC_HEIGHT))[1] for ln in (up, down))
+    assert y_down - y_up == pytest.approx(NC_ROW * fig.dpi / 72)
+    x_px = ax.transData.transform((frame.loc[1, X], 0.0))[0]
+    img = np.asarray(fig.canvas.buffer_rgba(), dtype=float)[..., :3] / 255
+    y_px = 0.5 * (y_up + y_down)
+    patch = img[int(img.shape[0] - y_px) - 12 : int(img.shape[0] - y_px) + 12, int(x_px) - 8 : int(x_px) + 8]
+    for rgb in (UP_RGB, DOWN_RGB):
+        assert np.all(np.abs(patch - np.asarray(rgb)) < 0.12, axis=-1).sum() >= 10

@@ -1,4 +1,4 @@
-"""Conventions shared by every nlgrd figure, and saving a figure with its caption.
+"""Conventions shared by every nlgrd figure (saving one with its caption: :mod:`.figure_files`).
 
 Sweeps and curves (:mod:`.nonlinear`, and the notebooks through it):
 
@@ -9,7 +9,8 @@ Sweeps and curves (:mod:`.nonlinear`, and the notebooks through it):
   half-filled (``fillstyle="bottom"``), joined by solid lines, and the legend says
   "stability not computed".
 - Points that did not converge: a cross on the bottom edge of the axes at their
-  frequency, counted in the legend ("... not converged (n)"), never a value.
+  frequency, counted in the legend ("... not converged (n)"), never a value; the down
+  sweep's a row above the up sweep's (:data:`NC_ROW`), so that both show at one speed.
 - Values beyond a given scale (``ylim``): a caret on the edge of the axes at their
   frequency, with the count and the largest value in the legend; the line breaks there
   instead of running off the axes.
@@ -31,10 +32,6 @@ Sweeps and curves (:mod:`.nonlinear`, and the notebooks through it):
 
 from __future__ import annotations
 
-import json
-import os
-from pathlib import Path
-
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
@@ -50,6 +47,8 @@ STABLE, UNSTABLE, UNKNOWN = 1, 0, -1
 UNKNOWN_TEXT = "stability not computed"
 #: Height of the not-converged crosses (axes fraction).
 NC_HEIGHT = 0.015
+#: Distance between rows of such marks [pt] (a mark is 5 pt wide).
+NC_ROW = 6.0
 #: Most legend entries drawn inside the axes (:func:`place_legend`).
 LEGEND_INSIDE = 8
 #: Smallest marker size in a legend [pt] (:func:`readable_markers`).
@@ -613,10 +612,13 @@ def draw_points(
     return artists
 
 
-def mark_not_converged(ax, x, colour: str, label: str, text: str = "not converged", marker: str = "x"):
+def mark_not_converged(
+    ax, x, colour: str, label: str, text: str = "not converged", marker: str = "x", row: int = 0
+):
     """Crosses (``marker``) on the bottom edge of the axes at ``x``, labelled ``"{label}: {text} (n)"``.
 
-    Returns the artist (None when ``x`` is empty).
+    Returns the artist (None when ``x`` is empty). Row ``row`` lies :data:`NC_ROW` points
+    above row 0, so that the marks of two series at one speed (up and down) both show.
 
     Parameters
     ----------
@@ -632,16 +634,21 @@ def mark_not_converged(ax, x, colour: str, label: str, text: str = "not converge
         What the marks stand for, in the legend entry.
     marker : str
         Matplotlib marker.
+    row : int
+        The row of marks (0 on the edge; the sweeps put the down sweep's in row 1).
 
     Returns
     -------
     matplotlib.lines.Line2D or None
         The marks, or None when ``x`` has no finite value.
     """
+    from matplotlib.transforms import ScaledTranslation
+
     x = np.asarray(x, dtype=float)
     x = x[np.isfinite(x)]
     if x.size == 0:
         return None
+    lift = ScaledTranslation(0.0, row * NC_ROW / 72.0, ax.figure.dpi_scale_trans)
     (ln,) = ax.plot(
         x,
         np.full(x.size, NC_HEIGHT),
@@ -650,7 +657,7 @@ def mark_not_converged(ax, x, colour: str, label: str, text: str = "not converge
         ms=5,
         mew=1.2,
         color=colour,
-        transform=ax.get_xaxis_transform(),
+        transform=ax.get_xaxis_transform() + lift,
         clip_on=False,
         zorder=5,
         label=f"{label}: {text} ({x.size})",
@@ -724,74 +731,3 @@ def clip_to_scale(ax, x, y, ylim, colour: str, label: str, codes=None) -> tuple[
         artists.append(mk)
         y[off] = np.nan
     return y, artists
-
-
-def headless() -> None:
-    """Draw without a display (the Agg backend): for scripts and report builds."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-
-
-FIGURES_FILE = "figures.json"
-
-
-def _write_atomic(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_bytes(data)
-    os.replace(tmp, path)
-
-
-def record_caption(path: str | os.PathLike, caption: str) -> None:
-    """Record ``caption`` for the figure file ``path`` in ``figures.json`` beside it.
-
-    The file maps figure names to one-sentence descriptions (what the figure compares);
-    the report index (:mod:`nlgrd.studies.reports`) shows them.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The figure file; its name is the key in ``figures.json``.
-    caption : str
-        One sentence; runs of whitespace are collapsed to single spaces.
-    """
-    path = Path(path)
-    index = path.parent / FIGURES_FILE
-    captions = json.loads(index.read_text(encoding="utf-8")) if index.exists() else {}
-    captions[path.name] = " ".join(caption.split())
-    text = json.dumps(dict(sorted(captions.items())), indent=1, ensure_ascii=False) + "\n"
-    _write_atomic(index, text.encode("utf-8"))
-
-
-def save_figure(fig, path: str | os.PathLike, caption: str | None = None, dpi: int = 110) -> Path:
-    """Save ``fig`` as PNG at ``path`` (tight layout, written atomically); returns the path.
-
-    With ``caption`` (one sentence: what the figure compares) it is recorded in
-    ``figures.json`` beside the figure (:func:`record_caption`).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure to save.
-    path : str or os.PathLike
-        The output file (the format follows its suffix); missing parent directories are
-        created.
-    caption : str, optional
-        One sentence recorded in ``figures.json`` (None or empty: none recorded).
-    dpi : int
-        Resolution [dots per inch].
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.tight_layout()
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    fig.savefig(tmp, dpi=dpi)
-    os.replace(tmp, path)
-    if caption:
-        record_caption(path, caption)
-    return path

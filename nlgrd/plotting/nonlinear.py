@@ -181,9 +181,9 @@ def plot_sweep_frame(
             lw=lw,
             alpha=alpha,
         )
-        mark_not_converged(ax, xv[~conv], colour, name, not_converged)
+        inner = d == "down"  # its answers inside the up sweep's, its edge marks a row above
+        mark_not_converged(ax, xv[~conv], colour, name, not_converged, row=int(inner))
         if "response" in part:
-            inner = d == "down"  # its answers inside the up sweep's where they coincide
             _mark_responses(ax, resp, conv, xv, yv, colour, name, ms, inner)
             err = _uncertainty_column(y)
             ev = pd.to_numeric(part[err], errors="coerce").to_numpy(float) if err in part else None
@@ -198,7 +198,8 @@ def plot_sweep_frame(
 def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms, inner=False) -> None:
     """Period-ν points ringed where they are drawn (the down sweep's ring inside the up
     sweep's, ``inner``); points without a stable periodic response (quasi-periodic, or none
-    found) and no time answer marked on the bottom edge, each kind counted."""
+    found) and no time answer marked on the bottom edge (the down sweep's a row above),
+    each kind counted."""
     resp = np.asarray(resp, dtype=str)
     period = np.char.startswith(resp, "period ")
     ring = RING_SIZES["down" if inner else "up"] * ms
@@ -211,8 +212,11 @@ def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms, inner=False) -> No
     answered = (*(k for k, _ in TIME_ANSWERS), TORUS_ANSWER[0])
     lost = conv & ~period & ~np.isin(resp, (PERIODIC, "<NA>", "nan", *answered))
     quasi = resp == QUASI_PERIODIC
-    mark_not_converged(ax, xv[lost & quasi], colour, name, "quasi-periodic", marker="2")
-    mark_not_converged(ax, xv[lost & ~quasi], colour, name, "no stable periodic response", marker="1")
+    row = int(inner)
+    mark_not_converged(ax, xv[lost & quasi], colour, name, "quasi-periodic", marker="2", row=row)
+    mark_not_converged(
+        ax, xv[lost & ~quasi], colour, name, "no stable periodic response", marker="1", row=row
+    )
 
 
 def _uncertainty_column(column: str) -> str:
