@@ -1,11 +1,14 @@
 """Every speed of a report's sweep answered, or marked "not found".
 
 A harmonic-balance sweep leaves gaps where no stable periodic orbit exists. The reports
-answer them in the time domain (:func:`nlgrd.timedomain.sweep_answers.with_time_answers`:
-"time domain" or "chaotic", each value with its sampling uncertainty), here on several
-processes: each point's answer depends on that point alone (its own unstable orbit as
-the start, a fixed seed for the Lyapunov twin, one BLAS thread), so the rows are split
-among the workers and put back in place, the same numbers as one process gives.
+answer a Neimark-Sacker point by the torus harmonic balance where it converges, each
+direction on a process of its own (a direction's tori are followed along it only:
+:func:`torus_answers_in_parallel`), and every other gap in the time domain
+(:func:`nlgrd.timedomain.sweep_answers.with_time_answers`: "time domain" or "chaotic",
+each value with its sampling uncertainty), here on several processes: each point's
+answer depends on that point alone (its own unstable orbit as the start, a fixed seed for
+the Lyapunov twin, one BLAS thread), so the rows are split among the workers and put back
+in place, the same numbers as one process gives.
 
 The table of a report then says for every point what answers it (its ``response``):
 "periodic", "period ν", "time domain", "chaotic" (or "quasi-periodic" where that kind
