@@ -1,11 +1,13 @@
 """Figures a reader can trust at a glance: the artists of the sweep and Campbell plots.
 
-Small synthetic result tables (never pixels): up and down sweeps get different colours;
+Small synthetic result tables, checked on the artists (on the rendered pixels only where
+the question is whether a marker can be seen): up and down sweeps get different colours;
 unstable points open markers and dashed lines; unknown stability (NaN, None, or False
 without Floquet multipliers) half-filled markers and the words "stability not computed"
 in the legend; non-converged points (NaN values, as the sweeps write them) crosses on the
 bottom edge counted in the legend; values beyond the scale carets at the axis limit with
-a note; Campbell curves broken where the whirl or kind changes or two modes come close.
+a note; Campbell curves broken where the whirl or kind changes or two modes come close;
+up and down answers at one speed both visible; legends naming only what is drawn.
 """
 
 from __future__ import annotations
