@@ -1,11 +1,13 @@
 """Figures a reader can trust at a glance: the artists of the sweep and Campbell plots.
 
-Small synthetic result tables (never pixels): up and down sweeps get different colours;
+Small synthetic result tables, checked on the artists (on the rendered pixels only where
+the question is whether a marker can be seen): up and down sweeps get different colours;
 unstable points open markers and dashed lines; unknown stability (NaN, None, or False
 without Floquet multipliers) half-filled markers and the words "stability not computed"
 in the legend; non-converged points (NaN values, as the sweeps write them) crosses on the
 bottom edge counted in the legend; values beyond the scale carets at the axis limit with
-a note; Campbell curves broken where the whirl or kind changes or two modes come close.
+a note; Campbell curves broken where the whirl or kind changes or two modes come close;
+up and down answers at one speed both visible; legends naming only what is drawn.
 """
 
 from __future__ import annotations
@@ -26,11 +28,16 @@ from matplotlib.colors import to_rgba  # noqa: E402
 from nlgrd.plotting import save_figure  # noqa: E402
 from nlgrd.plotting.common import (  # noqa: E402
     LEGEND_INSIDE,
+    LEGEND_MARKER_MIN,
     NC_HEIGHT,
+    NC_ROW,
     NO_MEASUREMENT_TEXT,
+    SERIES_COLOURS,
     axis_label,
+    drawn_entries,
     note_no_measurement,
     place_legend,
+    plot_counted,
     stability_codes,
 )
 from nlgrd.plotting.nonlinear import plot_continuation, plot_sweep, plot_sweep_frame  # noqa: E402
@@ -583,3 +590,199 @@ def test_a_short_legend_that_would_cover_points_goes_outside():
     ax.figure.canvas.draw()
     assert len(legend.get_texts()) == 1
     assert _extent(legend, ax.figure).x0 >= _extent(ax, ax.figure).x1 - 1e-6
+
+
+# Issue 35, item 4: every figure of the answered sweeps legible (the reports and `nlgrd sweep`
+# share these helpers). The first test looks at pixels: whether a marker can be seen is a
+# property of the rendered image, not of one artist.
+
+UP_RGB, DOWN_RGB = (to_rgba(c)[:3] for c in SERIES_COLOURS[0])
+
+
+def answered_frame(kinds, ms_y=1.0):
+    """Up and down rows at the same speeds, one per kind, with the same value in both
+    directions (the coincidence a report shows where both sweeps reach the same attractor).
+    Torus rows carry the verdict "not computed", as SweepResult.to_frame writes it."""
+    f = 1000.0 + 100.0 * np.arange(len(kinds))
+    rows = []
+    for d in ("up", "down"):
+        for x, kind in zip(f, kinds, strict=True):
+            torus = kind == "torus"
+            rows.append(
+                {X: x, "direction": d, "converged": True, "stable": pd.NA, "floquet_max [-]": np.nan,
+                 Y: ms_y + x / 1000, "response": "quasi-periodic" if torus else kind,
+                 "verdict": "not computed" if torus else "unstable"}
+            )  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def colour_pixels(fig, ax, x, y, rgb, half=25, tol=0.12):
+    """Pixels within ``half`` px of the data point (x, y) whose colour is within ``tol`` of
+    ``rgb`` in every channel (antialiased edges blend with white, so they do not count)."""
+    fig.canvas.draw()
+    img = np.asarray(fig.canvas.buffer_rgba(), dtype=float)[..., :3] / 255
+    px, py = ax.transData.transform((x, y))
+    row, col = int(round(img.shape[0] - py)), int(round(px))
+    patch = img[max(row - half, 0) : row + half, max(col - half, 0) : col + half]
+    return int(np.all(np.abs(patch - np.asarray(rgb)) < tol, axis=-1).sum())
+
+
+@pytest.mark.parametrize("kind", ["time domain", "chaotic", "torus"])
+def test_up_and_down_answers_at_one_speed_are_both_visible(kind):
+    """Issue 35, item 4: where the up and down sweeps are answered at the same speed with the
+    same value, the down marker used to be drawn over the up one, the same open shape: the
+    up answer disappeared. Now the up marker is open and large, the down one filled, smaller
+    and above it: at the point the rendered image must show both colours, each over at least
+    15 px (the up outline of a 1.4 x 10 pt diamond at 100 dpi is ~80 px; a hidden one leaves
+    only antialiased fringes, which the colour tolerance excludes). A point where only the
+    down answer lies must show no up colour (the check can fail)."""
+    frame = answered_frame([kind, kind])
+    frame = frame[~((frame["direction"] == "up") & (frame[X] == 1100.0))]  # down alone at 1100 Hz
+    fig, ax = plt.subplots(figsize=(4, 3), dpi=100)
+    plot_sweep_frame(frame, X, Y, ax=ax, label="FE", ms=10)
+    ax.set_xlim(900, 1200)
+    ax.set_ylim(1.8, 2.3)
+    assert colour_pixels(fig, ax, 1000.0, 2.0, UP_RGB) >= 15
+    assert colour_pixels(fig, ax, 1000.0, 2.0, DOWN_RGB) >= 15
+    assert colour_pixels(fig, ax, 1100.0, 2.1, UP_RGB) == 0
+    assert colour_pixels(fig, ax, 1100.0, 2.1, DOWN_RGB) >= 15
+
+
+def test_period_two_rings_of_up_and_down_are_concentric():
+    """Up and down period-2 rings at one speed: the up ring is the larger, so that the down
+    ring (drawn on top) lies inside it instead of over it; both open (the orbit's marker
+    shows through)."""
+    frame = sweep_frame(n=4)
+    frame["response"] = "period 2"
+    ax = plot_sweep_frame(frame, X, Y, label="FE")
+    (up,) = by_label(ax, "FE up: period 2 (4)")
+    (down,) = by_label(ax, "FE down: period 2 (4)")
+    assert up.get_markersize() > down.get_markersize() + 1.0  # pt: the down ring clear inside
+    assert up.get_markerfacecolor() == "none" and down.get_markerfacecolor() == "none"
+
+
+def test_chaotic_stars_are_larger_than_the_other_answers():
+    """Issue 35, item 4: the chaotic stars read too small at the default size (1.3 ms, as the
+    diamonds); a star's ink is thin, so it is drawn at 1.8 x the marker size of the stable
+    points, the up star (the open, outer one) at exactly that size."""
+    frame = answered_frame(["chaotic", "time domain"])
+    for ms in (3.5, 5.0):
+        _, ax = plt.subplots()
+        plot_sweep_frame(frame, X, Y, ax=ax, label="FE", ms=ms)
+        bars = {c.get_label(): c[0] for c in ax.containers}  # error bars: (data line, caps, bars)
+        star, diamond = bars["FE up: chaotic (1; ±2σ)"], bars["FE up: time domain (1; ±2σ)"]
+        assert star.get_marker() == "*" and diamond.get_marker() == "D"
+        assert star.get_markersize() == pytest.approx(1.8 * ms)
+        assert star.get_markersize() > diamond.get_markersize()
+
+
+def test_a_legend_names_only_the_kinds_drawn_with_their_counts():
+    """Issue 35, item 4: Kubo's fig5b listed "up: period-2 orbits" where no period-2 orbit
+    was drawn. place_legend leaves out every artist without a finite point (keeping the
+    text-only note that no measurement is shipped); plot_counted draws nothing for an empty
+    kind and counts the points it draws; a period-2 kind wholly beyond the scale gets no
+    ring entry (its carets say it)."""
+    _, ax = plt.subplots()
+    note_no_measurement(ax)
+    ax.plot([], [], "^", label="up: period-2 orbits")  # what the notebook drew
+    ax.plot([np.nan], [np.nan], "v", label="down: nothing finite")
+    assert plot_counted(ax, [1.0, 2.0], [np.nan, np.nan], "^", "up: empty") is None
+    plot_counted(ax, [1.0, 2.0, 3.0], [1.0, np.nan, 3.0], "v", "down: period-2 orbits")
+    texts = [t.get_text() for t in place_legend(ax).get_texts()]
+    assert texts == [NO_MEASUREMENT_TEXT, "down: period-2 orbits (2)"]
+    assert drawn_entries(ax)[1] == texts
+    frame = sweep_frame(n=4)
+    frame["response"] = "period 2"
+    ax = plot_sweep_frame(frame, X, Y, label="FE", ylim=(0, 1))  # every value above 1
+    labels = [ln.get_label() for ln in ax.get_lines()]
+    assert not any("period 2" in t for t in labels)
+    assert any("above the scale" in t for t in labels)
+
+
+def test_legend_lists_error_bar_kinds_in_drawing_order():
+    """matplotlib lists error-bar containers after every line, so the time answers' entries
+    came after the landmarks drawn later (fig5 of notebook 01): the legend follows the order
+    in which the kinds were drawn."""
+    ax = plot_sweep_frame(answered_frame(["time domain"]), X, Y, label="FE")
+    ax.axvline(1000.0, label="gear-pair mode")
+    texts = drawn_entries(ax)[1]
+    assert texts.index("FE up: time domain (1; ±2σ)") < texts.index("gear-pair mode")
+    assert texts.index("FE down: time domain (1; ±2σ)") < texts.index("gear-pair mode")
+
+
+def test_legend_markers_are_readable_while_the_curve_keeps_its_dots():
+    """The damping-band figures draw their thin curves with 1.5 pt markers, unreadable as
+    legend keys: the legend's copies are drawn at LEGEND_MARKER_MIN at least, the axes'
+    markers keep their size."""
+    ax = plot_sweep_frame(sweep_frame(), X, Y, label="thin", ms=1.5)
+    legend = place_legend(ax)
+    sizes = [h.get_markersize() for h in legend.legend_handles if h.get_marker() not in ("", "None", None)]
+    assert sizes and min(sizes) >= LEGEND_MARKER_MIN
+    assert {ln.get_markersize() for ln in by_label(ax, "thin up")} == {1.5}
+
+
+def test_outside_legends_of_stacked_panels_widen_the_figure_once():
+    """A stacked figure (K&B's fig8 with the floor, two panels, each legend outside) was
+    widened by every panel's legend: the axes shrank to make room for legends that share
+    one column. The figure grows by the widest legend of the column only."""
+    fig, axs = plt.subplots(2, 1, figsize=(6.0, 6.0))
+    widths = []
+    for k, ax in enumerate(axs):
+        ax.plot([0, 1], [0, 1], "o-", label="a label of some length " + "x" * (10 * k))
+        legend = place_legend(ax, inside=0)
+        widths.append(legend.get_window_extent(fig.canvas.get_renderer()).width / fig.dpi)
+    assert fig.get_figwidth() == pytest.approx(6.0 + max(widths) + 0.3, rel=1e-6)
+
+
+def test_a_written_table_without_the_verdict_draws_its_torus_answers_apart(tmp_path):
+    """The reports write their answered tables without the ``verdict`` column (dte_fe.csv,
+    dslr_fe.csv). Read back and drawn, a quasi-periodic row with a value (a torus answer:
+    an unanswered quasi-periodic row has none, docs/conventions.md) was drawn as a periodic
+    point, joined to the lines. It must be a square of its own, counted, and on no line."""
+    frame = answered_frame(["torus", "time domain"]).drop(columns="verdict")
+    frame.to_csv(tmp_path / "t.csv", index=False)
+    back = pd.read_csv(tmp_path / "t.csv")
+    ax = plot_sweep_frame(back, X, Y, label="FE")
+    (square,) = by_label(ax, "FE up: quasi-periodic (torus HB) (1)")
+    assert square.get_marker() == "s" and list(square.get_xdata()) == [1000.0]
+    joined = [ln for ln in data_lines(ax) if ln.get_linestyle() not in ("None", "none")]
+    assert not any(np.isfinite(ln.get_ydata()).any() for ln in joined)  # no line: nothing periodic
+    assert not any("stability not computed" in ln.get_label() for ln in ax.get_lines())
+
+
+def test_a_legend_placed_before_the_first_draw_sees_the_data_where_it_is_drawn():
+    """Kubo's fig5b (fast run) had its 8-entry legend over the curve: before the first draw
+    matplotlib's axes still have their (0, 1) limits, so the data of a real sweep (speeds in
+    rpm, DSLR 1-5) lay off the axes when place_legend asked whether the legend covers a
+    point. Points filling the axes at such values, the legend must still leave the axes
+    (renderer extents after the layout, in pixels)."""
+    _, ax = plt.subplots()
+    xx, yy = np.meshgrid(np.linspace(2000.0, 14000.0, 30), np.linspace(1.5, 4.5, 30))
+    ax.plot(xx.ravel(), yy.ravel(), ".", ls="none", label="points")
+    legend = place_legend(ax)
+    ax.figure.tight_layout()
+    ax.figure.canvas.draw()
+    assert _extent(legend, ax.figure).x0 >= _extent(ax, ax.figure).x1 - 1e-6
+
+
+def test_up_and_down_points_not_found_at_one_speed_both_show():
+    """K&B's fig8 with the floor (fast run): the up and down sweeps' "not found" crosses at
+    the same speeds lay on one another, the down's red over the up's blue, though the
+    legend counted both. The down sweep's crosses lie a row (NC_ROW points) above; in the
+    rendered image both colours show at that speed, each over at least 10 px (a 5 pt cross
+    of 1.2 pt strokes at 100 dpi is ~40 px)."""
+    frame = sweep_frame(n=4)
+    frame["converged"] = [True, False, True, True, True, True, False, True]  # 333 Hz, both
+    fig, ax = plt.subplots(figsize=(4, 3), dpi=100)
+    plot_sweep_frame(frame, X, Y, ax=ax, label="FE", not_converged="not found")
+    (up,) = by_label(ax, "FE up: not found (1)")
+    (down,) = by_label(ax, "FE down: not found (1)")
+    fig.canvas.draw()
+    y_up, y_down = (ln.get_transform().transform((333.0, NC_HEIGHT))[1] for ln in (up, down))
+    assert y_down - y_up == pytest.approx(NC_ROW * fig.dpi / 72)
+    x_px = ax.transData.transform((frame.loc[1, X], 0.0))[0]
+    img = np.asarray(fig.canvas.buffer_rgba(), dtype=float)[..., :3] / 255
+    y_px = 0.5 * (y_up + y_down)
+    patch = img[int(img.shape[0] - y_px) - 12 : int(img.shape[0] - y_px) + 12, int(x_px) - 8 : int(x_px) + 8]
+    for rgb in (UP_RGB, DOWN_RGB):
+        assert np.all(np.abs(patch - np.asarray(rgb)) < 0.12, axis=-1).sum() >= 10

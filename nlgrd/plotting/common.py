@@ -1,4 +1,4 @@
-"""Conventions shared by every nlgrd figure, and saving a figure with its caption.
+"""Conventions shared by every nlgrd figure (saving one with its caption: :mod:`.figure_files`).
 
 Sweeps and curves (:mod:`.nonlinear`, and the notebooks through it):
 
@@ -9,7 +9,8 @@ Sweeps and curves (:mod:`.nonlinear`, and the notebooks through it):
   half-filled (``fillstyle="bottom"``), joined by solid lines, and the legend says
   "stability not computed".
 - Points that did not converge: a cross on the bottom edge of the axes at their
-  frequency, counted in the legend ("... not converged (n)"), never a value.
+  frequency, counted in the legend ("... not converged (n)"), never a value; the down
+  sweep's a row above the up sweep's (:data:`NC_ROW`), so that both show at one speed.
 - Values beyond a given scale (``ylim``): a caret on the edge of the axes at their
   frequency, with the count and the largest value in the legend; the line breaks there
   instead of running off the axes.
@@ -18,15 +19,18 @@ Sweeps and curves (:mod:`.nonlinear`, and the notebooks through it):
 - Axis labels are words with units, never raw table columns (:func:`axis_label`).
 - Legends with more than :data:`LEGEND_INSIDE` entries go outside the axes, on the right
   (:func:`place_legend`), so that they never cover the curves.
+- A legend names only what is drawn (:func:`drawn_entries`): an artist without a finite
+  point gets no entry, and a count in an entry is that of the points drawn.
+- Up and down answers at the same speed both stay visible: the up sweep's answer markers
+  (not joined: torus, time domain, chaotic) are open and large, the down sweep's filled,
+  :data:`DOWN_INSET` of that size and drawn above them, so that a coinciding pair reads
+  as a filled core in an open outline of the other colour (:func:`answer_marker_style`);
+  period-ν rings likewise, the down ring inside the up one.
 - A figure of a case the paper compared with measurements says on it when no measured
   curve is loaded (:func:`note_no_measurement`).
 """
 
 from __future__ import annotations
-
-import json
-import os
-from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -43,8 +47,14 @@ STABLE, UNSTABLE, UNKNOWN = 1, 0, -1
 UNKNOWN_TEXT = "stability not computed"
 #: Height of the not-converged crosses (axes fraction).
 NC_HEIGHT = 0.015
+#: Distance between rows of such marks [pt] (a mark is 5 pt wide).
+NC_ROW = 6.0
 #: Most legend entries drawn inside the axes (:func:`place_legend`).
 LEGEND_INSIDE = 8
+#: Smallest marker size in a legend [pt] (:func:`readable_markers`).
+LEGEND_MARKER_MIN = 4.5
+#: Size of the down sweep's answer markers per the up sweep's (:func:`answer_marker_style`).
+DOWN_INSET = 0.65
 #: Note of :func:`note_no_measurement`.
 NO_MEASUREMENT_TEXT = "no measured curve shipped\n(to add one: data/experimental/README.md)"
 
@@ -128,9 +138,121 @@ def axis_label(column: str) -> str:
     return f"{text} [{unit}]" if unit else text
 
 
+def _shows_something(artist) -> bool:
+    """Whether a legend handle draws anything on the axes: a line or marker with a finite
+    point, a patch, a collection with an element; a note (no marker, no line) counts."""
+    from matplotlib.collections import Collection, PathCollection
+    from matplotlib.container import Container
+    from matplotlib.lines import Line2D
+
+    if isinstance(artist, Container):
+        return any(_shows_something(a) for a in artist.get_children() if a is not None)
+    if isinstance(artist, Line2D):
+        marker = artist.get_marker()
+        no_marker = marker in (None, "", " ", "None", "none")
+        if no_marker and artist.get_linestyle() in ("None", "none", "", " "):
+            return True  # a text entry (note_no_measurement)
+        xy = np.column_stack([np.asarray(artist.get_xdata(), float), np.asarray(artist.get_ydata(), float)])
+        return bool(np.all(np.isfinite(xy), axis=1).any()) if xy.size else False
+    if isinstance(artist, PathCollection):  # scatter: one marker path, a point per offset
+        off = np.asarray(artist.get_offsets(), float).reshape(-1, 2)
+        return bool(np.all(np.isfinite(off), axis=1).any())
+    if isinstance(artist, Collection):
+        return len(artist.get_paths()) > 0
+    return True
+
+
+def drawn_entries(ax) -> tuple[list, list]:
+    """The legend entries of ``ax`` whose artists draw something: a kind that was not drawn
+    (e.g. a series with no finite point) gets no entry.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes whose labelled artists make the legend.
+
+    Returns
+    -------
+    handles : list
+        The artists (lines, containers, patches) with at least one drawn element.
+    labels : list of str
+        Their labels.
+    """
+    from matplotlib.container import Container
+
+    handles, labels = ax.get_legend_handles_labels()
+    keep = [i for i, h in enumerate(handles) if _shows_something(h)]
+    # in the order drawn (matplotlib lists containers, e.g. error bars, after every line)
+    children = {id(a): k for k, a in enumerate(ax.get_children())}
+
+    def drawn_at(h):
+        parts = [a for a in h.get_children() if a is not None] if isinstance(h, Container) else [h]
+        return min((children.get(id(a), len(children)) for a in parts), default=len(children))
+
+    keep.sort(key=lambda i: drawn_at(handles[i]))
+    return [handles[i] for i in keep], [labels[i] for i in keep]
+
+
+def plot_counted(ax, x, y, fmt: str, label: str, **kwargs):
+    """The points of one kind at their finite (x, y), not joined, labelled ``"{label} (n)"``
+    with n the points drawn; nothing (no legend entry either) when there is none.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    x, y : array_like
+        Coordinates; points with a non-finite one are left out.
+    fmt : str
+        Matplotlib marker (format string of one marker).
+    label : str
+        What the points are, in the legend.
+    **kwargs
+        Other options of ``ax.plot`` (colour, ``ms``, ``mfc`` ...).
+
+    Returns
+    -------
+    matplotlib.lines.Line2D or None
+        The points, or None when none is finite.
+    """
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    ok = np.isfinite(x) & np.isfinite(y)
+    if not ok.any():
+        return None
+    (line,) = ax.plot(x[ok], y[ok], fmt, ls="none", label=f"{label} ({int(ok.sum())})", **kwargs)
+    return line
+
+
+def answer_marker_style(ms: float, scale: float, inner: bool) -> dict:
+    """Marker options of an answer drawn as a point (torus, time domain, chaotic): the up
+    sweep's (``inner`` False) open, ``scale * ms`` wide; the down sweep's (``inner``) filled,
+    :data:`DOWN_INSET` of that and drawn above, so that both stay visible where they coincide.
+
+    Parameters
+    ----------
+    ms : float
+        Marker size of the sweep's stable points [pt].
+    scale : float
+        The answer kind's size per ``ms`` [-].
+    inner : bool
+        The down sweep's marker (filled, smaller, on top).
+
+    Returns
+    -------
+    dict
+        ``ms``, ``mew``, ``zorder``, ``filled`` (whether the face takes the colour) and the
+        error bars' ``elinewidth`` (the down sweep's thinner, on top of the up sweep's).
+    """
+    size = scale * ms
+    if inner:
+        return {"ms": DOWN_INSET * size, "mew": 0.6, "zorder": 3.2, "filled": True, "elinewidth": 0.7}
+    return {"ms": size, "mew": 1.4, "zorder": 3.0, "filled": False, "elinewidth": 1.5}
+
+
 def place_legend(ax, fontsize: float = 8, inside: int = LEGEND_INSIDE, **kwargs):
     """The legend of ``ax``: inside (best place) up to ``inside`` entries if it covers no drawn
-    point there, else outside on the right.
+    point there, else outside on the right; only the entries of artists that draw something
+    (:func:`drawn_entries`).
 
     Parameters
     ----------
@@ -150,34 +272,77 @@ def place_legend(ax, fontsize: float = 8, inside: int = LEGEND_INSIDE, **kwargs)
     """
     handles, labels = kwargs.pop("handles", None), kwargs.pop("labels", None)
     if handles is None:
-        handles, labels = ax.get_legend_handles_labels()
+        handles, labels = drawn_entries(ax)
     elif labels is None:
         labels = [h.get_label() for h in handles]
     if not handles:
         return None
+    ax.get_xlim(), ax.get_ylim()  # autoscale now: the data's pixels below are those drawn, not (0, 1)'s
     if len(handles) <= inside:
         legend = ax.legend(handles, labels, fontsize=fontsize, **kwargs)
+        if kwargs.get("loc", "best") in ("best", 0) and "bbox_to_anchor" not in kwargs:
+            # "best" is chosen again at each draw: after tight_layout it may move onto points
+            kwargs["loc"] = _where(ax, legend)
+            legend = ax.legend(handles, labels, fontsize=fontsize, **kwargs)
         if not _covers_points(ax, legend):
-            return legend
+            return readable_markers(legend)
     kwargs.pop("loc", None)
     kwargs.pop("bbox_to_anchor", None)
     outside = {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "borderaxespad": 0}
     legend = ax.legend(handles, labels, fontsize=fontsize, **outside, **kwargs)
     _widen_for(ax, legend)
+    return readable_markers(legend)
+
+
+def readable_markers(legend, size: float = LEGEND_MARKER_MIN):
+    """Draw the legend's markers at least ``size`` wide (a dense curve's 1.5 pt dots cannot be
+    told apart in a legend); the markers on the axes keep their size.
+
+    Parameters
+    ----------
+    legend : matplotlib.legend.Legend or None
+        The legend (None: nothing to do).
+    size : float
+        Smallest marker size in the legend [pt].
+
+    Returns
+    -------
+    matplotlib.legend.Legend or None
+        ``legend``.
+    """
+    from matplotlib.lines import Line2D
+
+    if legend is None:
+        return None
+    for handle in legend.legend_handles:
+        if isinstance(handle, Line2D) and 0 < handle.get_markersize() < size:
+            handle.set_markersize(size)
     return legend
+
+
+def _where(ax, legend) -> str:
+    """The named location (of the nine "best" chooses from) of ``legend`` as placed now."""
+    renderer = ax.figure.canvas.get_renderer()
+    box, axes = legend.get_window_extent(renderer), ax.get_window_extent(renderer)
+    col = int(np.clip(3 * ((box.x0 + box.x1) / 2 - axes.x0) / axes.width, 0, 2))
+    row = int(np.clip(3 * ((box.y0 + box.y1) / 2 - axes.y0) / axes.height, 0, 2))
+    name = f"{('lower', 'center', 'upper')[row]} {('left', 'center', 'right')[col]}"
+    return "center" if name == "center center" else name
 
 
 def _widen_for(ax, legend) -> None:
     """Widen the figure by the width of an outside legend, so that the axes keep their size.
 
-    The width added is kept on the axes: a legend redrawn on the same axes widens the
-    figure only by what it adds."""
+    The widths added are kept on the figure, per column of axes (their right edge): a legend
+    redrawn on the same axes, or beside another panel of the same column, widens the figure
+    only by what it adds to the widest legend of that column."""
     fig = ax.figure
     width = legend.get_window_extent(fig.canvas.get_renderer()).width / fig.dpi + 0.3  # [in], with the gap
-    added = getattr(ax, "_nlgrd_legend_width", 0.0)
-    if width > added:
-        fig.set_size_inches(fig.get_figwidth() + width - added, fig.get_figheight())
-        ax._nlgrd_legend_width = width
+    added = fig.__dict__.setdefault("_nlgrd_legend_widths", {})
+    column = round(float(ax.get_position().x1), 3)
+    if width > added.get(column, 0.0):
+        fig.set_size_inches(fig.get_figwidth() + width - added.get(column, 0.0), fig.get_figheight())
+        added[column] = width
 
 
 def _covers_points(ax, legend) -> bool:
@@ -447,10 +612,13 @@ def draw_points(
     return artists
 
 
-def mark_not_converged(ax, x, colour: str, label: str, text: str = "not converged", marker: str = "x"):
+def mark_not_converged(
+    ax, x, colour: str, label: str, text: str = "not converged", marker: str = "x", row: int = 0
+):
     """Crosses (``marker``) on the bottom edge of the axes at ``x``, labelled ``"{label}: {text} (n)"``.
 
-    Returns the artist (None when ``x`` is empty).
+    Returns the artist (None when ``x`` is empty). Row ``row`` lies :data:`NC_ROW` points
+    above row 0, so that the marks of two series at one speed (up and down) both show.
 
     Parameters
     ----------
@@ -466,16 +634,21 @@ def mark_not_converged(ax, x, colour: str, label: str, text: str = "not converge
         What the marks stand for, in the legend entry.
     marker : str
         Matplotlib marker.
+    row : int
+        The row of marks (0 on the edge; the sweeps put the down sweep's in row 1).
 
     Returns
     -------
     matplotlib.lines.Line2D or None
         The marks, or None when ``x`` has no finite value.
     """
+    from matplotlib.transforms import ScaledTranslation
+
     x = np.asarray(x, dtype=float)
     x = x[np.isfinite(x)]
     if x.size == 0:
         return None
+    lift = ScaledTranslation(0.0, row * NC_ROW / 72.0, ax.figure.dpi_scale_trans)
     (ln,) = ax.plot(
         x,
         np.full(x.size, NC_HEIGHT),
@@ -484,7 +657,7 @@ def mark_not_converged(ax, x, colour: str, label: str, text: str = "not converge
         ms=5,
         mew=1.2,
         color=colour,
-        transform=ax.get_xaxis_transform(),
+        transform=ax.get_xaxis_transform() + lift,
         clip_on=False,
         zorder=5,
         label=f"{label}: {text} ({x.size})",
@@ -558,74 +731,3 @@ def clip_to_scale(ax, x, y, ylim, colour: str, label: str, codes=None) -> tuple[
         artists.append(mk)
         y[off] = np.nan
     return y, artists
-
-
-def headless() -> None:
-    """Draw without a display (the Agg backend): for scripts and report builds."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-
-
-FIGURES_FILE = "figures.json"
-
-
-def _write_atomic(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_bytes(data)
-    os.replace(tmp, path)
-
-
-def record_caption(path: str | os.PathLike, caption: str) -> None:
-    """Record ``caption`` for the figure file ``path`` in ``figures.json`` beside it.
-
-    The file maps figure names to one-sentence descriptions (what the figure compares);
-    the report index (:mod:`nlgrd.studies.reports`) shows them.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The figure file; its name is the key in ``figures.json``.
-    caption : str
-        One sentence; runs of whitespace are collapsed to single spaces.
-    """
-    path = Path(path)
-    index = path.parent / FIGURES_FILE
-    captions = json.loads(index.read_text(encoding="utf-8")) if index.exists() else {}
-    captions[path.name] = " ".join(caption.split())
-    text = json.dumps(dict(sorted(captions.items())), indent=1, ensure_ascii=False) + "\n"
-    _write_atomic(index, text.encode("utf-8"))
-
-
-def save_figure(fig, path: str | os.PathLike, caption: str | None = None, dpi: int = 110) -> Path:
-    """Save ``fig`` as PNG at ``path`` (tight layout, written atomically); returns the path.
-
-    With ``caption`` (one sentence: what the figure compares) it is recorded in
-    ``figures.json`` beside the figure (:func:`record_caption`).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure to save.
-    path : str or os.PathLike
-        The output file (the format follows its suffix); missing parent directories are
-        created.
-    caption : str, optional
-        One sentence recorded in ``figures.json`` (None or empty: none recorded).
-    dpi : int
-        Resolution [dots per inch].
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.tight_layout()
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    fig.savefig(tmp, dpi=dpi)
-    os.replace(tmp, path)
-    if caption:
-        record_caption(path, caption)
-    return path

@@ -14,6 +14,7 @@ import pandas as pd
 from nlgrd.plotting.common import (
     DIRECTION_MARKERS,
     UNKNOWN,
+    answer_marker_style,
     axis_label,
     clip_to_scale,
     direction_colours,
@@ -50,6 +51,11 @@ QUASI_PERIODIC = "quasi-periodic"
 NO_STABLE = "no stable mesh-periodic response"
 #: ... of points answered by time integration: (value, marker), drawn with error bars.
 TIME_ANSWERS = (("time domain", "D"), ("chaotic", "*"))
+#: Marker size of each kind drawn apart, per marker size of the stable points: a star's ink
+#: is thin, so it is drawn larger than a diamond or a square to read as well.
+ANSWER_SIZES = {"quasi-periodic (torus HB)": 1.4, "time domain": 1.5, "chaotic": 1.8}
+#: Diameters of the period-ν rings per marker size: up outside, down inside it.
+RING_SIZES = {"up": 2.4, "down": 1.7}
 #: The ``verdict`` of a point whose stability was not computed (a torus answer's).
 NOT_COMPUTED = "not computed"
 #: The legend's name of a quasi-periodic point answered by the torus harmonic balance (a
@@ -149,9 +155,13 @@ def plot_sweep_frame(
         codes = _stability(part)
         yv = np.where(conv, yv, np.nan)
         resp = part["response"].astype(str).to_numpy() if "response" in part else np.full(len(part), "")
-        if "verdict" in part:  # a torus answer: quasi-periodic, its stability "not computed"
+        # a torus answer: quasi-periodic, its stability "not computed"; in a table written
+        # without the verdict (the reports' CSVs), a quasi-periodic row with a value
+        if "verdict" in part:
             torus = (resp == QUASI_PERIODIC) & (part["verdict"].astype(str).to_numpy() == NOT_COMPUTED)
-            resp = np.where(torus & conv, TORUS_ANSWER[0], resp)
+        else:
+            torus = (resp == QUASI_PERIODIC) & np.isfinite(yv)
+        resp = np.where(torus & conv, TORUS_ANSWER[0], resp)
         timed = np.isin(resp, [k for k, _ in (*TIME_ANSWERS, TORUS_ANSWER)]) & conv
         yt, yv = np.where(timed, yv, np.nan), np.where(timed, np.nan, yv)  # never drawn as periodic
         colour = colours.get(d, next(iter(colours.values())))
@@ -171,12 +181,13 @@ def plot_sweep_frame(
             lw=lw,
             alpha=alpha,
         )
-        mark_not_converged(ax, xv[~conv], colour, name, not_converged)
+        inner = d == "down"  # its answers inside the up sweep's, its edge marks a row above
+        mark_not_converged(ax, xv[~conv], colour, name, not_converged, row=int(inner))
         if "response" in part:
-            _mark_responses(ax, resp, conv, xv, yv, colour, name, ms)
+            _mark_responses(ax, resp, conv, xv, yv, colour, name, ms, inner)
             err = _uncertainty_column(y)
             ev = pd.to_numeric(part[err], errors="coerce").to_numpy(float) if err in part else None
-            _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms)
+            _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms, inner)
     if ylim is not None:
         ax.set_ylim(*[lim if lim is not None else cur for lim, cur in zip(ylim, ax.get_ylim(), strict=True)])
     ax.set_xlabel(axis_label(x))
@@ -184,21 +195,28 @@ def plot_sweep_frame(
     return ax
 
 
-def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms) -> None:
-    """Period-ν points ringed where they are drawn; points without a stable periodic
-    response (quasi-periodic, or none found) and no time answer marked on the bottom edge,
+def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms, inner=False) -> None:
+    """Period-ν points ringed where they are drawn (the down sweep's ring inside the up
+    sweep's, ``inner``); points without a stable periodic response (quasi-periodic, or none
+    found) and no time answer marked on the bottom edge (the down sweep's a row above),
     each kind counted."""
     resp = np.asarray(resp, dtype=str)
     period = np.char.startswith(resp, "period ")
+    ring = RING_SIZES["down" if inner else "up"] * ms
     for kind in sorted(set(resp[conv & period])):
         at = conv & (resp == kind) & np.isfinite(yv)
-        ax.plot(xv[at], yv[at], "o", ms=2.2 * ms, mfc="none", mec=colour, mew=0.8, ls="none",
+        if not at.any():  # all beyond the scale: counted by the carets, no empty entry
+            continue
+        ax.plot(xv[at], yv[at], "o", ms=ring, mfc="none", mec=colour, mew=0.8, ls="none", zorder=3,
                 label=f"{name}: {kind} ({int(at.sum())})")  # fmt: skip
     answered = (*(k for k, _ in TIME_ANSWERS), TORUS_ANSWER[0])
     lost = conv & ~period & ~np.isin(resp, (PERIODIC, "<NA>", "nan", *answered))
     quasi = resp == QUASI_PERIODIC
-    mark_not_converged(ax, xv[lost & quasi], colour, name, "quasi-periodic", marker="2")
-    mark_not_converged(ax, xv[lost & ~quasi], colour, name, "no stable periodic response", marker="1")
+    row = int(inner)
+    mark_not_converged(ax, xv[lost & quasi], colour, name, "quasi-periodic", marker="2", row=row)
+    mark_not_converged(
+        ax, xv[lost & ~quasi], colour, name, "no stable periodic response", marker="1", row=row
+    )
 
 
 def _uncertainty_column(column: str) -> str:
@@ -208,21 +226,26 @@ def _uncertainty_column(column: str) -> str:
     return f"{stem}_uncertainty{sep}{unit}"
 
 
-def _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms) -> None:
-    """Time-domain answers: open diamonds ("time domain") or stars ("chaotic") at their
-    value, not joined, with error bars of 2 standard uncertainties, each kind counted; the
-    torus harmonic balance's quasi-periodic answers as open squares (no sampling error)."""
-    at = (resp == TORUS_ANSWER[0]) & np.isfinite(yt)
-    if at.any():
-        ax.plot(xv[at], yt[at], TORUS_ANSWER[1], ms=1.2 * ms, mfc="none", mec=colour, ls="none",
-                label=f"{name}: {TORUS_ANSWER[0]} ({int(at.sum())})")  # fmt: skip
-    for kind, marker in TIME_ANSWERS:
+def _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms, inner=False) -> None:
+    """Time-domain answers: diamonds ("time domain") or stars ("chaotic") at their value,
+    not joined, with error bars of 2 standard uncertainties, each kind counted; the torus
+    harmonic balance's quasi-periodic answers as squares (no sampling error). Sizes from
+    :data:`ANSWER_SIZES`; the up sweep's open, the down sweep's (``inner``) filled and
+    smaller, on top, with thinner bars (:func:`~nlgrd.plotting.common.answer_marker_style`)."""
+    for kind, marker in ((TORUS_ANSWER[0], TORUS_ANSWER[1]), *TIME_ANSWERS):
         at = (resp == kind) & np.isfinite(yt)
         if not at.any():
             continue
+        style = answer_marker_style(ms, ANSWER_SIZES[kind], inner)
+        face = colour if style["filled"] else "none"
+        if kind == TORUS_ANSWER[0]:  # no sampling error
+            ax.plot(xv[at], yt[at], marker, ms=style["ms"], mfc=face, mec=colour, mew=style["mew"], ls="none",
+                    zorder=style["zorder"], label=f"{name}: {kind} ({int(at.sum())})")  # fmt: skip
+            continue
         yerr = None if ev is None else 2 * np.where(np.isfinite(ev[at]), ev[at], 0.0)
-        ax.errorbar(xv[at], yt[at], yerr=yerr, fmt=marker, ms=1.3 * ms, mfc="none", mec=colour,
-                    ecolor=colour, elinewidth=0.8, capsize=1.5, ls="none",
+        ax.errorbar(xv[at], yt[at], yerr=yerr, fmt=marker, ms=style["ms"], mfc=face, mec=colour,
+                    mew=style["mew"], ecolor=colour, elinewidth=style["elinewidth"], capsize=1.5,
+                    ls="none", zorder=style["zorder"],
                     label=f"{name}: {kind} ({int(at.sum())}; ±2σ)")  # fmt: skip
 
 

@@ -1,11 +1,14 @@
 """Every speed of a report's sweep answered, or marked "not found".
 
 A harmonic-balance sweep leaves gaps where no stable periodic orbit exists. The reports
-answer them in the time domain (:func:`nlgrd.timedomain.sweep_answers.with_time_answers`:
-"time domain" or "chaotic", each value with its sampling uncertainty), here on several
-processes: each point's answer depends on that point alone (its own unstable orbit as
-the start, a fixed seed for the Lyapunov twin, one BLAS thread), so the rows are split
-among the workers and put back in place, the same numbers as one process gives.
+answer a Neimark-Sacker point by the torus harmonic balance where it converges, each
+direction on a process of its own (a direction's tori are followed along it only:
+:func:`torus_answers_in_parallel`), and every other gap in the time domain
+(:func:`nlgrd.timedomain.sweep_answers.with_time_answers`: "time domain" or "chaotic",
+each value with its sampling uncertainty), here on several processes: each point's
+answer depends on that point alone (its own unstable orbit as the start, a fixed seed for
+the Lyapunov twin, one BLAS thread), so the rows are split among the workers and put back
+in place, the same numbers as one process gives.
 
 The table of a report then says for every point what answers it (its ``response``):
 "periodic", "period ν", "time domain", "chaotic" (or "quasi-periodic" where that kind
@@ -35,6 +38,7 @@ __all__ = [
     "NOT_FOUND",
     "answer_gaps_in_parallel",
     "answered_table",
+    "torus_answers_in_parallel",
     "gap_rows",
     "plot_answered",
     "response_counts",
@@ -103,6 +107,57 @@ def _put_rows(out: dict, part: SweepResult, rows: np.ndarray, n: int) -> None:
             out[f.name] = a
 
 
+def _torus_rows(
+    result: GearedSweepResult, system: RotorSystem, rows: np.ndarray, rtol: float
+) -> GearedSweepResult:
+    """A worker's task: the torus answers of one direction (``rows``), followed along it as
+    :func:`~nlgrd.timedomain.sweep_answers.with_torus_answers` follows each direction."""
+    return with_torus_answers(dc.replace(result, mesh=_only_rows(result.mesh, rows)), system, rtol=rtol)
+
+
+def torus_answers_in_parallel(
+    result: GearedSweepResult, system: RotorSystem, *, workers: int = 1, rtol: float = OUTPUT_RTOL
+) -> GearedSweepResult:
+    """The sweep's Neimark-Sacker points answered by the torus harmonic balance
+    (:func:`~nlgrd.timedomain.sweep_answers.with_torus_answers`), each direction on its own
+    process: a direction's tori are followed from point to point along it and never from the
+    other direction's, so its rows put back are the numbers one process gives
+    (tests/test_answered_sweeps.py). Spawned workers, as :func:`answer_gaps_in_parallel`.
+
+    Parameters
+    ----------
+    result : GearedSweepResult
+        The one-mesh sweep.
+    system : RotorSystem
+        The rotor swept.
+    workers : int
+        Processes [-] (1: this one; at most one per direction is used).
+    rtol : float
+        The sweep's tolerance, which a torus's convergence estimate must meet [-].
+
+    Returns
+    -------
+    GearedSweepResult
+    """
+    res, n = result.mesh, len(result.mesh)
+    direction = np.asarray(res.direction).astype(str)
+    groups = [np.nonzero(direction == d)[0] for d in dict.fromkeys(direction.tolist())]
+    workers = max(1, min(int(workers), len(groups)))
+    if workers == 1:
+        return with_torus_answers(result, system, rtol=rtol)
+    merged = {f.name: getattr(res, f.name) for f in dc.fields(res)}
+    bearings = {f.name: getattr(result.bearings, f.name) for f in dc.fields(result.bearings)}
+    context = multiprocessing.get_context("spawn")  # no fork of a threaded kernel
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        futures = {pool.submit(_torus_rows, result, system, g, rtol): g for g in groups}
+        for fut in as_completed(futures):
+            part, g = fut.result(), futures[fut]
+            _put_rows(merged, part.mesh, g, n)
+            _put_rows(bearings, part.bearings, g, n)
+    cls = type(result.bearings)
+    return dc.replace(result, mesh=dc.replace(res, **merged), bearings=cls(**bearings))
+
+
 def answer_gaps_in_parallel(
     result: GearedSweepResult,
     system: RotorSystem,
@@ -120,6 +175,7 @@ def answer_gaps_in_parallel(
     converges within ``rtol`` (:func:`~nlgrd.timedomain.sweep_answers.with_torus_answers`),
     then every other gap in the time domain.
 
+    The tori of each direction on a process of their own (:func:`torus_answers_in_parallel`).
     ``workers`` = 1 is :func:`~nlgrd.timedomain.sweep_answers.answer_sweep` itself;
     more split the time-domain rows among processes (interleaved, so that each gets points from
     every part of the range) and put every per-point field back at its rows: the same
@@ -153,8 +209,8 @@ def answer_gaps_in_parallel(
     -------
     GearedSweepResult
     """
-    if torus:  # the torus first, along the sweep (each from its neighbour's): one process
-        result = with_torus_answers(result, system, rtol=rtol)
+    if torus:  # the torus first, along the sweep (each from its neighbour's): a process a direction
+        result = torus_answers_in_parallel(result, system, workers=workers, rtol=rtol)
     rows = gap_rows(result)
     workers = max(1, min(int(workers), rows.size))
     if workers == 1 or rows.size == 0:
@@ -245,8 +301,10 @@ def response_counts(frame: pd.DataFrame) -> pd.DataFrame:
 
 def plot_answered(frame: pd.DataFrame, x: str, y: str, ax=None, label: str | None = None, series=0, **kw):
     """A table of :func:`answered_table` drawn by :func:`nlgrd.plotting.nonlinear.plot_sweep_frame`:
-    periodic lines, period-ν rings, time answers as diamonds or stars with ±2σ bars, and the
-    points :data:`NOT_FOUND` as crosses on the bottom edge, "not found (n)" in the legend.
+    periodic lines, period-ν rings, torus answers as squares, time answers as diamonds or
+    stars with ±2σ bars (the up sweep's open, the down sweep's filled inside them: both show
+    where they coincide), and the points :data:`NOT_FOUND` as crosses on the bottom edge,
+    "not found (n)" in the legend.
 
     Parameters
     ----------
