@@ -126,3 +126,52 @@ def test_continuation_turning_point_refined_on_the_exact_flow(lifted_sweep):
     w, exact = refine_turning_points(model, c)
     print(f"H = 13 turning point {c.turning_omegas[0]:.6f}, refined {w[0]:.12f}, reference {FOLD}")
     assert exact.tolist() == [True] and abs(w[0] - FOLD) < 1e-8
+
+
+#: A start on the lifted-off branch (tests/test_piecewise_reference.py::LIFTED): the H = 13
+#: orbit at 1.2896 rad/s shot once; a start for the reference's Newton, not a result.
+LIFTED = (1.28958517, np.array([3.6362, -0.9591, 1.9417, 3.656]))
+
+
+def reference_harmonics(omega: float, H: int = 13, n: int = 128) -> np.ndarray:
+    """The reference's exact lifted-off orbit at ``omega`` (Newton from :data:`LIFTED`), its
+    x₂ sampled at ``n`` angles on the exact flow, as H real harmonics (1, 2H+1): an orbit
+    independent of the library's harmonic balance."""
+    from nlgrd.nonlinear.fourier.harmonics import analyse
+
+    stop = pr.Stop(0.0, PRELOAD)
+    s0, _, ok = pr.shoot(LIFTED[1], omega, stop=stop)
+    assert ok, omega
+    flow = pr.Flow(omega, stop)
+    x2 = [s0[1]] + [flow.advance(s0, jacobian=False, t_end=j * flow.T / n)[0][1] for j in range(1, n)]
+    return analyse(np.array(x2), H)[None, :]
+
+
+def test_a_branch_that_turns_unstable_is_followed_to_its_fold():
+    """A down sweep whose last row is the lifted-off orbit at 1.30 rad/s, unstable (the
+    reference: a real multiplier 1.19 next to the fold), after a stable row (a stable-seeking
+    sweep would leave this branch there): locate_bifurcations follows it on the exact flow
+    past the sweep's end and finds the reference's fold :data:`FOLD` within 1e-6 rad/s
+    (its fold tolerance 1e-3 x rtol = 1e-6 relative; the reference to 1e-9). The rows'
+    orbits come from the reference's exact flow, not from the library's harmonic balance;
+    the stable row is the closed-stop orbit of the same chain (the linear response), on
+    another branch: its branch is still stable at 1.30 rad/s, so no crossing is reported
+    between the two rows."""
+    model = preloaded_chain()
+    z_closed = model.at(1.31, 13).linear_solution().reshape(1, -1)
+    z = np.stack([z_closed, reference_harmonics(1.30)])
+    res = assemble_result(
+        np.array([1.31, 1.30]), ["down", "down"], z, [True, True], [0.0, 0.0], [1, 1], [0.95, 1.19],
+        [_point(13), _point(13)], "test", None, None, [0.95 + 0.1j, 1.19 + 0j],
+    )  # fmt: skip
+    found = locate_bifurcations(model, res, rtol=1e-3)
+    print(found)
+    assert len(found) == 1 and found[0][1] == "fold" and abs(found[0][2] - FOLD) < 1e-6, found
+
+
+def test_a_period_two_model_reports_at_the_base_frequency():
+    """``nu`` must be a positive integer: one line naming it."""
+    from nlgrd.errors import ModelError
+
+    with pytest.raises(ModelError, match="nu"):
+        locate_bifurcations(preloaded_chain(), _ended_sweep(), nu=0)
