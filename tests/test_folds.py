@@ -35,6 +35,17 @@ PRELOAD = 12.0
 #: The reference's period-1 fold of the lifted-off branch [rad/s] (piecewise_reference.locate
 #: to 1e-9; tests/test_piecewise_reference.py::test_preloaded_fold).
 FOLD = 1.2895493815
+#: The reference's other bifurcations of the preloaded chain's period-1 branches [rad/s]
+#: (piecewise_reference.locate to 1e-9 in ω; not yet asserted by a library test).
+#: The lifted-off branch from its fold up (pr.continue_branch(LIFTED, 1.55, ds=0.1,
+#: max_points=300) to 1.3886 rad/s; 2827 s on the shared machine): unstable (a complex
+#: pair 1.13 ± 0.17i) up to a Neimark-Sacker point, stable, then flip-unstable past a
+#: period doubling (a real μ down to -15 at 1.3886).
+NS_LIFTED, PD_LIFTED = 1.3195461123, 1.3648663814
+#: The closed-stop branch from 1.20 rad/s up (pr.continue_branch from the closed orbit,
+#: ds=0.05, 400 points; 284 s): stable (|μ| 0.95) to past its grazing near 1.3845, folds,
+#: unstable (a real μ up to 2.7) back to a second fold, then stable again.
+FOLDS_CLOSED = (1.3845452317, 1.3698130028)
 
 
 def preloaded_chain() -> ReducedModel:
@@ -133,14 +144,23 @@ def test_continuation_turning_point_refined_on_the_exact_flow(lifted_sweep):
 LIFTED = (1.28958517, np.array([3.6362, -0.9591, 1.9417, 3.656]))
 
 
-def reference_harmonics(omega: float, H: int = 13, n: int = 128) -> np.ndarray:
-    """The reference's exact lifted-off orbit at ``omega`` (Newton from :data:`LIFTED`), its
-    x₂ sampled at ``n`` angles on the exact flow, as H real harmonics (1, 2H+1): an orbit
-    independent of the library's harmonic balance."""
+#: Starts on the lifted-off branch from the reference's continuation above (rounded to 5
+#: digits: starts for its Newton, not results): unstable below the NS, stable, flip-unstable.
+LIFTED_STARTS = {
+    1.30987: np.array([3.70482, -1.20486, 2.30538, -0.76426]),
+    1.335167: np.array([4.74581, -0.72782, 3.19143, -3.37074]),
+    1.370112: np.array([7.43603, 0.77422, 7.19412, -8.01593]),
+}
+
+
+def reference_harmonics(omega: float, H: int = 13, n: int = 128, start=None) -> np.ndarray:
+    """The reference's exact lifted-off orbit at ``omega`` (Newton from ``start``, default
+    :data:`LIFTED`), its x₂ sampled at ``n`` angles on the exact flow, as H real harmonics
+    (1, 2H+1): an orbit independent of the library's harmonic balance."""
     from nlgrd.nonlinear.fourier.harmonics import analyse
 
     stop = pr.Stop(0.0, PRELOAD)
-    s0, _, ok = pr.shoot(LIFTED[1], omega, stop=stop)
+    s0, _, ok = pr.shoot(LIFTED[1] if start is None else start, omega, stop=stop)
     assert ok, omega
     flow = pr.Flow(omega, stop)
     x2 = [s0[1]] + [flow.advance(s0, jacobian=False, t_end=j * flow.T / n)[0][1] for j in range(1, n)]
@@ -175,3 +195,22 @@ def test_a_period_two_model_reports_at_the_base_frequency():
 
     with pytest.raises(ModelError, match="nu"):
         locate_bifurcations(preloaded_chain(), _ended_sweep(), nu=0)
+
+
+def test_neimark_sacker_and_period_doubling_of_the_lifted_branch():
+    """An up sweep of three rows on the lifted-off branch (the reference's exact orbits at
+    1.310, 1.335 and 1.370 rad/s: unstable with a complex pair, stable, flip-unstable):
+    locate_bifurcations bisects the NS and the PD on the library's exact flow to within
+    2e-5 rad/s of the reference's :data:`NS_LIFTED` and :data:`PD_LIFTED` (bisection to
+    rtol = 1e-5 relative, 1.4e-5 rad/s; the reference to 1e-9; the issue asks 1e-3)."""
+    model = preloaded_chain()
+    ws = sorted(LIFTED_STARTS)
+    z = np.stack([reference_harmonics(w, start=LIFTED_STARTS[w]) for w in ws])
+    res = assemble_result(
+        np.array(ws), ["up"] * 3, z, [True] * 3, [0.0] * 3, [1] * 3, [1.12, 0.96, 2.87],
+        [_point(13) for _ in ws], "test", None, None, [1.06 + 0.52j, 0.96 + 0.1j, -2.87 + 0j],
+    )  # fmt: skip
+    found = locate_bifurcations(model, res, rtol=1e-5, folds=False)
+    print(found, NS_LIFTED, PD_LIFTED)
+    assert [k for _, k, _ in found] == ["Neimark-Sacker", "period doubling"], found
+    assert abs(found[0][2] - NS_LIFTED) < 2e-5 and abs(found[1][2] - PD_LIFTED) < 2e-5

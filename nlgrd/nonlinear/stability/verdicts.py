@@ -328,16 +328,17 @@ def _branch_ends(result: SweepResult, direction: str) -> list[tuple[int, float]]
 
 
 def _bisect(model, z, w_stable, w_unstable, rtol):
-    """Where max |μ| of the branch through ``z`` crosses 1 + STABLE_RTOL; None when that
-    branch is stable up to ``w_unstable`` (the unstable row lies on another branch)."""
+    """Where max |μ| of the branch through ``z`` crosses 1 + STABLE_RTOL, each orbit shot
+    from the last stable one; None when that branch is stable up to ``w_unstable`` (the
+    unstable row lies on another branch)."""
     a, b = w_stable, w_unstable
     while abs(b - a) > rtol * abs(a):
         mid = 0.5 * (a + b)
         orbit = polish(model, z, mid)
         if orbit is None:
             return None
-        if np.max(np.abs(orbit.multipliers)) < 1 + STABLE_RTOL:
-            a = mid
+        if np.max(np.abs(orbit.multipliers)) < 1 + STABLE_RTOL:  # the next shot from here
+            a, z = mid, orbit_harmonics(model, orbit, mid, FOLD_HARMONICS)
         else:
             b = mid
     if b == w_unstable:  # every orbit was stable: is the branch's at w_unstable?
