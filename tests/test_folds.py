@@ -22,6 +22,7 @@ import numpy as np
 import piecewise_reference as pr
 import pytest
 
+from nlgrd.nonlinear.fourier.periods import spread
 from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.laws.force_laws import ContactStop
 from nlgrd.nonlinear.results.metrics import MeshMetrics
@@ -48,9 +49,11 @@ NS_LIFTED, PD_LIFTED = 1.3195461123, 1.3648663814
 FOLDS_CLOSED = (1.3845452317, 1.3698130028)
 
 
-def preloaded_chain() -> ReducedModel:
-    """The chain of tests/piecewise_reference.py with the stop preloaded by :data:`PRELOAD`."""
-    stop = ContactStop(pr.KC, 0.0, np.array([0.0, pr.SEAT, 0.0]))
+def preloaded_chain(nu: int = 1) -> ReducedModel:
+    """The chain of tests/piecewise_reference.py with the stop preloaded by :data:`PRELOAD`;
+    ``nu`` = 2: the period-2 model (base ω/2, the seat at harmonic 2)."""
+    seat = np.array([0.0, pr.SEAT, 0.0])
+    stop = ContactStop(pr.KC, 0.0, spread(seat, nu) if nu > 1 else seat)
     return ReducedModel.from_matrices(pr.M, pr.D, pr.K, pr.W, np.array([0.0, PRELOAD]), (stop,))
 
 
@@ -153,18 +156,19 @@ LIFTED_STARTS = {
 }
 
 
-def reference_harmonics(omega: float, H: int = 13, n: int = 128, start=None) -> np.ndarray:
-    """The reference's exact lifted-off orbit at ``omega`` (Newton from ``start``, default
-    :data:`LIFTED`), its x₂ sampled at ``n`` angles on the exact flow, as H real harmonics
-    (1, 2H+1): an orbit independent of the library's harmonic balance."""
+def reference_harmonics(omega: float, H: int = 13, n: int = 128, start=None, nu: int = 1) -> np.ndarray:
+    """The reference's exact orbit of period ν at ``omega`` (Newton from ``start``, default
+    :data:`LIFTED`), its x₂ sampled at ``n`` angles over ν periods on the exact flow, as ν H
+    real harmonics of ω/ν (1, 2νH+1): an orbit independent of the library's harmonic
+    balance."""
     from nlgrd.nonlinear.fourier.harmonics import analyse
 
     stop = pr.Stop(0.0, PRELOAD)
-    s0, _, ok = pr.shoot(LIFTED[1] if start is None else start, omega, stop=stop)
+    s0, _, ok = pr.shoot(LIFTED[1] if start is None else start, omega, nu, stop=stop)
     assert ok, omega
     flow = pr.Flow(omega, stop)
-    x2 = [s0[1]] + [flow.advance(s0, jacobian=False, t_end=j * flow.T / n)[0][1] for j in range(1, n)]
-    return analyse(np.array(x2), H)[None, :]
+    x2 = [s0[1]] + [flow.advance(s0, jacobian=False, t_end=j * nu * flow.T / n)[0][1] for j in range(1, n)]
+    return analyse(np.array(x2), nu * H)[None, :]
 
 
 def test_a_branch_that_turns_unstable_is_followed_to_its_fold():
