@@ -10,7 +10,10 @@ The independent reference is tests/piecewise_reference.py on the exact flow: the
 a zero of the test function Π(1 - μ) along a pseudo-arc-length continuation, bisected to
 1e-12 in arc length (tests/test_piecewise_reference.py::test_preloaded_fold: two
 continuation steps agree to 1e-9, a multiplier at +1 to 1e-6, the orbit beside it checked
-by DOP853). The library's fold locator
+by DOP853). The same reference gives the lifted-off branch's Neimark-Sacker point and
+period doubling and the fold of the period-2 branch born there (:data:`NS_LIFTED`,
+:data:`PD_LIFTED`, :data:`P2_FOLD`); the tests below start the library from the
+reference's exact orbits (rows of a sweep) and compare what it locates. The library's fold locator
 (:func:`nlgrd.nonlinear.stability.verdicts.locate_fold`) follows the branch on its own
 shooting code and finds the zero of |μ - 1|² by secant steps, so the two share nothing
 but the equations.
@@ -218,3 +221,36 @@ def test_neimark_sacker_and_period_doubling_of_the_lifted_branch():
     print(found, NS_LIFTED, PD_LIFTED)
     assert [k for _, k, _ in found] == ["Neimark-Sacker", "period doubling"], found
     assert abs(found[0][2] - NS_LIFTED) < 2e-5 and abs(found[1][2] - PD_LIFTED) < 2e-5
+
+
+#: The reference's period-2 fold [rad/s]: pr.shoot(nu=2) marched from :data:`P2_START` down
+#: (1.3600, 1.3570, 1.3540, 1.3525, 1.3520, 1.3518, 1.35176, 1.35175, 1.351745 rad/s, each
+#: from the last orbit; ~2 min) finds orbits to 1.351745 with a real multiplier of the
+#: period-2 map falling to 1 (1.0468, 1.0294, 1.0123 at the last three), and the zero of
+#: (μ - 1)² extrapolated linearly through the last two, 1.3517439 (through the two before:
+#: 1.3517435; the branch exists above it, is unstable, and folds there).
+P2_FOLD = 1.3517439
+#: A start on the period-2 branch born at :data:`PD_LIFTED` (subcritical: it exists below,
+#: unstable, a real multiplier 1.56 of the period-2 map): the reference's period-2 orbit at
+#: PD_LIFTED - 2e-3 rad/s, shot from the PD orbit plus 0.05 of its flip eigenvector (5
+#: digits: a start for its Newton, not a result).
+P2_START = (1.3628663814, np.array([6.73395, 0.16199, 6.18303, -7.11646]))
+
+
+@pytest.mark.slow  # a march of period-2 shots (~340 s on the loaded shared machine)
+def test_period_two_fold_of_the_preloaded_chain():
+    """A period-2 down sweep whose branch ends after its first row (the reference's exact
+    period-2 orbit at 1.36287 rad/s): locate_bifurcations(nu=2) on the period-2 model
+    follows it on the exact flow to its fold, within 1e-5 rad/s of the reference's
+    :data:`P2_FOLD` (the fold tolerance 1e-9 relative; the reference's extrapolated zero
+    moves by 4e-7 between two secants: 1e-5 covers it with margin, and is 100 x inside the
+    issue's 1e-3)."""
+    w, start = P2_START
+    z = reference_harmonics(w, start=start, nu=2)
+    res = assemble_result(
+        np.array([w, 1.30]), ["down", "down"], np.stack([z, z]), [True, False], [0.0, 0.0], [1, 1],
+        [1.56, np.nan], [_point(26), _point(26)], "test", None, None, [1.56 + 0j, np.nan],
+    )  # fmt: skip
+    found = locate_bifurcations(preloaded_chain(2), res, nu=2)
+    print(found, P2_FOLD)
+    assert len(found) == 1 and found[0][1] == "fold" and abs(found[0][2] - P2_FOLD) < 1e-5, found
