@@ -237,7 +237,6 @@ P2_FOLD = 1.3517439
 P2_START = (1.3628663814, np.array([6.73395, 0.16199, 6.18303, -7.11646]))
 
 
-@pytest.mark.slow  # a march of period-2 shots (~340 s on the loaded shared machine)
 def test_period_two_fold_of_the_preloaded_chain():
     """A period-2 down sweep whose branch ends after its first row (the reference's exact
     period-2 orbit at 1.36287 rad/s): locate_bifurcations(nu=2) on the period-2 model
