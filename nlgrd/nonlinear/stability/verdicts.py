@@ -235,17 +235,21 @@ def _refresh_metrics(model: ReducedModel, result: SweepResult, no_stable: NDArra
 
 
 def locate_bifurcations(
-    model: ReducedModel, result: SweepResult, *, rtol: float = 1e-6, folds: bool = True
+    model: ReducedModel, result: SweepResult, *, rtol: float = 1e-6, folds: bool = True, nu: int = 1
 ) -> list[tuple]:
     """The bifurcations of a sweep on a :func:`~nlgrd.nonlinear.stability.shooting.shootable`
     model, located on the exact flow.
 
     Where the converged verdict changes between two consecutive points, the frequency at
     which max |μ| of the exact orbit crosses 1 + STABLE_RTOL, by bisection (each orbit shot
-    from the harmonic-balance orbit of the stable side's point). Where the sweep jumps
-    (:meth:`~nlgrd.nonlinear.results.sweep_results.SweepResult.jumps`) and its branch ends
-    before the next point, the fold that ends it (:func:`locate_fold`): stable or not, a
-    branch that ends is a fold, whose multiplier +1 no verdict change shows.
+    from the harmonic-balance orbit of the stable side's point; none where that branch is
+    still stable at the unstable point, which lies on another branch). Folds (:func:`locate_fold`):
+    from every row where the sweep jumps
+    (:meth:`~nlgrd.nonlinear.results.sweep_results.SweepResult.jumps`) or its branch ends,
+    and from the first unstable row where a branch turns unstable, the branch is followed
+    on the exact flow, stable or not, to :data:`FOLD_REACH` past the sweep's end; where it
+    ends, the fold that ends it (a multiplier +1 no verdict change shows; a stable-seeking
+    sweep leaves an unstable branch before its fold).
 
     Parameters
     ----------
@@ -256,8 +260,11 @@ def locate_bifurcations(
     rtol : float
         Relative width of the final bracket [-] (a fold: to ``rtol`` x 1e-3).
     folds : bool
-        Also locate the folds at the branch ends (each a few dozen shots: on a sweep
-        with several jumps, minutes).
+        Also locate the folds (each a few dozen shots: on a sweep with several jumps,
+        minutes).
+    nu : int
+        The model's base is ω/ν (a period-ν model, ``result.omega`` the frequencies ω):
+        the bifurcations of a period-ν sweep, reported at ω [-].
 
     Returns
     -------
@@ -268,10 +275,16 @@ def locate_bifurcations(
     """
     if not shootable(model):
         return []
+    if int(nu) != nu or nu < 1:
+        raise ModelError("nu", f"must be a positive integer, got {nu!r}")
+    if nu > 1:
+        found = locate_bifurcations(model, replace(result, omega=result.omega / nu), rtol=rtol, folds=folds)
+        return [(d, k, nu * w) for d, k, w in found]
     out = []
     ok = result.converged & result.stability_known & result.verdict_converged
     for d in dict.fromkeys(result.direction.tolist()):
-        found = []
+        found, starts = [], []
+        sign = 1.0 if d != "down" else -1.0
         idx = np.nonzero((result.direction == d) & ok)[0]
         for i, j in zip(idx[:-1], idx[1:], strict=True):
             if result.stable[i] == result.stable[j]:
@@ -286,11 +299,15 @@ def locate_bifurcations(
             w = _bisect(model, result.harmonics[s], float(result.omega[s]), float(result.omega[u]), rtol)
             if w is not None:
                 found.append((d, kind, w))
-        for i, w_off in _branch_ends(result, d) if folds else ():
-            w = locate_fold(model, result.harmonics[i], float(result.omega[i]), w_off, rtol=1e-3 * rtol)
-            if w is not None:
+            if u == j:  # the branch turns unstable: the sweep may leave it before its fold
+                starts.append(j)
+        rows = np.nonzero(result.direction == d)[0]
+        end = float(result.omega[rows[-1]]) if rows.size else 0.0
+        w_far = end + sign * FOLD_REACH * abs(end)  # each branch followed past the sweep's end
+        for i in sorted({i for i, _ in _branch_ends(result, d)} | set(starts)) if folds else ():
+            w = locate_fold(model, result.harmonics[i], float(result.omega[i]), w_far, rtol=1e-3 * rtol)
+            if w is not None and not any(k == "fold" and abs(w - v) <= rtol * abs(v) for _, k, v in found):
                 found.append((d, "fold", w))
-        sign = 1.0 if d != "down" else -1.0
         out += sorted(found, key=lambda f: sign * f[2])
     return out
 
@@ -311,23 +328,35 @@ def _branch_ends(result: SweepResult, direction: str) -> list[tuple[int, float]]
 
 
 def _bisect(model, z, w_stable, w_unstable, rtol):
+    """Where max |μ| of the branch through ``z`` crosses 1 + STABLE_RTOL, each orbit shot
+    from the last stable one; None when that branch is stable up to ``w_unstable`` (the
+    unstable row lies on another branch)."""
     a, b = w_stable, w_unstable
     while abs(b - a) > rtol * abs(a):
         mid = 0.5 * (a + b)
         orbit = polish(model, z, mid)
         if orbit is None:
             return None
-        if np.max(np.abs(orbit.multipliers)) < 1 + STABLE_RTOL:
-            a = mid
+        if np.max(np.abs(orbit.multipliers)) < 1 + STABLE_RTOL:  # the next shot from here
+            a, z = mid, orbit_harmonics(model, orbit, mid, FOLD_HARMONICS)
         else:
             b = mid
+    if b == w_unstable:  # every orbit was stable: is the branch's at w_unstable?
+        orbit = polish(model, z, b)
+        if orbit is None or np.max(np.abs(orbit.multipliers)) < 1 + STABLE_RTOL:
+            return None
     return 0.5 * (a + b)
 
 
+#: :func:`locate_bifurcations` follows a branch to this fraction of ω past the sweep's end.
+FOLD_REACH = 0.01
 #: Orbits kept as harmonics between the steps of :func:`locate_fold` (the next shot's start).
 FOLD_HARMONICS = 64
 #: Steps of :func:`locate_fold` at most (secant and bisection).
 FOLD_STEPS = 60
+#: |μ - 1|² below which a branch end with the secant zero of |μ - 1|² within the tolerance
+#: is a fold (|μ - 1| <= 0.1).
+FOLD_NEAR = 0.01
 #: While |μ - 1|² does not fall, :func:`locate_fold` gives up below this step (relative):
 #: the branch ends without a fold (grazing).
 STEP_RTOL = 1e-6
@@ -353,8 +382,10 @@ def locate_fold(
     Theory, §10.2; Seydel 2010, Practical Bifurcation and Stability Analysis, §5.4 for
     the square-root law). While f falls, the step goes at most to the secant zero of f
     through the last two orbits; the fold is that zero once two successive zeros agree
-    to ``rtol``. A branch whose steps collapse while f stays away from 0 (a steep part,
-    grazing) has no fold there.
+    to ``rtol``, or once the branch ends (no orbit one step ahead) with f below
+    :data:`FOLD_NEAR` and its secant zero within ``rtol`` ahead (a complex pair near 1 may
+    turn real only just before the fold, where f is not yet linear). A branch whose
+    steps collapse while f stays away from 0 (a steep part, grazing) has no fold there.
 
     Parameters
     ----------
@@ -411,7 +442,12 @@ def locate_fold(
             return None  # the branch goes on
         prev, (w, y, f) = (w, f), (trial, yt, _fold_test(orbit.multipliers))
         fresh, h = True, 1.5 * step
-    # the steps collapsed: a fold when its multiplier reached +1
+    # the steps collapsed: a fold when its multiplier reached +1, or when f, falling at
+    # the last two orbits and already near 0, reaches 0 within the tolerance (the branch
+    # ends there: a pair of multipliers near 1 may turn real only just before the fold,
+    # so the secant zeros need not agree twice)
     if estimate is not None and f <= 1e-4 * f_start:
+        return float(estimate)
+    if ahead is not None and 0 < ahead <= rtol * abs(w) and f <= FOLD_NEAR:
         return float(estimate)
     return None
