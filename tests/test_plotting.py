@@ -35,6 +35,7 @@ from nlgrd.plotting.common import (  # noqa: E402
     SERIES_COLOURS,
     axis_label,
     drawn_entries,
+    mark_not_converged,
     note_no_measurement,
     place_legend,
     plot_counted,
@@ -786,3 +787,17 @@ def test_up_and_down_points_not_found_at_one_speed_both_show():
     patch = img[int(img.shape[0] - y_px) - 12 : int(img.shape[0] - y_px) + 12, int(x_px) - 8 : int(x_px) + 8]
     for rgb in (UP_RGB, DOWN_RGB):
         assert np.all(np.abs(patch - np.asarray(rgb)) < 0.12, axis=-1).sum() >= 10
+
+
+@pytest.mark.parametrize("row", [0, 1])
+def test_not_converged_marks_alone_set_the_speed_axis(row):
+    """A sweep where no point converged draws only its crosses: the speed axis must span
+    them in either row (the lifted row's transform hides the data branch from matplotlib's
+    autoscaling; before the fix the axis stayed at (-0.05, 0.05), the crosses were drawn far
+    outside it unclipped, and tight_layout refused the figure: the capability matrix's
+    period-2 cells)."""
+    fig, ax = plt.subplots()
+    mark_not_converged(ax, [1000.0, 1050.0, 1100.0], "C0", "up", row=row)
+    lo, hi = ax.get_xlim()
+    assert lo <= 1000.0 and hi >= 1100.0 and hi - lo < 200.0
+    plt.close(fig)

@@ -662,6 +662,9 @@ def mark_not_converged(
         zorder=5,
         label=f"{label}: {text} ({x.size})",
     )
+    # the lifted transform hides the data branch from autoscaling: include x by hand
+    ax.update_datalim(np.column_stack([x, np.zeros_like(x)]), updatey=False)
+    ax.autoscale_view(scaley=False)
     return ln
 
 
