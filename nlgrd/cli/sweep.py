@@ -128,6 +128,7 @@ def cmd_sweep(args) -> int:
         key = "--search-at" if args.search_at is not None else "--period"
         raise ModelError(key, "searches the orbits of one gear pair excited at its mesh period", args.model)
     grid = None if args.continuation else values  # the values as typed, written in the CSV
+    nu = period if period != "auto" and period >= 3 else 1  # --period N: searched and followed
     if links:
         from nlgrd.nonlinear.models.link_model import build_link_model
         from nlgrd.nonlinear.models.model_views import LinkView
@@ -160,12 +161,11 @@ def cmd_sweep(args) -> int:
                 "period only (no --continuation, --period auto)",
             )
         return _shaft_order_command(args, system, omegas, unit, quantity, out, png)
-    if period != "auto" and period >= 3:
-        if not links:
-            view = _geared_view(system, float(omegas.max()), args.harmonics or PERIOD_HARMONICS, period)
+    if not links:  # one gear pair: its mesh coordinate (the period-N model for --period N)
+        H = args.harmonics or (PERIOD_HARMONICS if nu > 1 else LADDER[-1])
+        view = _geared_view(system, float(omegas.max()), H, nu)
+    if nu > 1:
         return _period_command(args, system, view, omegas, unit, quantity, out, png, search)
-    if not links:
-        view = _geared_view(system, float(omegas.max()), args.harmonics or LADDER[-1])
     if args.continuation:
         return _continuation(args, system, view, unit, omegas, count, quantity, out, png)
     res = view.sweep(
@@ -318,7 +318,7 @@ def _period_command(args, system, view, omegas, unit, quantity, out, png, search
     m = view.points(res)
     ok = m.converged & ~m.no_stable
     print(
-        f"period {nu}: {len(m)} points ({args.direction}), H = {H}, "
+        f"period {nu}: {len(m)} points ({args.direction}), {view.words()}H = {H}, "
         f"a stable period-{nu} orbit at {int(ok.sum())}"
     )
     for label, mask in (
