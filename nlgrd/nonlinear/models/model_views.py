@@ -44,8 +44,9 @@ ORBIT_COLUMNS = (
 
 
 class GearedView:
-    """Orbits of one gear pair: the period-ν models and what is written of each orbit and
-    branch (:data:`ORBIT_COLUMNS`).
+    """One gear pair on its mesh coordinate: its sweep and continuation, the sweep's table
+    and figure, the period-ν models and what is written of each orbit and branch
+    (:data:`ORBIT_COLUMNS`).
 
     Parameters
     ----------
@@ -191,19 +192,21 @@ class GearedView:
 
 
 class LinkView:
-    """Orbits of a link model: the period-ν models and what is written of each orbit and
-    branch: the base frequency, the reference shaft speed and every link's outputs over
-    the orbit's whole period (as :func:`~nlgrd.nonlinear.models.link_model.link_sweep`'s columns).
+    """A link model: its sweep and continuation, the sweep's table and figure, the period-ν
+    models and what is written of each orbit and branch: the base frequency, the reference
+    shaft speed and every link's outputs over the orbit's whole period (as
+    :func:`~nlgrd.nonlinear.models.link_model.link_sweep`'s columns).
 
     Parameters
     ----------
     model : LinkModel
         The sweep's model.
-    column : str
-        The output column printed for each orbit (``--quantity``).
+    column : str or None
+        The output column drawn, continued and printed for each orbit (``--quantity``;
+        None: the periodic models alone, as :func:`nlgrd.analyses.search_orbits` uses).
     """
 
-    def __init__(self, model, column: str):
+    def __init__(self, model, column: str | None):
         from nlgrd.nonlinear.results.link_results import output_names
 
         self.model, self.column = model, column
