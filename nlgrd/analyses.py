@@ -20,12 +20,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.tracing.period_branches import PERIOD_HARMONICS
 from nlgrd.rotor.system import RotorSystem
 
 __all__ = ["campbell", "continuation", "load", "model", "modes", "search_orbits", "sweep", "time_sweep"]
 
 #: Mesh harmonics of an orbit search without ``H`` (the CLI's ``--period N`` default) [-].
-SEARCH_HARMONICS = 9
+SEARCH_HARMONICS = PERIOD_HARMONICS
 
 
 def load(path: str | os.PathLike) -> RotorSystem:
@@ -301,20 +302,13 @@ def search_orbits(
     -------
     list of FoundOrbit
     """
+    from nlgrd.nonlinear.models.model_views import GearedView, LinkView
     from nlgrd.nonlinear.tracing.orbit_search import search_orbits as search
 
     omega = float(_omegas(system, rpm, hz)[0])
     m = model(system, omega, int(H))
-    if _single_mesh(system):
-        from nlgrd.nonlinear.models.geared import geared_model_of
-
-        model_of = geared_model_of(m)
-    else:
-        from nlgrd.nonlinear.models.link_model import period_model
-
-        def model_of(nu: int):
-            return m.reduced if nu == 1 else period_model(m, nu).reduced
-
+    view = GearedView(m) if _single_mesh(system) else LinkView(m, None)
+    model_of = view.model_of(int(H), omega)
     return search(model_of, omega, int(H), periods, **options)
 
 

@@ -1,5 +1,5 @@
 """``nlgrd sweep --period N`` for N >= 3: period-N orbits searched for, followed over the grid
-and written as the sweep (nlgrd.cli.orbits.period_search).
+and written as the sweep (nlgrd.nonlinear.models.model_views.period_branches).
 
 Model: the single-DOF gear pair of tests/test_orbit_search.py built as an FE model file: two
 20-tooth gears (module 5 mm, base radius r_b = 46.985 mm) with polar inertias I = 2 m r_b²,

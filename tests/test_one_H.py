@@ -46,9 +46,9 @@ def captured(monkeypatch):
         seen["titles"].append(fig.axes[0].get_title())
         return figure(self, fig, path)
 
-    def written(res, *args, **kwargs):
+    def written(view, res, *args, **kwargs):
         seen["results"].append(res)
-        return write(res, *args, **kwargs)
+        return write(view, res, *args, **kwargs)
 
     monkeypatch.setattr(Outputs, "figure", staged)
     monkeypatch.setattr(cli_sweep, "_write_sweep", written)

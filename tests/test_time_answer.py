@@ -148,7 +148,7 @@ def test_command_line_switches():
     from argparse import Namespace
 
     from nlgrd.cli import build_parser
-    from nlgrd.cli.link_sweep import time_answers
+    from nlgrd.cli.sweep import time_answers
     from nlgrd.errors import ModelError
 
     args = build_parser().parse_args(["sweep", KB, "--hz", "3500:3600:3", "--no-time-domain"])

@@ -1,5 +1,7 @@
-"""The ``nlgrd sweep`` command: a harmonic-balance sweep (or continuation) of a model file's
-gear pair, written as a CSV table and a figure."""
+"""The ``nlgrd sweep`` command: a harmonic-balance sweep (or continuation) of any model file,
+written as a CSV table and a figure, with a summary; one flow for every model (its view,
+:mod:`nlgrd.nonlinear.models.model_views`, picks the library calls). A link model's columns
+are ``<link>.<quantity> [unit]`` (:func:`link_quantity` reads ``--quantity`` for them)."""
 
 from __future__ import annotations
 
@@ -20,6 +22,8 @@ from nlgrd.io.command_line import (
 )
 from nlgrd.io.model_checks import check_harmonics_memory, check_speed_range
 from nlgrd.nonlinear.results.response_kinds import QUASI_PERIODIC
+from nlgrd.nonlinear.tracing.harmonic_convergence import LADDER
+from nlgrd.nonlinear.tracing.period_branches import PERIOD_HARMONICS
 
 
 class _Unit:
@@ -57,7 +61,12 @@ def _title(system, args) -> str:
 
 
 def cmd_sweep(args) -> int:
-    """Nonlinear harmonic-balance sweep (or continuation) of the geared model: CSV, PNG, summary.
+    """Nonlinear harmonic-balance sweep (or continuation) of any model: CSV, PNG, summary.
+
+    One flow for every model: the model's view
+    (:mod:`nlgrd.nonlinear.models.model_views`: one gear pair on its mesh coordinate, or
+    any set of links) decides which library call does the work; the command parses, writes
+    and prints.
 
     Parameters
     ----------
@@ -77,8 +86,7 @@ def cmd_sweep(args) -> int:
     import numpy as np
 
     from nlgrd.io.model_file import load_model
-    from nlgrd.nonlinear.models.geared import build_geared_model
-    from nlgrd.nonlinear.tracing.harmonic_convergence import LADDER
+    from nlgrd.nonlinear.models.link_model import needs_links
 
     if (args.rpm is None) == (args.hz is None):
         raise ModelError(
@@ -113,41 +121,39 @@ def cmd_sweep(args) -> int:
         check_harmonics_memory(system, args.harmonics, "--harmonics")
     except ModelError as err:
         raise err.within(file=str(args.model)) from None
-    from nlgrd.cli.link_sweep import link_sweep_command, needs_links
-
-    if search is not None and not needs_links(system) and system.gear_pairs[0].error_period > 1:
+    links = needs_links(system)
+    if links and not system.gear_pairs and not system.bearing_clearances:
+        raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
+    if search is not None and not links and system.gear_pairs[0].error_period > 1:
         key = "--search-at" if args.search_at is not None else "--period"
         raise ModelError(key, "searches the orbits of one gear pair excited at its mesh period", args.model)
-    if needs_links(system):
-        if not system.gear_pairs and not system.bearing_clearances:
-            raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
-        check_speed_range(system, float(max(values)), args.rpm is not None, option, repr(text))
-        if args.continuation:
-            return _link_continuation(args, system, values, count, out, png)
-        return link_sweep_command(
-            args,
-            system,
-            values,
-            out,
-            png,
-            search,
-            lambda plan: _Unit(
-                args.rpm is not None, 1 / plan.speed_per_base, speed="shaft speed", base="base frequency"
-            ),
+    grid = None if args.continuation else values  # the values as typed, written in the CSV
+    nu = period if period != "auto" and period >= 3 else 1  # --period N: searched and followed
+    if links:
+        from nlgrd.nonlinear.models.link_model import build_link_model
+        from nlgrd.nonlinear.models.model_views import LinkView
+
+        model = build_link_model(system)
+        per_base = model.receptance.plan.speed_per_base
+        unit = _Unit(args.rpm is not None, 1 / per_base, grid, speed="shaft speed", base="base frequency")
+        view = LinkView(model, link_quantity(args.quantity, model)[0])
+        quantity = view.column
+        omegas = unit.omega(values)
+        if not args.continuation:  # the grid as nlgrd.analyses.sweep makes it
+            omegas = values * math.pi / 30 / per_base if args.rpm is not None else 2 * math.pi * values
+    else:
+        quantity = check_quantity(args.quantity or "dslr")
+        gp = system.gear_pairs[0]
+        unit = _Unit(
+            args.rpm is not None,
+            gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio),
+            grid,
         )
-    quantity = check_quantity(args.quantity or "dslr")
-    gp = system.gear_pairs[0]
-    unit = _Unit(
-        args.rpm is not None,
-        gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio),
-        None if args.continuation else values,
-    )
-    omegas = unit.omega(values)
+        omegas = unit.omega(values)
     check_speed_range(system, float(max(values)), args.rpm is not None, option, repr(text))
     pyplot()
-    from nlgrd.nonlinear.tracing.auto_period import transitions
-
-    if gp.error_period > 1:  # teeth that differ: the revolution's shaft orders and sidebands
+    if not links and system.gear_pairs[0].error_period > 1:  # teeth that differ: the revolution's orders
+        gp = system.gear_pairs[0]
         if args.continuation or period not in ("auto", gp.error_period):
             raise ModelError(
                 "--period",
@@ -155,44 +161,121 @@ def cmd_sweep(args) -> int:
                 "period only (no --continuation, --period auto)",
             )
         return _shaft_order_command(args, system, omegas, unit, quantity, out, png)
-    if period != "auto" and period >= 3:
-        return _period_command(args, system, omegas, unit, quantity, out, png, search)
-    model = build_geared_model(system, float(omegas.max()), H=args.harmonics or LADDER[-1])
+    if not links:  # one gear pair: its mesh coordinate (the period-N model for --period N)
+        H = args.harmonics or (PERIOD_HARMONICS if nu > 1 else LADDER[-1])
+        view = _geared_view(system, float(omegas.max()), H, nu)
+    if nu > 1:
+        return _period_command(args, system, view, omegas, unit, quantity, out, png, search)
     if args.continuation:
-        from nlgrd.nonlinear.models.geared import geared_continuation
-
-        def trace(begin, end, **kwargs):
-            res = geared_continuation(
-                system, begin, end, H=args.harmonics, model=model, stability=not args.no_stability, **kwargs
-            )
-            return res, res.to_frame()
-
-        return _continuation(args, system, trace, unit, omegas, count, quantity, out, png)
-    from nlgrd.nonlinear.models.geared import geared_sweep
-
-    res = geared_sweep(
-        system,
-        omegas=omegas,
-        H=args.harmonics,
-        directions=args.direction,
-        model=model,
-        stability=not args.no_stability,
-        progress=ProgressBar("sweep"),
-        period=period,
+        return _continuation(args, system, view, unit, omegas, count, quantity, out, png)
+    res = view.sweep(
+        omegas, args.harmonics, args.direction, not args.no_stability, period, ProgressBar("sweep")
     )
-    from nlgrd.cli.link_sweep import time_answers
-
-    res = time_answers(args, system, res, period)
+    res = time_answers(args, system, res, period, view.time_model())
     found = None
     if search is not None:
-        from nlgrd.cli.orbits import search_command
+        from nlgrd.nonlinear.models.model_views import search_beside
 
-        found = search_command(model, res, omegas, *search, unit)
-    _write_sweep(res, quantity, out, png, found=found, unit=unit, title=_title(system, args))
-    status = _summary(args, res, unit, out, png, transitions)
-    if found is not None:
-        print(f"wrote {_beside(out, 'orbits')} and {_beside(out, 'branches')}")
-    return status
+        found = search_beside(view, res, omegas, *search, unit, print)
+    _write_sweep(view, res, quantity, out, png, found=found, unit=unit, title=_title(system, args))
+    return _summary(args, view, res, unit, out, png, found is not None)
+
+
+def time_answers(args, system, res, period, model=None):
+    """``res`` with its points without a stable periodic response answered in the time
+    domain (:func:`nlgrd.timedomain.sweep_answers.answer_sweep`), unless
+    ``--no-time-domain``, ``--no-stability`` or a ``--period`` other than auto.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options of ``nlgrd sweep``.
+    system : RotorSystem
+        The model.
+    res : GearedSweepResult or LinkSweepResult
+        The sweep.
+    period : int or str
+        The parsed ``--period``.
+    model : LinkModel, optional
+        The link model (built from ``system`` when None).
+
+    Returns
+    -------
+    GearedSweepResult or LinkSweepResult
+
+    Raises
+    ------
+    ModelError
+        ``--time-periods`` below 80 (also where the rule does not apply).
+    """
+    cap = getattr(args, "time_periods", None)
+    if cap is not None and cap < 80:  # a bad value is reported even where unused
+        raise ModelError("--time-periods", f"must be at least 80, got {cap}")
+    from nlgrd.io.command_line import ProgressBar
+    from nlgrd.timedomain.sweep_answers import answer_sweep
+
+    periods = {} if cap is None else {"periods": min(512, int(cap)), "max_periods": int(cap)}
+    return answer_sweep(
+        res,
+        system=system,
+        model=model,
+        period=period,
+        stability=not args.no_stability,
+        time_domain=not args.no_time_domain,
+        progress=ProgressBar("time domain"),
+        **periods,
+    )
+
+
+def link_quantity(text: str | None, model) -> tuple[str, str]:
+    """``--quantity`` for a link model: ``LINK.QUANTITY`` or a bare quantity of the first
+    link that has it (None: a mesh's DSLR, else the first link's largest force).
+
+    Parameters
+    ----------
+    text : str or None
+        The option as given.
+    model : LinkModel
+        The model whose links are asked.
+
+    Returns
+    -------
+    (str, str)
+        The column ``<link>.<quantity> [unit]`` and its label.
+    """
+    from nlgrd.nonlinear.links.contract import GearMeshLink
+    from nlgrd.nonlinear.results.link_results import output_names
+
+    keys: dict[str, list[str]] = {}  # every link's and linear bearing's outputs, by name
+    for column in output_names(model):
+        name, _, q = column.partition(".")
+        keys.setdefault(name, []).append(q)
+    if text is None:  # the default: a mesh's DSLR, else the first link's largest force
+        has_dslr = any(isinstance(lk, GearMeshLink) for lk in model.links)
+        text = "dslr" if has_dslr else f"{model.links[0].name}.force_max"
+    name, _, q = text.rpartition(".")
+    if not name:
+        meshes = [lk.name for lk in model.links if isinstance(lk, GearMeshLink)]
+        order = meshes + [lk.name for lk in model.links if lk.name not in meshes]
+        name = next((n for n in order if any(k.split(" ")[0] == q for k in keys[n])), "")
+    if name not in keys:
+        raise ModelError("--quantity", f"no link {name or text!r}; links: {', '.join(keys)}")
+    match = [k for k in keys[name] if k.split(" ")[0] == q]
+    if not match:
+        quantities = ", ".join(k.split(" ")[0] for k in keys[name])
+        raise ModelError("--quantity", f"link {name!r} has no {q!r}; it has {quantities}")
+    return f"{name}.{match[0]}", f"{name}: {match[0]}"
+
+
+def _geared_view(system, top: float, H: int, nu: int = 1):
+    """The view of one gear pair's model for mesh frequencies up to ``top`` [rad/s], with H
+    mesh harmonics (ν H of the base ω/ν for period ν)."""
+    from nlgrd.nonlinear.models.geared import build_geared_model
+    from nlgrd.nonlinear.models.model_views import GearedView
+
+    if nu == 1:
+        return GearedView(build_geared_model(system, top, H=H))
+    return GearedView(build_geared_model(system, top, nu * H, period=nu), nu)
 
 
 def _check_period_options(args, period: int) -> None:
@@ -209,22 +292,19 @@ def _check_period_options(args, period: int) -> None:
         raise ModelError("--search-periods", f"--period {period} searches period {period} only")
 
 
-def _period_command(args, system, omegas, unit, quantity, out, png, search) -> int:
+def _period_command(args, system, view, omegas, unit, quantity, out, png, search) -> int:
     """``--period N``, N >= 3: the period-N orbits searched for, followed over the grid and
-    written as the sweep (:func:`nlgrd.cli.orbits.period_search`); exit 1 when none is found."""
+    written as the sweep (:func:`nlgrd.nonlinear.models.model_views.period_branches`); exit 1
+    when none is found."""
     import numpy as np
 
-    from nlgrd.cli.orbits import PERIOD_HARMONICS, period_search
-    from nlgrd.nonlinear.models.geared import build_geared_model
+    from nlgrd.nonlinear.models.model_views import period_branches
     from nlgrd.nonlinear.tracing.harmonic_convergence import OUTPUT_RTOL
-    from nlgrd.nonlinear.tracing.orbit_search import N_STARTS
 
     at, (nu,) = search
     H = args.harmonics or PERIOD_HARMONICS
-    model = build_geared_model(system, float(omegas.max()), nu * H, period=nu)
     where = ", ".join(f"{v:g}" for v in at) + f" {unit.name}"
-    print(f"period {nu}: searching at {where} ({N_STARTS} starts each, H = {H})")
-    res, orbits, branches = period_search(model, omegas, at, nu, H, unit, args.direction)
+    res, orbits, branches = period_branches(view, omegas, at, nu, H, args.direction, unit, print)
     if res is None:
         print(
             f"nlgrd: error: no period-{nu} orbit found at {where} (H = {H}); nothing written: try other "
@@ -232,11 +312,13 @@ def _period_command(args, system, omegas, unit, quantity, out, png, search) -> i
             file=sys.stderr,
         )
         return 1
-    _write_sweep(res, quantity, out, png, found=(orbits, branches), unit=unit, title=_title(system, args))
-    m = res.mesh
+    _write_sweep(
+        view, res, quantity, out, png, found=(orbits, branches), unit=unit, title=_title(system, args)
+    )
+    m = view.points(res)
     ok = m.converged & ~m.no_stable
     print(
-        f"period {nu}: {len(m)} points ({args.direction}), H = {H}, "
+        f"period {nu}: {len(m)} points ({args.direction}), {view.words()}H = {H}, "
         f"a stable period-{nu} orbit at {int(ok.sum())}"
     )
     for label, mask in (
@@ -258,32 +340,22 @@ def _beside(out, name: str):
     return out.with_name(f"{out.stem}_{name}.csv")
 
 
-def _write_sweep(res, quantity, out, png, extra=None, found=None, unit=None, title=None) -> None:
-    from nlgrd.plotting.common import place_legend
-    from nlgrd.plotting.nonlinear import MESH_HZ, plot_sweep
-
-    xaxis = unit.axis if unit is not None else MESH_HZ
-    frame = res.to_frame()
-    if unit is not None and unit.grid is not None:
+def _write_sweep(view, res, quantity, out, png, extra=None, found=None, unit=None, title=None) -> None:
+    """The sweep's CSV (the range's column as typed), its figure, and the orbit tables."""
+    frame = view.table(res)
+    if unit.grid is not None:
         snap_to_grid(frame, unit.column, unit.grid)
+    for table in found if found is not None and unit.grid is not None else ():
+        snap_to_grid(table, unit.column, unit.grid)
+    figure = view.figure(
+        res, frame, quantity, unit.column, unit.axis, title, None if found is None else found[1]
+    )
     with Outputs() as files:
         files.csv(frame, out)
-        if title is not None:  # the H of the CSV's column and the summary line
-            title = f"{title}\nH = {res.mesh.H} harmonics of the mesh frequency"
-        ax = plot_sweep(res.mesh, quantity=quantity, xaxis=xaxis, title=title)
         if found is not None:
-            from nlgrd.plotting.sweep_figures import draw_branches
-
-            for table in found if unit is not None and unit.grid is not None else ():
-                snap_to_grid(table, unit.column, unit.grid)
             files.csv(found[0], _beside(out, "orbits"))
             files.csv(found[1], _beside(out, "branches"))
-            x = "pinion_speed [rpm]" if unit is not None and unit.name == "rpm" else "mesh_frequency [Hz]"
-            draw_branches(ax, found[1], x, quantity)
-            ax.set_xlabel(xaxis[0])
-            place_legend(ax, fontsize=7)
-        ax.figure.tight_layout()
-        files.figure(ax.figure, png)
+        files.figure(figure, png)
         if extra is not None:
             files.figure(*extra)
         files.commit()
@@ -293,6 +365,7 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
     """The sweep over the error period, and the spectra of its largest response."""
     import numpy as np
 
+    from nlgrd.nonlinear.models.model_views import GearedView
     from nlgrd.nonlinear.models.shaft_orders import (
         SHAFT_ORDER_LADDER,
         bearing_force_spectrum,
@@ -300,7 +373,6 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
         shaft_order_model,
         shaft_order_sweep,
     )
-    from nlgrd.nonlinear.tracing.auto_period import transitions
     from nlgrd.plotting.sweep_figures import plot_spectra
 
     model = shaft_order_model(system, float(omegas.max()), args.harmonics or SHAFT_ORDER_LADDER[-1])
@@ -324,34 +396,45 @@ def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
         bearing = (fb, ab[:, j], res.bearing_names[j])
         fig = plot_spectra(dte_spectrum(res, i), bearing, w_mesh, title)[0].figure
         extra = (fig, out.with_name(out.stem + "_spectrum.png"))
-    _write_sweep(res, quantity, out, png, extra, unit=unit, title=_title(system, args))
+    view = GearedView(model)
+    _write_sweep(view, res, quantity, out, png, extra, unit=unit, title=_title(system, args))
     if extra is not None:
         print(f"wrote {extra[1]}")
-    return _summary(args, res, unit, out, png, transitions)
+    return _summary(args, view, res, unit, out, png)
 
 
-def _summary(args, res, unit, out, png, transitions) -> int:
+def _summary(args, view, res, unit, out, png, orbits: bool = False) -> int:
+    """Print what the sweep found, point by point in the range's unit; 1 when no point converged."""
     import numpy as np
 
     from nlgrd.cli.orbits import none_of
+    from nlgrd.nonlinear.tracing.auto_period import transitions
 
-    bad = np.atleast_1d(res.mesh.omega[~res.mesh.converged])
+    m = view.points(res)
+    bad = np.atleast_1d(m.omega[~m.converged])
+    timed = m.time_answered
+    kinds = np.asarray(m.time_kind, dtype=object)
+    solved = timed & (kinds == QUASI_PERIODIC)
+    lost = int(np.sum(np.asarray(m.no_stable, dtype=bool))) - int(np.sum(timed))
     print(
-        f"sweep: {len(res.mesh)} points ({args.direction}), {harmonics_line(res.mesh)}, "
-        f"{len(bad)} not converged"
+        f"sweep: {len(m)} points ({args.direction}), {view.words()}{harmonics_line(m)}, "
+        f"{len(bad)} not converged, {lost} without a stable periodic response, {int(np.sum(solved))} "
+        f"answered by the torus harmonic balance, {int(np.sum(timed & ~solved))} answered in the time domain"
+    )
+    wrote = f"wrote {out} and {png}" + (
+        f", {_beside(out, 'orbits')} and {_beside(out, 'branches')}" if orbits else ""
     )
     if len(bad):
         print(
             f"not converged (NaN in the CSV, flagged converged = False) at {unit.name}: "
             + ", ".join(unit(w) for w in bad)
         )
-    if len(bad) == len(res.mesh):
-        print(f"wrote {out} and {png}")
+    if len(bad) == len(m):
+        print(wrote)
         print(f"nlgrd: error: no point of the sweep converged{none_of(args.period)}", file=sys.stderr)
         return 1
-    timed = res.mesh.time_answered
-    torus = np.isfinite(res.mesh.secondary_frequency) & ~timed
-    lost = np.atleast_1d(res.mesh.omega[res.mesh.no_stable & ~torus & ~timed])
+    torus = np.isfinite(m.secondary_frequency) & ~timed
+    lost = np.atleast_1d(m.omega[m.no_stable & ~torus & ~timed])
     if len(lost):
         print(
             f"no stable periodic response (response column; NaN outputs) at {unit.name}: "
@@ -363,18 +446,16 @@ def _summary(args, res, unit, out, png, transitions) -> int:
             f"{unit.name} (secondary frequency Hz): "
             + ", ".join(
                 f"{unit(w)} ({f / (2 * np.pi):.0f})"
-                for w, f in zip(res.mesh.omega[torus], res.mesh.secondary_frequency[torus], strict=True)
+                for w, f in zip(m.omega[torus], m.secondary_frequency[torus], strict=True)
             )
         )
-    kinds = np.asarray(res.mesh.time_kind, dtype=object)
-    solved = timed & (kinds == QUASI_PERIODIC)
     if np.any(solved):
         print(
             f"quasi-periodic, answered by the torus harmonic balance (values; its stability not computed) at "
             f"{unit.name} (secondary frequency Hz): "
             + ", ".join(
                 f"{unit(w)} ({f / (2 * np.pi):.0f})"
-                for w, f in zip(res.mesh.omega[solved], res.mesh.secondary_frequency[solved], strict=True)
+                for w, f in zip(m.omega[solved], m.secondary_frequency[solved], strict=True)
             )
         )
     for kind in ("time domain", "chaotic"):
@@ -382,15 +463,15 @@ def _summary(args, res, unit, out, png, transitions) -> int:
         if np.any(at):
             print(
                 f"{kind} (no stable periodic orbit; integrated in time, values ± their uncertainty) at "
-                f"{unit.name}: " + ", ".join(unit(w) for w in res.mesh.omega[at])
+                f"{unit.name}: " + ", ".join(unit(w) for w in m.omega[at])
             )
-    two = np.atleast_1d(res.mesh.omega[(res.mesh.period == 2) & res.mesh.converged & ~res.mesh.no_stable])
+    two = np.atleast_1d(m.omega[(m.period == 2) & m.converged & ~m.no_stable])
     if len(two):
         print(f"period 2 (period doubled) at {unit.name}: " + ", ".join(unit(w) for w in two))
     jumps = res.jumps()
     for j in jumps:
         print(f"jump ({j.direction}): {unit(j.omega_from)} -> {unit(j.omega_to)} {unit.name}")
-    torus_dirs = set(np.asarray(res.mesh.direction)[np.isfinite(res.mesh.secondary_frequency)].astype(str))
+    torus_dirs = set(np.asarray(m.direction)[np.isfinite(m.secondary_frequency)].astype(str))
     if any(j.direction in torus_dirs for j in jumps):
         print(
             "note: this sweep has quasi-periodic points, so where it leaves a branch depends on the "
@@ -398,42 +479,20 @@ def _summary(args, res, unit, out, png, transitions) -> int:
             "there. A slow run-down in the time domain decides (nlgrd.timedomain.run_down; Kubo's "
             "case in docs/verification.md, 'Kubo's main down jump')"
         )
-    for t in transitions(res.mesh):
+    for t in transitions(m):
         print(
             f"{t.kind} ({t.direction}): {unit(t.omega_from)} -> {unit(t.omega_to)} {unit.name}, "
             f"{t.response_from} -> {t.response_to}"
         )
-    print(f"wrote {out} and {png}")
+    print(wrote)
     return 0
 
 
-def _link_continuation(args, system, values, count, out, png) -> int:
-    """``--continuation`` of a link model: the curve of every link's outputs, the figure
-    of ``--quantity`` (:func:`nlgrd.cli.link_sweep.link_quantity`) along it."""
-    import dataclasses
-
-    from nlgrd.cli.link_sweep import link_quantity
-    from nlgrd.nonlinear.models.link_model import build_link_model, link_continuation
-
-    model = build_link_model(system)
-    plan = model.receptance.plan
-    unit = _Unit(args.rpm is not None, 1 / plan.speed_per_base, speed="shaft speed", base="base frequency")
-    column, _ = link_quantity(args.quantity, model)
-
-    def trace(begin, end, **kwargs):
-        res = link_continuation(model, begin, end, args.harmonics, stability=not args.no_stability, **kwargs)
-        metrics = {**res.curve.curve.metrics, column: res.links[column].to_numpy()}
-        curve = dataclasses.replace(res.curve, curve=dataclasses.replace(res.curve.curve, metrics=metrics))
-        return curve, res.to_frame()
-
-    return _continuation(args, system, trace, unit, unit.omega(values), count, column, out, png)
-
-
-def _continuation(args, system, trace, unit, omegas, count, quantity, out, png) -> int:
+def _continuation(args, system, view, unit, omegas, count, quantity, out, png) -> int:
     """``--continuation``: trace the curve up from START, down from STOP, or both; check the coverage.
 
-    ``trace(begin, end, **step_options)`` gives the curve (a ContinuationResult whose
-    metrics hold ``quantity``) and its table. COUNT, when given, sets the largest step so
+    ``view.continuation`` gives the curve (a ContinuationResult whose metrics hold
+    ``quantity``) and its table. COUNT, when given, sets the largest step so
     that successive points lie at most about (STOP - START) / (COUNT - 1) apart in
     frequency (never coarser than the default).
     """
@@ -460,7 +519,7 @@ def _continuation(args, system, trace, unit, omegas, count, quantity, out, png) 
                 "ds_max": ds_max,
                 "max_steps": max(defaults["max_steps"], 10 * count),
             }
-        res, frame = trace(begin, end, **kwargs)
+        res, frame = view.continuation(begin, end, args.harmonics, quantity, not args.no_stability, **kwargs)
         traces[name] = res
         frame.insert(1, "trace", name)
         frame.insert(2, f"{unit.speed.replace(' ', '_')} [rpm]", res.omega / unit.per_speed * 30 / math.pi)

@@ -574,38 +574,3 @@ def gear_pair_mode(system: RotorSystem, speed: float = 0.0, n_modes: int = 40) -
     frac = link.stiffness * np.abs(link.w @ phi) ** 2 / strain
     j = int(np.argmax(frac))
     return float(res.natural_frequencies[j]), float(frac[j])
-
-
-def geared_model_of(model: GearedModel) -> Callable[[int], ReducedModel]:
-    """``model_of`` for :func:`~nlgrd.nonlinear.tracing.orbit_search.search_orbits` on a geared FE model: ν →
-    its period-ν model,
-    built once per ν and H (kept in ``model.cache``) with as many base harmonics as
-    ``model`` has mesh harmonics, ν times over.
-
-    Parameters
-    ----------
-    model : GearedModel
-        From :func:`nlgrd.nonlinear.models.geared.build_geared_model` (period 1).
-
-    Returns
-    -------
-    callable
-        ``model_of(nu)`` -> ReducedModel on the base ω/ν.
-    """
-
-    def model_of(nu: int) -> ReducedModel:
-        if nu == 1:
-            return model.reduced
-        key = ("period", nu, nu * model.H)
-        return model.cache.get(
-            key,
-            lambda: build_geared_model(
-                model.system,
-                model.max_mesh_frequency,
-                nu * model.H,
-                model.receptance.requested_method,
-                period=nu,
-            ),
-        ).reduced
-
-    return model_of

@@ -1,0 +1,450 @@
+"""One way through a sweep for every model: what differs between a gear pair reduced onto its
+mesh coordinate and any set of links, behind one interface (a *view*), so that ``nlgrd
+sweep`` and the orbit search run one flow and the model decides only which library call
+does the work.
+
+- :class:`GearedView`, one gear pair excited at its mesh period
+  (:func:`~nlgrd.nonlinear.models.geared.build_geared_model`): ``geared_sweep``,
+  ``geared_continuation``; its table has the mesh frequency and the pinion speed, its orbits
+  the mesh's outputs (:data:`ORBIT_COLUMNS`);
+- :class:`LinkView`, any set of meshes, clearances and unbalance
+  (:func:`~nlgrd.nonlinear.models.link_model.build_link_model`): ``link_sweep``,
+  ``link_continuation``; its table and orbits have the base frequency, the reference shaft
+  speed and every link's and linear bearing's outputs over the orbit's whole period.
+
+The orbit search on either: :func:`search_beside` (``--search-at``: ``<out>_orbits.csv``,
+every orbit found with whether the sweep has it, and ``<out>_branches.csv``, the branch of
+each stable orbit the sweep does not have, followed over the grid) and
+:func:`period_branches` (``--period N``: the same two and the merged period-N response), both
+over :mod:`nlgrd.nonlinear.tracing.period_branches`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from nlgrd.nonlinear.tracing.period_branches import PERIOD_HARMONICS
+
+#: Columns of ``<out>_orbits.csv`` for one gear pair.
+ORBIT_COLUMNS = (
+    "search at",
+    "mesh_frequency [Hz]",
+    "pinion_speed [rpm]",
+    "period",
+    "stable",
+    "floquet_max [-]",
+    "on the sweep",
+    "dte_rms [um]",
+    "force_max [N]",
+    "dslr [-]",
+    "amplitude [um]",
+    "start",
+)
+
+
+class GearedView:
+    """One gear pair on its mesh coordinate: its sweep and continuation, the sweep's table
+    and figure, the period-ν models and what is written of each orbit and branch
+    (:data:`ORBIT_COLUMNS`).
+
+    Parameters
+    ----------
+    model : GearedModel
+        The sweep's model (period 1), or the period-``nu`` model of a ``--period`` search.
+    nu : int
+        The period ``model`` was built for [mesh periods].
+    """
+
+    columns = ORBIT_COLUMNS
+
+    def __init__(self, model, nu: int = 1):
+        self.model, self.nu = model, nu
+
+    def points(self, res):
+        """The harmonic-balance points of a sweep of this model (a SweepResult)."""
+        return res.mesh
+
+    def sweep(self, omegas, H, directions: str, stability: bool, period, progress=None):
+        """:func:`~nlgrd.nonlinear.models.geared.geared_sweep` of the model over ``omegas`` [rad/s]."""
+        from nlgrd.nonlinear.models.geared import geared_sweep
+
+        return geared_sweep(
+            self.model.system,
+            omegas=omegas,
+            H=H,
+            directions=directions,
+            model=self.model,
+            stability=stability,
+            progress=progress,
+            period=period,
+        )
+
+    def continuation(self, begin: float, end: float, H, quantity: str, stability: bool, **options):
+        """:func:`~nlgrd.nonlinear.models.geared.geared_continuation` from ``begin`` to ``end``
+        [rad/s]: the curve (its metrics hold ``quantity``) and its table."""
+        from nlgrd.nonlinear.models.geared import geared_continuation
+
+        res = geared_continuation(
+            self.model.system, begin, end, H=H, model=self.model, stability=stability, **options
+        )
+        return res, res.to_frame()
+
+    def time_model(self):
+        """The model :func:`nlgrd.timedomain.sweep_answers.answer_sweep` takes: None (it
+        integrates the system's geared model itself)."""
+        return None
+
+    def period_model(self, nu: int, H: int):
+        """The period-ν GearedModel serving ν H' harmonics of ω/ν, H' the larger of ``H`` and
+        the harmonics per mesh period ``model`` was built for (a model is never rebuilt
+        smaller); ``model`` itself when it is that one, else built once (``model.cache``)."""
+        from nlgrd.nonlinear.models.geared import build_geared_model
+
+        m = self.model
+        n = nu * max(H, m.H // self.nu)
+        if (nu, n) == (self.nu, m.H):
+            return m
+        return m.cache.get(
+            ("period", nu, n),
+            lambda: build_geared_model(
+                m.system, m.max_mesh_frequency, n, m.receptance.requested_method, period=nu
+            ),
+        )
+
+    def model_of(self, H: int, top: float):
+        """``model_of(nu)`` for the orbit search: the period-ν reduced model
+        (:meth:`period_model`; ``top`` is the model's own ``max_mesh_frequency``)."""
+        return lambda nu: self.period_model(nu, H).reduced
+
+    def row(self, o) -> dict:
+        m = o.metrics
+        return {
+            "mesh_frequency [Hz]": o.omega / (2 * np.pi),
+            "pinion_speed [rpm]": float(self.model.pinion_rpm(o.omega)),
+            "dte_rms [um]": np.nan if m is None else m.dte_rms * 1e6,
+            "force_max [N]": np.nan if m is None else m.force_max,
+            "dslr [-]": np.nan if m is None else m.dslr,
+        }
+
+    def text(self, row: dict) -> str:
+        return f"RMS DTE {row['dte_rms [um]']:.4g} um"
+
+    def frame(self, branch) -> pd.DataFrame:
+        f = branch.to_frame()
+        f.insert(0, "pinion_speed [rpm]", self.model.pinion_rpm(branch.omega))
+        return f
+
+    def table(self, res) -> pd.DataFrame:
+        """The sweep's table (:meth:`GearedSweepResult.to_frame`: the pinion speed beside the
+        mesh frequency)."""
+        return res.to_frame()
+
+    def words(self) -> str:
+        """What the sweep's summary says of the model before its H: nothing (one mesh)."""
+        return ""
+
+    def figure(self, res, frame, quantity: str, x: str, xaxis, title: str, branches=None):
+        """The sweep's figure: ``quantity`` (a metric name) against ``xaxis`` (label, value per
+        mesh frequency [Hz]), the branches of ``x`` when given
+        (:func:`nlgrd.plotting.nonlinear.plot_sweep`)."""
+        from nlgrd.plotting.common import place_legend
+        from nlgrd.plotting.nonlinear import plot_sweep
+
+        title = f"{title}\nH = {res.mesh.H} harmonics of the mesh frequency"
+        ax = plot_sweep(res.mesh, quantity=quantity, xaxis=xaxis, title=title)
+        if branches is not None:
+            from nlgrd.plotting.sweep_figures import draw_branches
+
+            draw_branches(ax, branches, x, quantity)
+            ax.set_xlabel(xaxis[0])
+            place_legend(ax, fontsize=7)
+        ax.figure.tight_layout()
+        return ax.figure
+
+    def on_sweep(self, res):
+        """``known(orbit, omega, followed)``: the sweep ``res`` has the orbit (its period, RMS
+        DTE and largest force to 1e-6) at a converged, stable point of that speed."""
+        mesh = res.mesh
+
+        def known(o, w: float, followed) -> bool:
+            here = np.nonzero(np.isclose(mesh.omega, w, rtol=1e-12) & mesh.converged & ~mesh.no_stable)[0]
+            return o.metrics is not None and any(
+                int(mesh.period[i]) == o.period
+                and np.isclose(mesh.metrics["dte_rms"][i], o.metrics.dte_rms, rtol=1e-6)
+                and np.isclose(mesh.metrics["force_max"][i], o.metrics.force_max, rtol=1e-6)
+                for i in here
+            )
+
+        return known
+
+    def result(self, res, H: int):
+        """The merged period-ν response ``res`` with its bearing loads: a GearedSweepResult."""
+        import dataclasses as dc
+
+        from nlgrd.nonlinear.models.geared import GearedSweepResult
+        from nlgrd.nonlinear.results.bearing_loads import bearing_names, bearing_response
+
+        model = self.period_model(self.nu, H)
+        on_base = dc.replace(res, omega=res.omega / self.nu)  # the frequencies the model's receptances take
+        names = bearing_names(model.system)
+        return GearedSweepResult(res, bearing_response(model, on_base), model.pinion_rpm(res.omega), names, H)
+
+
+class LinkView:
+    """A link model: its sweep and continuation, the sweep's table and figure, the period-ν
+    models and what is written of each orbit and branch: the base frequency, the reference
+    shaft speed and every link's outputs over the orbit's whole period (as
+    :func:`~nlgrd.nonlinear.models.link_model.link_sweep`'s columns).
+
+    Parameters
+    ----------
+    model : LinkModel
+        The sweep's model.
+    column : str or None
+        The output column drawn, continued and printed for each orbit (``--quantity``;
+        None: the periodic models alone, as :func:`nlgrd.analyses.search_orbits` uses).
+    """
+
+    def __init__(self, model, column: str | None):
+        from nlgrd.nonlinear.results.link_results import output_names
+
+        self.model, self.column = model, column
+        self.per_base = model.receptance.plan.speed_per_base * 60  # [rpm per Hz of the base]
+        self.outputs = output_names(model)
+        self.columns = (
+            "search at",
+            "base_frequency [Hz]",
+            "shaft_speed [rpm]",
+            "period",
+            "stable",
+            "floquet_max [-]",
+            "on the sweep",
+            *self.outputs,
+            "amplitude [um]",
+            "start",
+        )
+
+    def points(self, res):
+        """The harmonic-balance points of a sweep of this model (a SweepResult)."""
+        return res.result
+
+    def sweep(self, omegas, H, directions: str, stability: bool, period, progress=None):
+        """:func:`~nlgrd.nonlinear.models.link_model.link_sweep` of the model over ``omegas`` [rad/s]."""
+        from nlgrd.nonlinear.models.link_model import link_sweep
+
+        return link_sweep(
+            self.model,
+            omegas,
+            H=H,
+            directions=directions,
+            stability=stability,
+            period=period,
+            progress=progress,
+        )
+
+    def continuation(self, begin: float, end: float, H, quantity: str, stability: bool, **options):
+        """:func:`~nlgrd.nonlinear.models.link_model.link_continuation` from ``begin`` to
+        ``end`` [rad/s]: the curve (its metrics hold the output column ``quantity``) and its
+        table."""
+        import dataclasses
+
+        from nlgrd.nonlinear.models.link_model import link_continuation
+
+        res = link_continuation(self.model, begin, end, H, stability=stability, **options)
+        metrics = {**res.curve.curve.metrics, quantity: res.links[quantity].to_numpy()}
+        curve = dataclasses.replace(res.curve, curve=dataclasses.replace(res.curve.curve, metrics=metrics))
+        return curve, res.to_frame()
+
+    def time_model(self):
+        """The model :func:`nlgrd.timedomain.sweep_answers.answer_sweep` takes: this one."""
+        return self.model
+
+    def period(self, nu: int):
+        """The period-ν model (:func:`~nlgrd.nonlinear.models.link_model.period_model`)."""
+        from nlgrd.nonlinear.models.link_model import period_model
+
+        return period_model(self.model, nu)
+
+    def values(self, harmonics, omega: float, nu: int) -> dict:
+        """Every link's and bearing's outputs of an orbit of ν base periods at the base
+        frequency ω [rad/s]."""
+        from nlgrd.nonlinear.results.link_results import point_outputs
+
+        return point_outputs(self.period(nu), harmonics, omega / nu)
+
+    def row(self, o) -> dict:
+        hz = o.omega / (2 * np.pi)
+        return {
+            "base_frequency [Hz]": hz,
+            "shaft_speed [rpm]": hz * self.per_base,
+            **self.values(o.harmonics, o.omega, o.period),
+        }
+
+    def text(self, row: dict) -> str:
+        return f"{self.column} {row[self.column]:.4g}"
+
+    def table(self, res) -> pd.DataFrame:
+        """The sweep's table (:meth:`LinkSweepResult.to_frame`) with the reference shaft
+        speed beside the base frequency."""
+        frame = res.to_frame()
+        per_base = self.model.receptance.plan.speed_per_base
+        frame.insert(1, "shaft_speed [rpm]", frame["base_frequency [Hz]"] * per_base * 60)
+        return frame
+
+    def words(self) -> str:
+        """What the sweep's summary says of the model before its H: its links and base."""
+        plan = self.model.receptance.plan
+        return (
+            f"links {', '.join(lk.name for lk in self.model.links)}, base frequency = {plan.name} "
+            f"({1 / plan.speed_per_base:.6g} x the shaft speed), "
+        )
+
+    def figure(self, res, frame, quantity: str, x: str, xaxis, title: str, branches=None):
+        """The sweep's figure: the column ``quantity`` of ``frame`` against its column ``x``,
+        the branches when given (:func:`nlgrd.plotting.sweep_figures.plot_link_sweep`)."""
+        from nlgrd.plotting.sweep_figures import plot_link_sweep
+
+        title = f"{title}\nbase frequency: {self.model.receptance.plan.name}, H = {res.result.H}"
+        return plot_link_sweep(frame, x, quantity, title, branches).figure
+
+    def on_sweep(self, res):
+        """``known(orbit, omega, followed)``: the sweep ``res`` has the orbit (its period and
+        every output to 1e-6) at a converged, stable point of that speed."""
+        r = res.result
+
+        def known(o, w: float, followed) -> bool:
+            here = np.nonzero(
+                np.isclose(r.omega, w, rtol=1e-12) & r.converged & ~np.asarray(r.no_stable, dtype=bool)
+            )[0]
+            mine = self.values(o.harmonics, o.omega, o.period)
+            return any(
+                int(r.period[i]) == o.period
+                and all(np.isclose(res.links[k].iloc[i], v, rtol=1e-6, atol=0) for k, v in mine.items())
+                for i in here
+            )
+
+        return known
+
+    def result(self, branch, H: int | None = None):
+        """``branch`` (one period) with every link's outputs where it is the response: a
+        :class:`~nlgrd.nonlinear.results.link_results.LinkSweepResult`."""
+        from nlgrd.nonlinear.results.link_results import LinkSweepResult, bearing_columns
+
+        nu = int(branch.period[0]) if len(branch) else 1
+        usable = branch.converged & ~np.asarray(branch.no_stable, dtype=bool)
+        blank = dict.fromkeys(self.outputs, np.nan)
+        rows = [
+            self.values(branch.harmonics[i], float(branch.omega[i]), nu) if usable[i] else blank
+            for i in range(len(branch))
+        ]
+        return LinkSweepResult(branch, pd.DataFrame(rows, columns=self.outputs), bearing_columns(self.model))
+
+    def frame(self, branch) -> pd.DataFrame:
+        f = self.result(branch).to_frame()
+        f.insert(0, "shaft_speed [rpm]", f["base_frequency [Hz]"] * self.per_base)
+        return f
+
+    def model_of(self, H: int, top: float):
+        """``model_of(nu)`` for the orbit search: the period-ν reduced model, its basis
+        serving H harmonics of the base up to ``top`` [rad/s]."""
+
+        def model_of(nu: int):
+            m = self.period(nu)
+            m.receptance.prepare(H * top)  # a modal basis (large models) serving νH harmonics of ω/ν
+            return m.reduced
+
+        return model_of
+
+
+def search_beside(view, res, omegas, at, periods, unit, report=None) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """``--search-at``: search at each speed, report what was found, follow the stable orbits
+    the sweep does not have over its grid
+    (:func:`~nlgrd.nonlinear.tracing.period_branches.search_and_follow`).
+
+    Parameters
+    ----------
+    view : GearedView or LinkView
+        The sweep's model and its columns.
+    res : GearedSweepResult or LinkSweepResult
+        The sweep.
+    omegas : ndarray
+        The sweep's base frequencies [rad/s].
+    at : ndarray
+        Search speeds, in the unit of ``unit``.
+    periods : tuple of int
+        Periods sought [base periods].
+    unit : callable
+        Base frequency [rad/s] to text in the range's unit; ``unit.omega`` the inverse.
+    report : callable, optional
+        Takes each progress line (None: silent).
+
+    Returns
+    -------
+    (DataFrame, DataFrame)
+        The orbits found and the followed branches.
+    """
+    from nlgrd.nonlinear.tracing.period_branches import search_and_follow
+
+    H = view.points(res).H
+    model_of = view.model_of(H, float(np.max(omegas)))
+    orbits, branches, _ = search_and_follow(
+        model_of, omegas, at, periods, H, unit, view.on_sweep(res), "the sweep's", view, report=report
+    )
+    if orbits.empty and report is not None:
+        report("orbit search: nothing converged at the speeds given")
+    return orbits, branches
+
+
+def period_branches(view, omegas, at, nu: int, H: int | None, directions: str, unit, report=None):
+    """``--period N`` (N >= 3): period-N orbits searched at ``at``, each new one followed over
+    the grid, the branches merged into one response per grid point and direction, its
+    harmonic error estimated at the next rung
+    (:func:`~nlgrd.nonlinear.tracing.period_branches.period_response`).
+
+    Parameters
+    ----------
+    view : GearedView or LinkView
+        The model (a GearedView holds the period-ν model) and its columns.
+    omegas : ndarray
+        The grid's base frequencies [rad/s].
+    at : ndarray
+        Search speeds, in the unit of ``unit``.
+    nu : int
+        The period sought [base periods].
+    H : int or None
+        Harmonics of the base (ν H of ω/ν); None: :data:`PERIOD_HARMONICS`.
+    directions : {"both", "up", "down"}
+        Sweep directions of the response.
+    unit : callable
+        Base frequency [rad/s] to text in the range's unit; ``unit.omega`` the inverse.
+    report : callable, optional
+        Takes each progress line (None: silent).
+
+    Returns
+    -------
+    (GearedSweepResult or LinkSweepResult or None, DataFrame, DataFrame)
+        The response (None when no period-ν orbit was found), the orbits found and the
+        followed branches.
+    """
+    from nlgrd.nonlinear.tracing.orbit_search import N_STARTS
+    from nlgrd.nonlinear.tracing.period_branches import period_response
+
+    H = H or PERIOD_HARMONICS
+    top = float(np.max(omegas))
+    if report is not None:
+        where = ", ".join(f"{v:g}" for v in at) + f" {unit.name}"
+        report(f"period {nu}: searching at {where} ({N_STARTS} starts each, H = {H})")
+    res, orbits, frames = period_response(
+        view.model_of(H, top),
+        lambda H_check: view.model_of(H_check, top)(nu),
+        omegas,
+        at,
+        nu,
+        H,
+        unit,
+        directions,
+        view,
+        report=report,
+    )
+    return (None if res is None else view.result(res, H)), orbits, frames

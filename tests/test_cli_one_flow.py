@@ -1,0 +1,72 @@
+"""Issue 33 item 7, "one sweep flow for every model": ``nlgrd sweep`` writes and summarises a
+sweep of one gear pair (its mesh coordinate) and of a link model (a bearing clearance) by
+one path (:mod:`nlgrd.cli.sweep`), and the period-ν models of the orbit search are built
+once (:class:`nlgrd.nonlinear.models.model_views.GearedView`).
+
+The numbers are checked elsewhere (tests/test_cli*.py, tests/test_capability_matrix.py);
+these are checks of the flow: the same summary on both, the speeds as typed."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from nlgrd.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+#: model -> (range option, range, the speed column of the CSV); 3 points each, H = 5,
+#: below the first strong resonance (tests/test_capability_matrix.py's ranges): about 1 s.
+CASES = {
+    "two_shaft": ("--rpm", "1800:2000:3", "pinion_speed [rpm]"),
+    "two_shaft_clearance": ("--rpm", "2000:3000:3", "shaft_speed [rpm]"),
+}
+#: The summary's first line: the same fields on every model, in this order.
+FIELDS = (
+    "points (up)",
+    "H = 5",
+    "not converged",
+    "without a stable periodic response",
+    "answered by the torus harmonic balance",
+    "answered in the time domain",
+)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_one_summary_and_the_typed_speeds_on_every_model(name, tmp_path, capsys):
+    """One summary for both kinds of model: its first line has every field of FIELDS in
+    order (the one-mesh line had only the first three before the two paths were merged);
+    the CSV's speed column is the typed grid exactly (snapped; rtol 0)."""
+    option, span, column = CASES[name]
+    out = tmp_path / "s.csv"
+    argv = ["sweep", str(ROOT / "data" / "models" / f"{name}.toml"), option, span]
+    assert main([*argv, "--harmonics", "5", "--direction", "up", "--out", str(out)]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    at = [first.find(f) for f in FIELDS]
+    assert min(at) >= 0 and at == sorted(at), first
+    df = pd.read_csv(out)
+    np.testing.assert_array_equal(
+        df[column].to_numpy(), [2000.0, 2500.0, 3000.0] if "clearance" in name else [1800.0, 1900.0, 2000.0]
+    )
+
+
+def test_period_models_are_built_once_and_never_smaller():
+    """GearedView.period_model: the view's own model for its period and H (no rebuild);
+    another period is built once (the same object on the second call, from the model's
+    cache) with at least as many harmonics per mesh period as the model (ν max(H, H_model)),
+    so a search beside a sweep whose H is below the model's does not solve on a smaller
+    basis than the sweep's own model."""
+    from nlgrd import load
+    from nlgrd.nonlinear.models.geared import build_geared_model
+    from nlgrd.nonlinear.models.model_views import GearedView
+
+    system = load(ROOT / "data" / "models" / "two_shaft.toml")
+    top = 2 * np.pi * 3200.0
+    model = build_geared_model(system, top, H=5)
+    view = GearedView(model)
+    assert view.period_model(1, 3) is model and view.period_model(1, 5) is model
+    two = view.period_model(2, 3)
+    assert two.H == 10 and view.period_model(2, 5) is two
+    assert view.period_model(2, 7).H == 14
