@@ -246,7 +246,8 @@ def locate_bifurcations(
     from the harmonic-balance orbit of the stable side's point; none where that branch is
     still stable at the unstable point, which lies on another branch). Folds (:func:`locate_fold`):
     from every row where the sweep jumps
-    (:meth:`~nlgrd.nonlinear.results.sweep_results.SweepResult.jumps`) or its branch ends,
+    (:meth:`~nlgrd.nonlinear.results.sweep_results.SweepResult.jumps`) or its branch ends
+    (a row with a converged verdict: its orbit is an exact one),
     and from the first unstable row where a branch turns unstable, the branch is followed
     on the exact flow, stable or not, to :data:`FOLD_REACH` past the sweep's end; where it
     ends, the fold that ends it (a multiplier +1 no verdict change shows; a stable-seeking
@@ -305,7 +306,8 @@ def locate_bifurcations(
         rows = np.nonzero(result.direction == d)[0]
         end = float(result.omega[rows[-1]]) if rows.size else 0.0
         w_far = end + sign * FOLD_REACH * abs(end)  # each branch followed past the sweep's end
-        for i in sorted({i for i, _ in _branch_ends(result, d)} | set(starts)) if folds else ():
+        ends = {i for i, _ in _branch_ends(result, d) if ok[i]}  # an exact orbit to start from
+        for i in sorted(ends | set(starts)) if folds else ():
             w = locate_fold(model, result.harmonics[i], float(result.omega[i]), w_far, rtol=1e-3 * rtol)
             if w is not None and not any(k == "fold" and abs(w - v) <= rtol * abs(v) for _, k, v in found):
                 found.append((d, "fold", w))
