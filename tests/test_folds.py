@@ -30,7 +30,7 @@ from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.laws.force_laws import ContactStop
 from nlgrd.nonlinear.results.metrics import MeshMetrics
 from nlgrd.nonlinear.results.sweep_results import assemble_result
-from nlgrd.nonlinear.stability.verdicts import _branch_ends, _fold_test, locate_bifurcations, locate_fold
+from nlgrd.nonlinear.stability.verdicts import _branch_ends, locate_bifurcations, locate_fold
 from nlgrd.nonlinear.tracing.continuation import continuation, refine_turning_points
 from nlgrd.nonlinear.tracing.sweep import sweep
 
@@ -58,13 +58,6 @@ def preloaded_chain(nu: int = 1) -> ReducedModel:
     seat = np.array([0.0, pr.SEAT, 0.0])
     stop = ContactStop(pr.KC, 0.0, spread(seat, nu) if nu > 1 else seat)
     return ReducedModel.from_matrices(pr.M, pr.D, pr.K, pr.W, np.array([0.0, PRELOAD]), (stop,))
-
-
-def test_fold_test_function():
-    """|μ - 1|² of the multiplier nearest +1: zero at a fold, blind to flips and tori."""
-    assert _fold_test(np.array([1.0, 0.5, -0.3])) == 0.0
-    assert _fold_test(np.array([-1.0, 0.2 + 0.5j, 0.2 - 0.5j])) == pytest.approx(0.8**2 + 0.5**2)
-    assert _fold_test(np.array([1.1, 0.9])) == pytest.approx(0.01)
 
 
 def _point(H: int = 2) -> MeshMetrics:
@@ -253,3 +246,97 @@ def test_period_two_fold_of_the_preloaded_chain():
     found = locate_bifurcations(preloaded_chain(2), res, nu=2)
     print(found, P2_FOLD)
     assert len(found) == 1 and found[0][1] == "fold" and abs(found[0][2] - P2_FOLD) < 1e-5, found
+
+
+def test_closed_stop_fold_past_grazing_is_the_reference():
+    """From the closed-stop orbit at 1.38 rad/s (the linear response: the stop closed all
+    period) towards 1.40, locate_fold finds the closed branch's first fold past its grazing,
+    :data:`FOLDS_CLOSED` [0] of the reference's pseudo-arc-length continuation, within 1e-8
+    rad/s (both to 1e-9). The former march in ω, which took each orbit within 5 % of the
+    last, hopped between the coexisting orbits there and returned 1.3865769 rad/s (2e-3
+    off). ~8 s."""
+    model = preloaded_chain()
+    z = model.at(1.38, 13).linear_solution().reshape(1, -1)
+    w = locate_fold(model, z, 1.38, 1.40, rtol=1e-9)
+    print(f"closed-stop fold {w!r}, reference {FOLDS_CLOSED[0]}")
+    assert w is not None and abs(w - FOLDS_CLOSED[0]) < 1e-8
+
+
+def test_a_sweep_past_its_branch_end_restarts():
+    """A down sweep (stability off) from the reference's exact lifted-off orbit at 1.29 rad/s
+    to 1.28, past the H = 13 branch's fold (1.2831 rad/s): the step from 1.29 has no orbit,
+    and the point is solved from the sweep's fresh starts (the linear one). Before, it was
+    left not converged (Newton from the ended branch only). Its orbit is the closed-stop
+    chain's, checked against the analytic linear response with the stop closed all period
+    (mean K_c⁻¹ F₀, first harmonic (K_c - ω² M + iω D)⁻¹ k_c a): to 1e-9 of the
+    amplitude (both exact: the orbit is linear). ~5 s."""
+    model = preloaded_chain()
+    res = sweep(model, [1.29, 1.28], 13, "down", stability=False, z0=reference_harmonics(1.29))
+    assert res.converged.tolist() == [True, True] and bool(res.branch_switch[1])
+    Kc = pr.K + pr.KC * pr.W @ pr.W.T
+    mean = np.linalg.solve(Kc, [0.0, PRELOAD])[1]
+    first = np.linalg.solve(Kc - 1.28**2 * pr.M + 1j * 1.28 * pr.D, pr.KC * pr.SEAT * pr.W[:, 0])[1]
+    z = res.harmonics[1, 0]
+    assert abs(z[0] - mean) < 1e-9 and abs(complex(z[1], -z[2]) - first) < 1e-9 * abs(first)
+    assert np.max(np.abs(z[3:])) < 1e-9  # the stop closed all period: no higher harmonics
+    assert abs(first - pr.SEAT) < mean  # x₂ - u > 0 at every angle: closed all period
+
+
+def _reference_max(model: ReducedModel, harmonics, omega: float) -> float | None:
+    """max |μ| of the reference's exact orbit shot from the library's orbit (None: no orbit)."""
+    from nlgrd.nonlinear.stability.shooting import initial_state
+
+    ss = model.linear_state_space(omega)
+    s = initial_state(ss, model.nonlinearities, harmonics, omega, model.static_force)
+    _, Phi, ok = pr.shoot(s, omega, stop=pr.Stop(0.0, PRELOAD))
+    return float(np.max(np.abs(np.linalg.eigvals(Phi)))) if ok else None
+
+
+@pytest.fixture(scope="module")
+def default_up():
+    """The default converged sweep up 1.25-1.45 rad/s, 51 frequencies (H = 5 chosen)."""
+    import warnings
+
+    from nlgrd.nonlinear.tracing.harmonic_convergence import HarmonicsWarning, converged_sweep
+
+    model = preloaded_chain()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", HarmonicsWarning)
+        return model, converged_sweep(model, np.linspace(1.25, 1.45, 51), "up")
+
+
+@pytest.mark.slow  # the default sweep (~50 s free, 94 s under load 7) and 39 reference shots
+def test_preloaded_chain_with_defaults_verdicts(default_up):
+    """Part of the issue's acceptance on the preloaded chain, with defaults: every orbit
+    converges, and every settled verdict is the reference's (its exact orbit shot from the
+    row's orbit, stable below 1 + 1e-6: both exact up to the contact times, 1e-13 T). The
+    rows of 1.386-1.426 rad/s, where the sweep follows harmonic-balance orbits that have no
+    exact orbit near them, are "not converged" (12 of 51 at 1.386-1.430 rad/s), never stable
+    or unstable: the issue's >= 50 frequencies with a verdict are not met (39). ~110 s
+    with the sweep on the shared machine."""
+    model, res = default_up
+    assert res.converged.all()
+    settled = np.nonzero(res.verdict_converged)[0]
+    refs = [_reference_max(model, res.harmonics[i], float(res.omega[i])) for i in settled]
+    wrong = [
+        float(res.omega[i])
+        for i, r in zip(settled, refs, strict=True)
+        if r is None or bool(res.stable[i]) != (r < 1 + 1e-6)
+    ]
+    print(f"{settled.size} of {len(res)} verdicts settled; wrong: {wrong}")
+    assert wrong == [] and settled.size >= 39
+    loose = res.omega[~res.verdict_converged]
+    assert loose.min() > 1.3845 and loose.max() < 1.4301
+
+
+@pytest.mark.slow  # with the sweep above; locate_fold 8 s free, 24 s under load 7
+def test_preloaded_chain_with_defaults_closed_fold(default_up):
+    """The default sweep up jumps after 1.382 rad/s, where the closed branch folds past its
+    grazing: locate_fold from that row finds the reference's fold :data:`FOLDS_CLOSED` [0]
+    within 1e-8 rad/s (both to 1e-9; the issue asks 1e-3)."""
+    model, res = default_up
+    i, w_off = _branch_ends(res, "up")[0]
+    assert res.omega[i] == pytest.approx(1.382) and res.verdict_converged[i]
+    w = locate_fold(model, res.harmonics[i], float(res.omega[i]), 1.40, rtol=1e-9)
+    print(f"fold {w!r}, reference {FOLDS_CLOSED[0]}")
+    assert w is not None and abs(w - FOLDS_CLOSED[0]) < 1e-8

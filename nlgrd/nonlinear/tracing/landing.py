@@ -18,6 +18,7 @@ from nlgrd.nonlinear.hb.harmonic_balance import HarmonicSolution
 from nlgrd.nonlinear.hb.solvers import solve
 from nlgrd.nonlinear.results.sweep_results import STABLE_RTOL
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.stability.shooting import shooting_start
 from nlgrd.nonlinear.tracing.arclength import jump_to_branch
 
 #: Newton iterations from the previous point beyond which a sweep checks by arc-length
@@ -128,6 +129,43 @@ def restart(model, problem, z_prev, omega, H, method, tol, max_iter, unstable=No
         if d < best_d:
             best, best_d = cand, d
     return best
+
+
+def fresh_start(model, problem, z_prev, omega, H, method, tol, max_iter, stability):
+    """A solution past the end of the branch a sweep followed, where every step from it
+    failed: the starts of :func:`restart` (the full-contact linear response, the previous
+    orbit's alternating part scaled) and the exact orbit shot from the linear response
+    (:func:`~nlgrd.nonlinear.stability.shooting.shooting_start`); the stable solution nearest
+    the previous one, else (the sweep leaves unstable points to its own rules) the nearest
+    unstable one.
+
+    Parameters
+    ----------
+    model, problem : ReducedModel, ReducedProblem
+        As :func:`restart`.
+    z_prev : ndarray
+        The last orbit of the sweep: real harmonics (n_nl, 2H+1) or flattened [m].
+    omega : float
+        Mesh frequency of the point [rad/s].
+    H, method, tol, max_iter : int, str, float, int
+        As :func:`restart`.
+    stability : bool
+        The sweep computes stability: prefer a stable solution.
+
+    Returns
+    -------
+    HarmonicSolution or None
+        None when no start converges.
+    """
+    unstable: list[HarmonicSolution] = []
+    best = restart(model, problem, z_prev, omega, H, method, tol, max_iter, unstable=unstable)
+    if best is not None and stability:
+        return best
+    cands = [c for c in (best, *unstable) if c is not None]
+    if not cands and (zs := shooting_start(model, float(omega), H)) is not None:
+        sol = solve(problem, zs, method=method, tol=tol, max_iter=max_iter, fallback=False)
+        cands = [sol] if sol.converged else []
+    return min(cands, key=lambda c: distance(c, z_prev)) if cands else None
 
 
 def pool_candidates(model, problem, pool, omega, direction, tol, max_iter) -> list[HarmonicSolution]:

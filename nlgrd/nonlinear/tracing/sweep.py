@@ -370,6 +370,10 @@ def _sweep_pass(
                 if cands:
                     sol = min(cands, key=lambda c: 0.0 if z is None else landing.distance(c, z))
                     switched = z is not None
+            if not sol.converged and z is not None and jump != "none":  # past a branch's end
+                cand = landing.fresh_start(model, problem, z, w, H, method, tol, max_iter, stability)
+                if cand is not None:
+                    sol, switched = cand, True
             fmax, dom, lost = np.nan, complex(np.nan, np.nan), False
             if sol.converged:
                 z, last_w = sol.harmonics, float(w)
