@@ -30,9 +30,9 @@ from nlgrd.nonlinear.tracing import torus_sweep as ts
 from nlgrd.nonlinear.tracing.torus_outputs import GearedTorus
 
 ROOT = Path(__file__).resolve().parent.parent
-#: Neimark-Sacker points of the fast report (60 points, 800-6000 Hz): three chaotic gaps and
-#: one torus.
-POINTS_HZ = (2122.0, 3620.3, 5118.6, 4501.7)
+#: Neimark-Sacker points of the fast report (60 points, 800-6000 Hz) where the periodic
+#: solve from rest lands on the unstable orbit: five chaotic gaps and two tori.
+POINTS_HZ = (2386.4, 3620.3, 4942.4, 5118.6, 5559.3, 1593.2, 5471.2)
 
 
 def _target(model, before: bool, count: dict) -> GearedTorus:

@@ -67,8 +67,8 @@ from nlgrd.nonlinear.hb.torus_grid import TorusGrid
 #: at each of the last :data:`STALL_STEPS` iterations while above :data:`STALL_FLOOR`
 #: (module docstring). Measured (benchmarks/README.md, "Failed torus tries"): the 98
 #: failed tries of the Kahraman & Blankenship fast report sit on such a plateau from
-#: iteration 5-20 on (94 of them meet the test); none of its 40 converged tries, nor Kubo's,
-#: has two consecutive iterations within 10 %.
+#: iteration 5-20 on (94 of them meet the test); none of its 40 converged tries, nor of
+#: Kubo's 6, moved by less than 10 % at two consecutive steps.
 STALL_RATIO = 0.05
 #: Consecutive iterations of a stalled residual before the solve stops [-].
 STALL_STEPS = 3

@@ -87,9 +87,7 @@ def link_torus_model(model) -> qp.TorusModel:
 
     def kappa_slope_at(freqs: NDArray, omega: float) -> tuple[NDArray, NDArray]:
         rec = model.receptance
-        speed = rec.plan.speed(omega)
-        velocity = 1j * (rec.model.damping(speed) + rec.C_link)
-        return kappa_and_slope(rec.model, P, velocity, freqs, speed, extra=rec.C_link)
+        return kappa_and_slope(rec.model, P, freqs, rec.plan.speed(omega), extra=rec.C_link)
 
     red = model.reduced
     return qp.TorusModel(kappa_at, red.kappa, red.force, red.nonlinearities, kappa_slope_at=kappa_slope_at)
