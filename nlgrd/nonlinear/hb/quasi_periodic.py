@@ -44,9 +44,9 @@ no phase condition.
 
 A try that cannot converge is stopped early (:data:`STALL_STEPS`): near a regular root
 Newton's residual falls superlinearly, each step squaring the error (Kantorovich; Deuflhard
-2011, Newton Methods for Nonlinear Problems, Springer, ch. 2), so a relative residual that
-moves by less than :data:`STALL_RATIO` over each of :data:`STALL_STEPS` full steps, far
-above the tolerance, marks iterates with no root near them. Where no torus exists
+2004, Newton Methods for Nonlinear Problems, Springer, ch. 2), so a relative residual that
+moves by less than :data:`STALL_RATIO` at each of :data:`STALL_STEPS` steps, far above the
+tolerance, marks iterates with no root near them. Where no torus exists
 (a chaotic band) the deflated steps run off that way: the undeflated step points back to
 the periodic orbit, deflation turns it outward, the k₂ > 0 part doubles each step and the
 relative residual stays put.
@@ -65,7 +65,7 @@ from nlgrd.nonlinear.hb.torus_grid import TorusGrid
 
 #: A Newton solve stops when its relative residual has changed by less than this fraction
 #: at each of the last :data:`STALL_STEPS` iterations while above :data:`STALL_FLOOR`
-#: (module docstring). Measured (benchmarks/README.md, "Failed torus tries"): the 98
+#: (module docstring). Measured (benchmarks/README.md, "`bench_torus_fail.py`"): the 98
 #: failed tries of the Kahraman & Blankenship fast report sit on such a plateau from
 #: iteration 5-20 on (94 of them meet the test); none of its 40 converged tries, nor of
 #: Kubo's 6, moved by less than 10 % at two consecutive steps.
