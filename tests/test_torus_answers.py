@@ -64,7 +64,8 @@ def test_a_torus_that_does_not_converge_falls_back_to_the_time_answer():
     complex pair, but the motion there is chaotic rattling (docs/verification.md,
     "Time-domain answers": λ 190-280 1/s in this band), and no torus converges from the
     critical mode: the point is answered by time integration, as before the torus was
-    tried (the failed attempt costs about 1.1 s CPU a point, measured)."""
+    tried (the failed attempt costs about 0.3 s CPU a point, measured; 1.0 s before the
+    stall stop of tests/test_torus_stall.py)."""
     system = nlgrd.load(str(ROOT / "data" / "case_studies" / "kahraman_blankenship.toml"))
     res = nlgrd.sweep(system, hz=[3600.0], directions="up", time_domain=False)
     assert res.to_frame()["response"].iloc[0] == QUASI_PERIODIC  # a Neimark-Sacker point

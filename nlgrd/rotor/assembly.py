@@ -224,6 +224,16 @@ class LinearModel:
             np.add.at(data, pos, blk.ravel())
         return data
 
+    def dynamic_stiffness_slope_data(self, omega: float, speed: float = 0.0) -> NDArray:
+        """dZ/dω at a fixed speed on the pattern ``_pattern`` (CSC order): -2ω M
+        + i (C + C_i + Ω G) + i C_b(Ω) of the tabulated bearings (the hysteretic part is
+        constant between its whirl-sign changes) [N s/m]."""
+        pat = self._pattern
+        data = -2 * omega * pat["M"] + 1j * (pat["C"] + pat["Ci"] + speed * pat["G"])
+        for (bearing, ratio, _), pos in zip(self.tabulated_bearings, pat["bear"], strict=True):
+            np.add.at(data, pos, (1j * bearing.C(ratio * speed)).ravel())
+        return data
+
     @cached_property
     def _pattern(self) -> dict:
         """The union sparsity pattern and every matrix's data aligned on it."""

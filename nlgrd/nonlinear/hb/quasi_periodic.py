@@ -41,6 +41,15 @@ torus a root and makes the periodic orbits poles.
 
 A forced torus (a second excitation at a given ω₂) is the same balance with ω₂ fixed and
 no phase condition.
+
+A try that cannot converge is stopped early (:data:`STALL_STEPS`): near a regular root
+Newton's residual falls superlinearly, each step squaring the error (Kantorovich; Deuflhard
+2004, Newton Methods for Nonlinear Problems, Springer, ch. 2), so a relative residual that
+moves by less than :data:`STALL_RATIO` at each of :data:`STALL_STEPS` steps, far above the
+tolerance, marks iterates with no root near them. Where no torus exists
+(a chaotic band) the deflated steps run off that way: the undeflated step points back to
+the periodic orbit, deflation turns it outward, the k₂ > 0 part doubles each step and the
+relative residual stays put.
 """
 
 from __future__ import annotations
@@ -53,6 +62,18 @@ from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.hb.torus_grid import TorusGrid
+
+#: A Newton solve stops when its relative residual has changed by less than this fraction
+#: at each of the last :data:`STALL_STEPS` iterations while above :data:`STALL_FLOOR`
+#: (module docstring). Measured (benchmarks/README.md, "`bench_torus_fail.py`"): the 98
+#: failed tries of the Kahraman & Blankenship fast report sit on such a plateau from
+#: iteration 5-20 on (94 of them meet the test); none of its 40 converged tries, nor of
+#: Kubo's 6, moved by less than 10 % at two consecutive steps.
+STALL_RATIO = 0.05
+#: Consecutive iterations of a stalled residual before the solve stops [-].
+STALL_STEPS = 3
+#: Relative residual above which a stalled solve is stopped: 10⁵ x the default tolerance [-].
+STALL_FLOOR = 1e-3
 
 
 @dataclass
@@ -73,6 +94,10 @@ class TorusModel:
     secondary_force : ndarray (n_c,) complex, optional
         A forced torus: the reduced force at (k₁, k₂) = (0, 1) [N]; None for an autonomous
         torus.
+    kappa_slope_at : callable (frequencies, omega) -> (κ, dκ/dΩ), optional
+        κ(Ω) as ``kappa_at`` gives it (the same numbers) and its derivative in Ω at the same
+        speed, both (n, n_c, n_c) [N/m, N s/m], from one factorisation per frequency; None:
+        dR/dω₂ by central differences of ``kappa_at`` (two more κ per frequency).
     """
 
     kappa_at: Callable[[NDArray, float], NDArray]
@@ -80,6 +105,7 @@ class TorusModel:
     periodic_force: Callable[[float, int], NDArray]
     nonlinearities: tuple = ()
     secondary_force: NDArray | None = None
+    kappa_slope_at: Callable[[NDArray, float], tuple[NDArray, NDArray]] | None = None
 
     def __post_init__(self):
         self.nonlinearities = tuple(self.nonlinearities)
@@ -148,6 +174,8 @@ class TorusSolution:
         Newton iterations [-].
     amplitude : float
         ‖Y_{k₂>0}‖ / ‖Y_{k₂=0, k₁>0}‖: how far the torus is from the periodic orbit [-].
+    stalled : bool
+        Newton was stopped early: its residual stalled (:data:`STALL_STEPS`).
     """
 
     omega: float
@@ -158,6 +186,7 @@ class TorusSolution:
     residual: float
     iterations: int
     amplitude: float
+    stalled: bool = False
 
 
 class TorusProblem:
@@ -208,6 +237,23 @@ class TorusProblem:
             hit = self._kappa_cache[key] = out
         return hit
 
+    def kappa_slope(self, secondary: float) -> tuple[NDArray, NDArray]:
+        """κ(Ω_k) (:meth:`kappa`) and dκ(Ω_k)/dω₂ = k₂ κ'(Ω_k), each (|𝒦|, n_c, n_c), by the
+        model's ``kappa_slope_at`` [N/m, N s/m]."""
+        key = float(secondary)
+        g, H1 = self.grid, self.grid.H1
+        kap = np.empty((g.n_terms, self.n_coords, self.n_coords), dtype=complex)
+        slope = np.zeros_like(kap)
+        kap[: H1 + 1] = self._kappa_row0
+        if g.n_terms > H1 + 1:
+            freqs = g.k1[H1 + 1 :] * self.omega + g.k2[H1 + 1 :] * key
+            kap[H1 + 1 :], d = self.model.kappa_slope_at(freqs, self.omega)
+            slope[H1 + 1 :] = g.k2[H1 + 1 :, None, None] * d
+        if len(self._kappa_cache) > 8:
+            self._kappa_cache.clear()
+        self._kappa_cache[key] = kap
+        return kap, slope
+
     def _laws(self, y: NDArray, jacobian: bool) -> tuple[NDArray, NDArray | None]:
         """Link forces on the grid (n_c, N) and their tangents (n_c, n_c, N) by central
         differences (exact for piecewise-linear laws away from the kinks)."""
@@ -252,14 +298,15 @@ class TorusProblem:
         J : ndarray or None
             dR/dz [N/m].
         dR : ndarray or None
-            dR/dω₂ [N s/rad] (central differences of κ).
+            dR/dω₂ [N s/rad] (the model's κ'(Ω), else central differences of κ).
         scale : float
             max(|κ Y|, |G|, |F|) [N].
         """
         g_ = self.grid
         n = self.n_coords
         Y = g_.to_complex(z, n)
-        kap = self.kappa(secondary)
+        slope = jacobian and self.model.secondary_force is None and self.model.kappa_slope_at is not None
+        kap, dk = self.kappa_slope(secondary) if slope else (self.kappa(secondary), None)
         KY = self._linear(Y, kap)
         y = g_.samples(Y)
         gs, dg = self._laws(y, jacobian)
@@ -286,8 +333,9 @@ class TorusProblem:
                     J[a * nr : (a + 1) * nr, b * nr : (b + 1) * nr] += g_.tangent_block(dg[a, b])
         dR = None
         if self.model.secondary_force is None:
-            step = 1e-6 * max(abs(secondary), 1e-3 * self.omega)
-            dk = (self.kappa(secondary + step) - self.kappa(secondary - step)) / (2 * step)
+            if dk is None:  # central differences of κ
+                step = 1e-6 * max(abs(secondary), 1e-3 * self.omega)
+                dk = (self.kappa(secondary + step) - self.kappa(secondary - step)) / (2 * step)
             dR = g_.to_real(self._linear(Y, dk))
         return R, J, dR, scale
 
@@ -334,9 +382,10 @@ def solve_torus(
     Y_ref: NDArray | None = None,
     tol: float = 1e-8,
     max_iter: int = 60,
+    stall: bool = True,
 ) -> TorusSolution:
     """Newton's method on (1), with ω₂ and the phase condition for an autonomous torus and
-    deflation of the periodic family.
+    deflation of the periodic family, stopped early when its residual stalls.
 
     Parameters
     ----------
@@ -357,12 +406,15 @@ def solve_torus(
         max|R| <= tol · max(|κ Y|, |G|, |F|) [-].
     max_iter : int
         Newton iterations [-].
+    stall : bool
+        Stop when the relative residual stalls (:data:`STALL_STEPS` iterations within
+        :data:`STALL_RATIO` above :data:`STALL_FLOOR`); False: run to ``max_iter``.
 
     Returns
     -------
     TorusSolution
         ``converged`` False when the tolerance was not met or Newton fell onto the periodic
-        orbit.
+        orbit; ``stalled`` True when stopped early.
     """
     prob = TorusProblem(model, omega, grid)
     n = prob.n_coords
@@ -371,17 +423,21 @@ def solve_torus(
     mask = np.tile(np.concatenate([grid.k2 > 0, (grid.k2 > 0)[1:]]), n)
     w2 = float(secondary)
     c = phase_row(Y_ref if Y_ref is not None else grid.to_complex(z, n), grid) if autonomous else None
-    res, it, ok = np.inf, 0, False
+    res, it, ok, stalled, flat = np.inf, 0, False, False, 0
     while it < max_iter:
         it += 1
         R, J, dR, scale = prob.residual(z, w2)
-        res = float(np.max(np.abs(R)) / scale)
-        if autonomous:
-            R = np.append(R, c @ z)
-            J = np.block([[J, dR[:, None]], [c[None, :], np.zeros((1, 1))]])
+        last, res = res, float(np.max(np.abs(R)) / scale)
         if res <= tol:
             ok = True
             break
+        flat = flat + 1 if res > STALL_FLOOR and abs(res / last - 1) < STALL_RATIO else 0
+        if stall and flat >= STALL_STEPS:
+            stalled = True
+            break
+        if autonomous:
+            R = np.append(R, c @ z)
+            J = np.block([[J, dR[:, None]], [c[None, :], np.zeros((1, 1))]])
         try:
             step = np.linalg.solve(J, -R)
         except np.linalg.LinAlgError:
@@ -407,7 +463,7 @@ def solve_torus(
         ok = False  # the periodic orbit, not a torus
     if not ok:
         Y = np.full_like(Y, np.nan)
-    return TorusSolution(float(omega), w2, Y, grid, ok, res, it, amp)
+    return TorusSolution(float(omega), w2, Y, grid, ok, res, it, amp, stalled)
 
 
 def periodic_start(Y_periodic: NDArray, grid: TorusGrid, shape: NDArray | None = None, size: float = 0.0):

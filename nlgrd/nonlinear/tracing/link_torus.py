@@ -30,6 +30,7 @@ from nlgrd.nonlinear.tracing.torus_outputs import (
     CHECKED,
     TORUS_OUTPUTS,
     bearing_force_harmonics,
+    kappa_and_slope,
     torus_back_contact,
     torus_bearing_statistics,
     torus_outputs,
@@ -84,8 +85,12 @@ def link_torus_model(model) -> qp.TorusModel:
             out[i] = np.linalg.inv(P.T @ x)
         return out
 
+    def kappa_slope_at(freqs: NDArray, omega: float) -> tuple[NDArray, NDArray]:
+        rec = model.receptance
+        return kappa_and_slope(rec.model, P, freqs, rec.plan.speed(omega), extra=rec.C_link)
+
     red = model.reduced
-    return qp.TorusModel(kappa_at, red.kappa, red.force, red.nonlinearities)
+    return qp.TorusModel(kappa_at, red.kappa, red.force, red.nonlinearities, kappa_slope_at=kappa_slope_at)
 
 
 def torus_link_bearings(model, sol: qp.TorusSolution, n_samples: tuple[int, int] = SAMPLES) -> dict:

@@ -15,6 +15,7 @@ same for a model with any links.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
@@ -74,7 +75,61 @@ def geared_torus_model(model) -> qp.TorusModel:
             out[i] = np.linalg.inv(W.T @ spla.splu(Z).solve(W.astype(complex)))
         return out
 
-    return qp.TorusModel(kappa_at, model.reduced.kappa, model.reduced.force, model.reduced.nonlinearities)
+    def kappa_slope_at(freqs: NDArray, omega: float) -> tuple[NDArray, NDArray]:
+        return kappa_and_slope(rec.model, W, freqs, rec.speed(omega))
+
+    red = model.reduced
+    return qp.TorusModel(kappa_at, red.kappa, red.force, red.nonlinearities, kappa_slope_at=kappa_slope_at)
+
+
+def kappa_and_slope(linear, W: NDArray, freqs: NDArray, speed: float, extra: sp.spmatrix | None = None):
+    """κ(Ω) = (Wᵀ Z(Ω)⁻¹ W)⁻¹ and dκ/dΩ at a fixed speed, one sparse LU of Z per frequency:
+    dκ = -κ (dh) κ, dh = -(Z⁻ᵀ W)ᵀ Z'(Ω) (Z⁻¹ W), Z' on the model's pattern
+    (:meth:`~nlgrd.rotor.assembly.LinearModel.dynamic_stiffness_slope_data`). κ is the
+    number a solve of ``linear.dynamic_stiffness`` (plus i Ω ``extra``) gives.
+
+    Parameters
+    ----------
+    linear : LinearModel
+        Its ``dynamic_stiffness`` is Z without ``extra``.
+    W : ndarray (n, n_c)
+        The coordinates' projection vectors.
+    freqs : ndarray (m,)
+        Ω [rad/s].
+    speed : float
+        Reference shaft speed [rad/s].
+    extra : sparse matrix (n, n), optional
+        Added to Z: i Ω times it (a link model's link damping) [N s/m].
+
+    Returns
+    -------
+    kappa, slope : ndarray (m, n_c, n_c) complex
+        [N/m], [N s/m].
+    """
+    Wc = W.astype(complex)
+    nc = W.shape[1]
+    kap = np.empty((len(freqs), nc, nc), dtype=complex)
+    slope = np.empty_like(kap)
+    pat = linear._pattern
+    rows = pat["indices"]
+    cols = np.repeat(np.arange(linear.n_dofs), np.diff(pat["indptr"]))
+    Z = linear.dynamic_stiffness(float(freqs[0]), speed) if len(freqs) and extra is None else None
+    for i, f in enumerate(freqs):
+        f = float(f)
+        if extra is None:  # the same matrix, its values replaced: no sparse construction
+            Z.data = linear.dynamic_stiffness_data(f, speed)
+            lu = spla.splu(Z)
+        else:
+            lu = spla.splu((linear.dynamic_stiffness(f, speed) + 1j * f * extra).tocsc())
+        u = lu.solve(Wc)
+        kap[i] = np.linalg.inv(W.T @ u)
+        v = lu.solve(Wc, trans="T")
+        d = linear.dynamic_stiffness_slope_data(f, speed)
+        dh = -np.einsum("ri,r,rj->ij", v[rows], d, u[cols])
+        if extra is not None:
+            dh -= 1j * (v.T @ (extra @ u))
+        slope[i] = -kap[i] @ dh @ kap[i]
+    return kap, slope
 
 
 class GearedTorus:

@@ -325,8 +325,9 @@ TORUS_LADDER = (0, 4, 8)
 #: Largest H₁ of the ladder (the model is built for it + 4).
 TORUS_MAX_H = 17
 #: Newton iterations of a sweep's torus solve: Kubo's tori converge in 3-12 from the
-#: critical mode or the previous torus (benchmarks/torus_kubo_reference*.csv); a start
-#: that has not converged by then is abandoned (a chaotic band costs 60 a start otherwise).
+#: critical mode or the previous torus (benchmarks/torus_kubo_reference*.csv), K&B's in
+#: 4-17; a start that has not converged by then is abandoned (a chaotic band costs 60 a
+#: start otherwise), one whose residual stalls sooner (quasi_periodic.STALL_STEPS).
 ANSWER_MAX_ITER = 25
 #: Relative residual of a sweep's torus solve: below the default 1e-8, so that the noise
 #: its start carries (the Floquet mode's last bits) stays far below the digits written.
