@@ -801,3 +801,23 @@ def test_not_converged_marks_alone_set_the_speed_axis(row):
     lo, hi = ax.get_xlim()
     assert lo <= 1000.0 and hi >= 1100.0 and hi - lo < 200.0
     plt.close(fig)
+
+
+def test_error_bars_of_an_rms_stop_at_zero():
+    """K&B's full report drew chaotic answers with ±2σ bars down to -7 µm of RMS DTE (an
+    RMS cannot be negative; 2σ from a short record exceeds the value): the lower bar of a
+    quantity that cannot be negative stops at zero, the upper one keeps 2σ. A signed
+    quantity (the mean DTE) keeps both."""
+    frame = answered_frame(["chaotic"])
+    frame[Y] = 1.0
+    frame["dte_rms_uncertainty [um]"] = 3.0
+    ax = plot_sweep_frame(frame, X, Y, label="FE")
+    segments = [seg for c in ax.collections for seg in c.get_segments()]
+    assert segments and min(min(seg[:, 1]) for seg in segments) == 0.0
+    assert max(max(seg[:, 1]) for seg in segments) == pytest.approx(7.0)
+    signed = frame.rename(
+        columns={Y: "dte_mean [um]", "dte_rms_uncertainty [um]": "dte_mean_uncertainty [um]"}
+    )
+    ax = plot_sweep_frame(signed, X, "dte_mean [um]", label="FE")
+    segments = [seg for c in ax.collections for seg in c.get_segments()]
+    assert min(min(seg[:, 1]) for seg in segments) == pytest.approx(-5.0)

@@ -187,7 +187,7 @@ def plot_sweep_frame(
             _mark_responses(ax, resp, conv, xv, yv, colour, name, ms, inner)
             err = _uncertainty_column(y)
             ev = pd.to_numeric(part[err], errors="coerce").to_numpy(float) if err in part else None
-            _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms, inner)
+            _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms, inner, _nonnegative(y))
     if ylim is not None:
         ax.set_ylim(*[lim if lim is not None else cur for lim, cur in zip(ylim, ax.get_ylim(), strict=True)])
     ax.set_xlabel(axis_label(x))
@@ -226,9 +226,21 @@ def _uncertainty_column(column: str) -> str:
     return f"{stem}_uncertainty{sep}{unit}"
 
 
-def _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms, inner=False) -> None:
+#: Stems of the quantities that cannot be negative (RMS, peak-to-peak, amplitudes, ratios of
+#: magnitudes, fractions): their error bars stop at zero.
+NONNEGATIVE_STEMS = ("_rms", "_p2p", "_amplitude", "dslr", "_fraction")
+
+
+def _nonnegative(column: str) -> bool:
+    """ "dte_rms [um]" -> True: a quantity of :data:`NONNEGATIVE_STEMS`."""
+    stem = column.partition(" [")[0]
+    return stem.endswith(NONNEGATIVE_STEMS)
+
+
+def _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms, inner=False, nonnegative=False) -> None:
     """Time-domain answers: diamonds ("time domain") or stars ("chaotic") at their value,
-    not joined, with error bars of 2 standard uncertainties, each kind counted; the torus
+    not joined, with error bars of 2 standard uncertainties (cut at zero for a quantity
+    that cannot be negative, ``nonnegative``), each kind counted; the torus
     harmonic balance's quasi-periodic answers as squares (no sampling error). Sizes from
     :data:`ANSWER_SIZES`; the up sweep's open, the down sweep's (``inner``) filled and
     smaller, on top, with thinner bars (:func:`~nlgrd.plotting.common.answer_marker_style`)."""
@@ -243,6 +255,8 @@ def _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms, inner=False) -> N
                     zorder=style["zorder"], label=f"{name}: {kind} ({int(at.sum())})")  # fmt: skip
             continue
         yerr = None if ev is None else 2 * np.where(np.isfinite(ev[at]), ev[at], 0.0)
+        if yerr is not None and nonnegative:  # an RMS or a ratio has no negative values
+            yerr = np.vstack([np.minimum(yerr, np.maximum(yt[at], 0.0)), yerr])
         ax.errorbar(xv[at], yt[at], yerr=yerr, fmt=marker, ms=style["ms"], mfc=face, mec=colour,
                     mew=style["mew"], ecolor=colour, elinewidth=style["elinewidth"], capsize=1.5,
                     ls="none", zorder=style["zorder"],
