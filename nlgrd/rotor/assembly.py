@@ -274,8 +274,13 @@ class LinearModel:
         for _, _, dofs in self.tabulated_bearings:
             r, c = np.meshgrid(dofs, dofs, indexing="ij")
             pat["bear"].append(np.searchsorted(keys, c.ravel().astype(np.int64) * n + r.ravel()))
-        pat["indices"], pat["indptr"] = union.indices.copy(), union.indptr.copy()
+        pat["indices"], pat["indptr"], pat["cols"] = union.indices.copy(), union.indptr.copy(), col
         return pat
+
+    @property
+    def pattern_entries(self) -> tuple[NDArray, NDArray]:
+        """Row and column of each non-zero of :meth:`dynamic_stiffness_data` (CSC order) [-]."""
+        return self._pattern["indices"], self._pattern["cols"]
 
 
 def plain_dynamic_stiffness(parts, omega, speed: float) -> NDArray:

@@ -109,7 +109,7 @@ class _Restriction:
         n = model.n_dofs
         new = np.full(n, -1)
         new[keep] = np.arange(len(keep))
-        col = np.repeat(np.arange(n), np.diff(pat["indptr"]))
+        col = model.pattern_entries[1]
         self.sel = np.flatnonzero((new[pat["indices"]] >= 0) & (new[col] >= 0))
         nk = len(keep)
         indptr = np.concatenate([[0], np.cumsum(np.bincount(new[col[self.sel]], minlength=nk))])

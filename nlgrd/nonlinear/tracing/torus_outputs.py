@@ -110,9 +110,7 @@ def kappa_and_slope(linear, W: NDArray, freqs: NDArray, speed: float, extra: sp.
     nc = W.shape[1]
     kap = np.empty((len(freqs), nc, nc), dtype=complex)
     slope = np.empty_like(kap)
-    pat = linear._pattern
-    rows = pat["indices"]
-    cols = np.repeat(np.arange(linear.n_dofs), np.diff(pat["indptr"]))
+    rows, cols = linear.pattern_entries
     Z = linear.dynamic_stiffness(float(freqs[0]), speed) if len(freqs) and extra is None else None
     for i, f in enumerate(freqs):
         f = float(f)
