@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.stability.shooting import _Flow, _laws
+from nlgrd.nonlinear.stability.shooting import model_flow
 
 if TYPE_CHECKING:  # pragma: no cover
     from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
@@ -42,12 +42,6 @@ TOL, CORRECTOR_ITER = 1e-11, 8
 FOLD_MU_ATOL = 1e-3
 #: Relative step of the central difference ∂r/∂ω.
 D_OMEGA = 1e-6
-
-
-def _flow(model: ReducedModel, omega: float) -> _Flow:
-    ss = model.linear_state_space(omega)
-    F0 = np.asarray(model.static_force, dtype=float).reshape(ss.M.shape[0])
-    return _Flow(ss, _laws(model.nonlinearities), F0, omega, 256)
 
 
 class _Branch:
@@ -67,15 +61,15 @@ class _Branch:
     def residual(self, v: NDArray) -> tuple[NDArray, NDArray, float]:
         """(r, Φ, relative residual) at v."""
         s, w = self.unpack(v)
-        end, Phi, _ = _flow(self.model, w).period(s)
+        end, Phi, _ = model_flow(self.model, w).period(s)
         r = end - s
         return r, Phi, float(np.max(np.abs(r * self.c[:-1])))
 
     def jacobian(self, v: NDArray, Phi: NDArray) -> NDArray:
         """[Φ - I, ∂r/∂ω] in the scaled variables (2N x 2N+1)."""
         s, w = self.unpack(v)
-        rp = _flow(self.model, w * (1 + D_OMEGA)).period(s)[0]
-        rm = _flow(self.model, w * (1 - D_OMEGA)).period(s)[0]
+        rp = model_flow(self.model, w * (1 + D_OMEGA)).period(s)[0]
+        rm = model_flow(self.model, w * (1 - D_OMEGA)).period(s)[0]
         dr = (rp - rm) / (2 * D_OMEGA * w)
         return np.column_stack([Phi - np.eye(s.size), dr]) / self.c
 

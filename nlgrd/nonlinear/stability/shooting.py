@@ -477,11 +477,29 @@ def orbit_harmonics(model: ReducedModel, orbit: ShootingOrbit, omega: float, H: 
     ndarray (n_nl, 2H+1)
         Real harmonics [m].
     """
+    return analyse(model_flow(model, omega).samples(orbit.state, max(8 * H, 256)), H)
+
+
+def model_flow(model: ReducedModel, omega: float) -> _Flow:
+    """The exact flow of a reduced model at base frequency ω (its linear state space, laws
+    and static force; 256 cells a period).
+
+    Parameters
+    ----------
+    model : ReducedModel
+        A :func:`shootable` model.
+    omega : float
+        Base frequency ω [rad/s].
+
+    Returns
+    -------
+    _Flow
+        Its period map, monodromy and samples.
+    """
     ss = model.linear_state_space(omega)
     N = ss.M.shape[0]
-    F0 = np.zeros(N) if model.static_force is None else np.asarray(model.static_force, dtype=float)
-    flow = _Flow(ss, _laws(model.nonlinearities), F0, omega, 256)
-    return analyse(flow.samples(orbit.state, max(8 * H, 256)), H)
+    F0 = np.zeros(N) if model.static_force is None else np.asarray(model.static_force, dtype=float).reshape(N)
+    return _Flow(ss, _laws(model.nonlinearities), F0, omega, 256)
 
 
 def shooting_start(model: ReducedModel, omega: float, H: int) -> NDArray | None:
