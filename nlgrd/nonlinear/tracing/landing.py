@@ -131,7 +131,7 @@ def restart(model, problem, z_prev, omega, H, method, tol, max_iter, unstable=No
     return best
 
 
-def fresh_start(model, problem, z_prev, omega, H, method, tol, max_iter, stability):
+def fresh_start(model, problem, z_prev, omega, H, method, tol, max_iter, stability, tried=None):
     """A solution past the end of the branch a sweep followed, where every step from it
     failed: the starts of :func:`restart` (the full-contact linear response, the previous
     orbit's alternating part scaled) and the exact orbit shot from the linear response
@@ -151,14 +151,21 @@ def fresh_start(model, problem, z_prev, omega, H, method, tol, max_iter, stabili
         As :func:`restart`.
     stability : bool
         The sweep computes stability: prefer a stable solution.
+    tried : list of HarmonicSolution, optional
+        The unstable orbits of a :func:`restart` the sweep already ran at this point (it found
+        no stable one): that restart is not repeated. None: not run yet.
 
     Returns
     -------
     HarmonicSolution or None
         None when no start converges.
     """
-    unstable: list[HarmonicSolution] = []
-    best = restart(model, problem, z_prev, omega, H, method, tol, max_iter, unstable=unstable)
+    unstable: list[HarmonicSolution] = [] if tried is None else list(tried)
+    best = (
+        None
+        if tried is not None
+        else restart(model, problem, z_prev, omega, H, method, tol, max_iter, unstable=unstable)
+    )
     if best is not None and stability:
         return best
     cands = [c for c in (best, *unstable) if c is not None]

@@ -323,14 +323,15 @@ def _sweep_pass(
                 sol = solve(problem, zs, method=method, tol=tol, max_iter=max_iter, fallback=False)
             if not sol.converged and z is None and jump != "none":
                 sol = landing.approach(model, problem, order, k, H, method, tol, max_iter, stability) or sol
+            restarts: list[HarmonicSolution] | None = None  # the restarts' unstable orbits, once run
             if not sol.converged and jump == "restart" and z is not None:
-                cand = landing.restart(model, problem, z, w, H, method, tol, max_iter)
+                restarts = []
+                cand = landing.restart(model, problem, z, w, H, method, tol, max_iter, unstable=restarts)
                 if cand is not None:
                     sol, switched = cand, True
                     try_jump = False
             searched = False  # the landing search has already looked for a stable orbit here
             if not sol.converged and try_jump:
-                restarts: list[HarmonicSolution] = []  # the restarts' unstable orbits
                 exhausted: list[bool] = []
                 zj, steps, folds, unstable = searches.jump(
                     model, H, z, last_w, float(w), tol=tol, require_stable=stability, exhausted=exhausted
@@ -351,7 +352,9 @@ def _sweep_pass(
                     if switched and auto:
                         sol = landing.nearest_landing(sol, z, others())
                 elif auto and (
-                    cand := landing.restart(model, problem, z, w, H, method, tol, max_iter, unstable=restarts)
+                    cand := landing.restart(
+                        model, problem, z, w, H, method, tol, max_iter, unstable=(restarts := [])
+                    )
                 ):
                     sol, switched = cand, True
                     sol = landing.nearest_landing(sol, z, others())
@@ -371,7 +374,9 @@ def _sweep_pass(
                     sol = min(cands, key=lambda c: 0.0 if z is None else landing.distance(c, z))
                     switched = z is not None
             if not sol.converged and z is not None and jump != "none":  # past a branch's end
-                cand = landing.fresh_start(model, problem, z, w, H, method, tol, max_iter, stability)
+                cand = landing.fresh_start(
+                    model, problem, z, w, H, method, tol, max_iter, stability, tried=restarts
+                )
                 if cand is not None:
                     sol, switched = cand, True
             fmax, dom, lost = np.nan, complex(np.nan, np.nan), False
