@@ -77,3 +77,100 @@ def test_link_continuation_plot_draws_its_curve():
     for v in values:
         assert np.any(np.isclose(drawn, v, rtol=1e-12, atol=0))
     plt.close(fig)
+
+
+# ----------------------------------------------------------------------------- time responses
+
+#: Kubo's single-DOF pair (tests/test_sdof.py), ζ = 0.02, LSTE of three harmonics.
+LSTE = np.array([0.0, 1.24e-6, 0.0, 0.50e-6, 0.30e-6, 0.10e-6, -0.05e-6])
+
+
+def _sdof():
+    from nlgrd.nonlinear.models.sdof import SDOFGearPair
+
+    return SDOFGearPair(0.261, 0.2587e9, 50e-6, 2295.0, LSTE, damping_ratio=0.02)
+
+
+def _history_checks(res, frame):
+    """The table of a mesh time response: its last period's δ, e and W in µm and N."""
+    h = res.history
+    assert list(frame.columns) == [
+        "time [s]",
+        "dte [um]",
+        "lste [um]",
+        "mesh_deflection [um]",
+        "mesh_force [N]",
+    ]
+    np.testing.assert_array_equal(frame["time [s]"], h.t)
+    np.testing.assert_allclose(frame["dte [um]"], h.delta * 1e6, rtol=1e-15)
+    np.testing.assert_allclose(frame["lste [um]"], h.lste * 1e6, rtol=1e-15)
+    np.testing.assert_allclose(
+        frame["mesh_deflection [um]"], (h.delta - h.lste) * 1e6, rtol=1e-12, atol=1e-12
+    )
+    np.testing.assert_allclose(frame["mesh_force [N]"], h.force, rtol=1e-15)
+
+
+def test_sdof_time_response_table_and_plot():
+    """``nlgrd.timedomain.sdof.integrate``'s TimeResponse: ``to_frame()`` in µm and N, and
+    ``plot(ax=ax)`` draws δ in µm against time in ms on ``ax``."""
+    from nlgrd.timedomain.sdof import integrate
+
+    sd = _sdof()
+    res = integrate(sd, 0.8 * sd.natural_frequency, tol=1e-6)
+    frame = res.to_frame()
+    _history_checks(res, frame)
+    fig, ax = plt.subplots()
+    assert res.plot(ax=ax) is ax
+    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), frame["dte [um]"], rtol=1e-15)
+    plt.close(fig)
+    plt.close(res.plot(quantity="force").figure)
+
+
+def test_fe_time_response_table_and_plot():
+    """``integrate_fe``'s FETimeResponse on the two-inertia pair of tests/test_continuation.py:
+    the same table and plot as the single DOF."""
+    from nlgrd.timedomain.geared import integrate_fe
+
+    sd = _sdof()
+    r, inertia = 0.047, 1.152e-3
+    w = np.array([r, r])
+    res = integrate_fe(
+        np.diag([inertia, inertia]),
+        sd.mesh_damping * np.outer(w, w),
+        np.zeros((2, 2)),
+        w,
+        sd.mesh(),
+        sd.static_load * w,
+        0.8 * sd.natural_frequency,
+        steps_per_period=128,
+        store_dofs=False,
+    )
+    frame = res.to_frame()
+    _history_checks(res, frame)
+    fig, ax = plt.subplots()
+    assert res.plot(quantity="force", ax=ax) is ax
+    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), frame["mesh_force [N]"], rtol=1e-15)
+    plt.close(fig)
+
+
+def test_link_time_response_table_and_plot():
+    """``link_time_response`` of rub_rotor: one column per link coordinate, named
+    ``<link>.<coordinate> [um]``, over one period in time [s]; ``plot(ax=ax)`` draws them."""
+    from nlgrd.nonlinear.models.link_model import build_link_model
+    from nlgrd.timedomain.links import link_time_response
+
+    model = build_link_model(nlgrd.load(RUB))
+    omega = 2 * np.pi * 40.0
+    res = link_time_response(model, omega, steps_per_period=64, tol=1e-4, max_periods=200)
+    frame = res.to_frame()
+    assert list(frame.columns) == ["time [s]", "rub.y [um]", "rub.z [um]"]
+    ns = res.y.shape[1]
+    np.testing.assert_allclose(frame["time [s]"], np.arange(ns) * 2 * np.pi / omega / ns, rtol=1e-15)
+    np.testing.assert_allclose(frame["rub.y [um]"], res.y[0] * 1e6, rtol=1e-15)
+    np.testing.assert_allclose(frame["rub.z [um]"], res.y[1] * 1e6, rtol=1e-15)
+    fig, ax = plt.subplots()
+    assert res.plot(ax=ax) is ax
+    drawn = [np.asarray(line.get_ydata(), dtype=float) for line in ax.get_lines()]
+    assert len(drawn) == 2
+    np.testing.assert_allclose(drawn[1], frame["rub.z [um]"], rtol=1e-15)
+    plt.close(fig)
