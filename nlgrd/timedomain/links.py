@@ -37,8 +37,9 @@ from nlgrd.nonlinear.fourier.harmonics import differentiate, evaluate, sample
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh
 from nlgrd.nonlinear.links.contract import GearMeshLink
 from nlgrd.nonlinear.models.link_model import LinkModel
+from nlgrd.nonlinear.results.link_results import LinkSweepResult, bearing_columns, link_rows
 from nlgrd.nonlinear.results.metrics import MeshMetrics
-from nlgrd.nonlinear.results.sweep_results import SweepResult, assemble_result
+from nlgrd.nonlinear.results.sweep_results import assemble_result
 from nlgrd.nonlinear.tracing.sweep import sweep_orders
 from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.integrator import hht_step, static_solution
@@ -679,7 +680,7 @@ def link_time_sweep(
     *,
     H: int = 15,
     **options,
-) -> SweepResult:
+) -> LinkSweepResult:
     """Time-domain sweeps of a link model, each frequency continuing from the last.
 
     Parameters
@@ -697,9 +698,12 @@ def link_time_sweep(
 
     Returns
     -------
-    SweepResult
-        ``harmonics`` of all link coordinates; ``residual_kind`` "period difference";
-        stability not computed (NA).
+    LinkSweepResult
+        ``result``: ``harmonics`` of all link coordinates, ``residual_kind`` "period
+        difference", stability not computed (NA); ``links``: every link's and linear
+        bearing's outputs from those harmonics, as a harmonic-balance sweep has them
+        (:func:`~nlgrd.nonlinear.results.link_results.link_rows`), NaN where no steady
+        state was reached.
     """
     rows: dict[str, list] = {k: [] for k in "wdzcrim"}
     state = options.pop("state0", None)
@@ -718,7 +722,7 @@ def link_time_sweep(
             )
             for k, v in zip("wdzcrim", vals, strict=True):
                 rows[k].append(v)
-    return assemble_result(
+    res = assemble_result(
         rows["w"],
         rows["d"],
         rows["z"],
@@ -730,3 +734,5 @@ def link_time_sweep(
         "time integration (links, HHT-α)",
         residual_kind="period difference",
     )
+    converged = np.asarray(res.converged, dtype=bool)
+    return LinkSweepResult(res, link_rows(model, res, converged), bearing_columns(model))
