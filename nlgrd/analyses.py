@@ -338,7 +338,9 @@ def time_sweep(
 
     Returns
     -------
-    SweepResult
+    SweepResult or LinkSweepResult
+        The latter (a link model) with every link's and linear bearing's outputs, as
+        :func:`sweep` has them.
     """
     omegas = _omegas(system, rpm, hz)
     m = model(system, float(omegas.max()), int(H))

@@ -268,3 +268,29 @@ def test_static_deflection_rejects_unbalanced_torque_on_free_train():
     )
     with pytest.raises(ModelError, match="rigid-body"):
         static_deflection(sys_, {(0, 2, "θx"): 10.0})
+
+
+def test_bearing_slopes_are_those_of_the_table():
+    """``Bearing.K_slope`` and ``C_slope``: the slopes of the linear interpolation of each
+    tabulated coefficient, by differences of ``stiffness``/``damping`` inside a segment
+    (either sign of the speed: the table is of |Ω|), 0 beyond the table and for constants."""
+    b = Bearing(
+        0,
+        0,
+        kyy=[1e8, 3e8, 2e8],
+        kzz=5e7,
+        kyz=[0.0, 1e7, 4e7],
+        cyy=[100.0, 300.0, 50.0],
+        speeds=[100.0, 200.0, 400.0],
+        kxx=1e9,
+        cxx=10.0,
+    )
+    h = 1e-3
+    for s in (150.0, 250.0, -250.0, 399.0):
+        dk = (b.stiffness(s + h) - b.stiffness(s - h)) / (2 * h)
+        dc = (b.damping(s + h) - b.damping(s - h)) / (2 * h)
+        np.testing.assert_allclose(b.K_slope(s)[1:3, 1:3], dk, rtol=1e-9, atol=1e-9 * np.abs(dk).max())
+        np.testing.assert_allclose(b.C_slope(s)[1:3, 1:3], dc, rtol=1e-9, atol=1e-9 * np.abs(dc).max())
+        assert b.K_slope(s)[0, 0] == 0.0 and b.C_slope(s)[0, 0] == 0.0
+    assert b.K_slope(150.0)[1, 1] == 2e6 and b.K_slope(-250.0)[1, 1] == 5e5  # d/dΩ of |Ω|
+    assert not b.K_slope(50.0).any() and not b.K_slope(500.0).any()

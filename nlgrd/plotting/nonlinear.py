@@ -475,6 +475,33 @@ def plot_time_history(history, quantity: str = "delta", ax=None, label: str | No
     return ax
 
 
+def plot_link_history(frame: pd.DataFrame, ax=None):
+    """Every column of a link time response's table but ``time [s]`` against time [ms]
+    (:meth:`nlgrd.timedomain.link_response.LinkTimeResponse.to_frame`).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        ``time [s]`` and the link coordinates ``<link>.<coordinate> [um]``.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
+    ax = get_ax(ax)
+    t = frame["time [s]"].to_numpy(float) * 1e3
+    for column in frame.columns:
+        if column != "time [s]":
+            ax.plot(t, frame[column].to_numpy(float), label=column.split(" [")[0])
+    ax.set_xlabel("time [ms]")
+    ax.set_ylabel("link coordinate [µm]")
+    ax.legend(fontsize=8)
+    return ax
+
+
 def plot_spectrum(
     omegas,
     amplitude,

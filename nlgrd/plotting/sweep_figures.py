@@ -33,7 +33,7 @@ def draw_branches(ax, branches: pd.DataFrame, x: str, quantity: str) -> None:
         plot_sweep_frame(part, x, column, ax=ax, label=name, series=2 + k % 3)
 
 
-def plot_link_sweep(frame: pd.DataFrame, x: str, column: str, title: str, branches=None):
+def plot_link_sweep(frame: pd.DataFrame, x: str, column: str, title: str | None, branches=None, ax=None):
     """A link sweep's ``column`` against ``x``, with the followed branches when given.
 
     Parameters
@@ -44,25 +44,31 @@ def plot_link_sweep(frame: pd.DataFrame, x: str, column: str, title: str, branch
         Abscissa column ("shaft_speed [rpm]" or "base_frequency [Hz]").
     column : str
         The drawn column ``<link>.<quantity> [unit]``.
-    title : str
-        The figure's title.
+    title : str or None
+        The axes' title (None: none).
     branches : DataFrame, optional
         Branches followed by an orbit search (:func:`draw_branches`).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new figure (laid out tight) when None.
 
     Returns
     -------
     matplotlib.axes.Axes
-        The axes of the new figure.
+        The axes drawn on.
     """
-    fig, ax = plt.subplots(figsize=(7, 4))
+    new = ax is None
+    if new:
+        _, ax = plt.subplots(figsize=(7, 4))
     plot_sweep_frame(frame, x, column, ax, label="sweep")
     ax.set_xlabel(axis_label(x))
     ax.set_ylabel(axis_label(column))
-    ax.set_title(title, fontsize=9)
+    if title:
+        ax.set_title(title, fontsize=9)
     if branches is not None:
         draw_branches(ax, branches, x, column.split(" [")[0])
     place_legend(ax, fontsize=7)
-    fig.tight_layout()
+    if new:
+        ax.figure.tight_layout()
     return ax
 
 

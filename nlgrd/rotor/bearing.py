@@ -98,6 +98,56 @@ class Bearing:
             return float(np.interp(abs(speed), self.speeds, v))
         return float(v)
 
+    def _slope(self, key: str, speed: float) -> float:
+        """d(coefficient)/d(speed) of the linear interpolation at ``speed`` (0 outside the
+        table and for a constant; at a table speed the slope of the segment above it)."""
+        v = getattr(self, key)
+        s = abs(speed)
+        if not isinstance(v, tuple) or s < self.speeds[0] or s >= self.speeds[-1]:
+            return 0.0
+        i = int(np.searchsorted(self.speeds, s, side="right")) - 1
+        return float(np.sign(speed) * (v[i + 1] - v[i]) / (self.speeds[i + 1] - self.speeds[i]))
+
+    def K_slope(self, speed: float = 0.0) -> NDArray:
+        """dK/dΩ: the change of the 6x6 stiffness with shaft speed [N s/m].
+
+        Parameters
+        ----------
+        speed : float
+            Shaft spin speed [rad/s].
+
+        Returns
+        -------
+        ndarray (6, 6)
+            Zero but for the tabulated (uy, uz) coefficients.
+        """
+        k = np.zeros((6, 6))
+        k[1:3, 1:3] = [
+            [self._slope("kyy", speed), self._slope("kyz", speed)],
+            [self._slope("kzy", speed), self._slope("kzz", speed)],
+        ]
+        return k
+
+    def C_slope(self, speed: float = 0.0) -> NDArray:
+        """dC/dΩ: the change of the 6x6 damping with shaft speed [N s²/m].
+
+        Parameters
+        ----------
+        speed : float
+            Shaft spin speed [rad/s].
+
+        Returns
+        -------
+        ndarray (6, 6)
+            Zero but for the tabulated (uy, uz) coefficients.
+        """
+        c = np.zeros((6, 6))
+        c[1:3, 1:3] = [
+            [self._slope("cyy", speed), self._slope("cyz", speed)],
+            [self._slope("czy", speed), self._slope("czz", speed)],
+        ]
+        return c
+
     def stiffness(self, speed: float = 0.0) -> NDArray:
         """2x2 stiffness on (uy, uz) [N/m] at shaft speed ``speed`` [rad/s]."""
         return np.array(

@@ -68,6 +68,34 @@ class FETimeResponse:
         """DTE and mesh-force metrics of the last period."""
         return metrics_from_history(self.history, mesh, H)
 
+    def to_frame(self):
+        """The last period (:meth:`TimeHistory.to_frame
+        <nlgrd.nonlinear.results.metrics.TimeHistory.to_frame>`): time [s], δ, e and δ - e
+        [µm], W [N].
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        return self.history.to_frame()
+
+    def plot(self, quantity: str = "delta", ax=None):
+        """The last period: "delta" (δ and e), "deflection" (δ - e) or "force" (W) against
+        time (:func:`nlgrd.plotting.nonlinear.plot_time_history`).
+
+        Parameters
+        ----------
+        quantity : str
+            "delta", "deflection" or "force".
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure when None.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        return self.history.plot(ax=ax, quantity=quantity)
+
 
 def integrate_fe(
     M,

@@ -33,61 +33,18 @@ import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.fourier.harmonics import analyse, differentiate, evaluate, sample
+from nlgrd.nonlinear.fourier.harmonics import differentiate, evaluate, sample
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh
 from nlgrd.nonlinear.links.contract import GearMeshLink
 from nlgrd.nonlinear.models.link_model import LinkModel
+from nlgrd.nonlinear.results.link_results import LinkSweepResult, bearing_columns, link_rows
 from nlgrd.nonlinear.results.metrics import MeshMetrics
-from nlgrd.nonlinear.results.sweep_results import SweepResult, assemble_result
+from nlgrd.nonlinear.results.sweep_results import assemble_result
 from nlgrd.nonlinear.tracing.sweep import sweep_orders
 from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.integrator import hht_step, static_solution
+from nlgrd.timedomain.link_response import LinkTimeResponse, coordinate_names
 from nlgrd.timedomain.period_map import MAX_STATE, PeriodMap
-
-
-@dataclass(frozen=True)
-class LinkTimeResponse:
-    """The last period of a time integration of a link model.
-
-    Attributes
-    ----------
-    omega : float
-        Base frequency [rad/s].
-    y : ndarray (d, steps_per_period)
-        Link coordinates over the last period [m].
-    converged : bool
-        A periodic steady state was reached.
-    periods : int
-        Periods simulated.
-    difference : float
-        Last relative period-to-period difference of y [-].
-    state : tuple of ndarray
-        (q, q', q'') at the end, to continue a sweep.
-    q : ndarray (len(output_dofs), steps_per_period)
-        The requested DOFs over the last period [m, rad].
-    """
-
-    omega: float
-    y: NDArray
-    converged: bool
-    periods: int
-    difference: float
-    state: tuple
-    q: NDArray
-
-    def harmonics(self, H: int) -> NDArray:
-        """Real harmonics (d, 2H+1) of the link coordinates over the last period [m].
-
-        Parameters
-        ----------
-        H : int
-            Number of harmonics [-].
-
-        Returns
-        -------
-        ndarray (d, 2H+1)
-        """
-        return analyse(self.y, H)
 
 
 def _forcing_samples(model: LinkModel, omega: float, ns: int, H: int) -> NDArray:
@@ -680,6 +637,7 @@ def link_time_response(
         diffs[-1] if diffs else np.inf,
         (s[:N].copy(), s[N : 2 * N].copy(), s[2 * N : 3 * N].copy()),
         q_hist,
+        coordinate_names(model),
     )
 
 
@@ -722,7 +680,7 @@ def link_time_sweep(
     *,
     H: int = 15,
     **options,
-) -> SweepResult:
+) -> LinkSweepResult:
     """Time-domain sweeps of a link model, each frequency continuing from the last.
 
     Parameters
@@ -740,9 +698,12 @@ def link_time_sweep(
 
     Returns
     -------
-    SweepResult
-        ``harmonics`` of all link coordinates; ``residual_kind`` "period difference";
-        stability not computed (NA).
+    LinkSweepResult
+        ``result``: ``harmonics`` of all link coordinates, ``residual_kind`` "period
+        difference", stability not computed (NA); ``links``: every link's and linear
+        bearing's outputs from those harmonics, as a harmonic-balance sweep has them
+        (:func:`~nlgrd.nonlinear.results.link_results.link_rows`), NaN where no steady
+        state was reached.
     """
     rows: dict[str, list] = {k: [] for k in "wdzcrim"}
     state = options.pop("state0", None)
@@ -761,7 +722,7 @@ def link_time_sweep(
             )
             for k, v in zip("wdzcrim", vals, strict=True):
                 rows[k].append(v)
-    return assemble_result(
+    res = assemble_result(
         rows["w"],
         rows["d"],
         rows["z"],
@@ -773,3 +734,5 @@ def link_time_sweep(
         "time integration (links, HHT-α)",
         residual_kind="period difference",
     )
+    converged = np.asarray(res.converged, dtype=bool)
+    return LinkSweepResult(res, link_rows(model, res, converged), bearing_columns(model))

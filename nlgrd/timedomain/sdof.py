@@ -54,6 +54,34 @@ class TimeResponse:
         """Real harmonics 0..H of δ over the last period (FFT of the samples)."""
         return analyse(self.history.delta, H)
 
+    def to_frame(self):
+        """The last period (:meth:`TimeHistory.to_frame
+        <nlgrd.nonlinear.results.metrics.TimeHistory.to_frame>`): time [s], δ, e and δ - e
+        [µm], W [N].
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        return self.history.to_frame()
+
+    def plot(self, quantity: str = "delta", ax=None):
+        """The last period: "delta" (δ and e), "deflection" (δ - e) or "force" (W) against
+        time (:func:`nlgrd.plotting.nonlinear.plot_time_history`).
+
+        Parameters
+        ----------
+        quantity : str
+            "delta", "deflection" or "force".
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure when None.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        return self.history.plot(ax=ax, quantity=quantity)
+
 
 def _segment_rhs(mode: int, zeta2: float, w0: float, bt: float, ecoef: tuple, rho: NDArray):
     """RHS u'' = -2ζ u' - |m| ρ(θ) (u - ẽ - m b̃) + w0 + 2ζ ẽ' in the scaled variables

@@ -153,6 +153,8 @@ class BearingClearance:
         RadialClearanceLaw(self.stiffness, self.clearance, self.exponent, n_samples=self.n_samples)
 
     n_coords = 2
+    #: The names of its coordinates: the journal's (u_y, u_z) less the housing's.
+    coordinates = ("y", "z")
     #: The outputs the harmonic-count estimate compares.
     converged_outputs = ("force_max [N]", "displacement_max [m]")
     contact_outputs = ("contact_fraction [-]",)
@@ -351,6 +353,8 @@ class GearMeshLink:
     order: int = 1
 
     n_coords = 1
+    #: The name of its coordinate: δ along the line of action.
+    coordinates = ("delta",)
     #: The outputs the harmonic-count estimate compares (those of the single-mesh path).
     converged_outputs = ("dte_rms [m]", "force_max [N]")
     contact_outputs = ("contact_loss_fraction [-]",)

@@ -73,9 +73,10 @@ def dynamic_stiffness_derivative(parts, harmonic, omega: float, speed_per: float
 def model_stiffness_derivative(model: LinearModel, harmonic: int, omega: float, speed_per: float) -> NDArray:
     """dZ_k/dω of a model along a sweep, speed-tabulated bearings included.
 
-    :func:`dynamic_stiffness_derivative` of the model's matrices plus i k C_b of the
-    bearings tabulated against speed, whose coefficients are held at the current speed
-    (their change with speed is left out; the i kω of the damping term is not).
+    :func:`dynamic_stiffness_derivative` of the model's matrices plus, for each bearing
+    tabulated against speed (Ω_b = r s ω, r its shaft's speed ratio), the derivative of
+    K_b(Ω_b) + i kω C_b(Ω_b): i k C_b + r s (dK_b/dΩ + i kω dC_b/dΩ), the slopes those of
+    the table's linear interpolation (:meth:`nlgrd.rotor.bearing.Bearing.K_slope`).
 
     Parameters
     ----------
@@ -96,7 +97,9 @@ def model_stiffness_derivative(model: LinearModel, harmonic: int, omega: float, 
     pat = model._pattern
     data = dynamic_stiffness_derivative(pat, harmonic, omega, speed_per)
     for (bearing, ratio, _), pos in zip(model.tabulated_bearings, pat["bear"], strict=True):
-        np.add.at(data, pos, (1j * harmonic * bearing.C(ratio * speed_per * omega)).ravel())
+        spin, per = ratio * speed_per * omega, ratio * speed_per
+        slope = per * (bearing.K_slope(spin) + 1j * harmonic * omega * bearing.C_slope(spin))
+        np.add.at(data, pos, (1j * harmonic * bearing.C(spin) + slope).ravel())
     return data
 
 

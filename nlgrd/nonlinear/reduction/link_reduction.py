@@ -157,7 +157,8 @@ class LinkReceptance:
         self.basis, self.max_frequency, self.cutoff_factor = None, None, float(cutoff_factor)
         self._Ps = self.P  # P in the coordinates the harmonics are solved in (DOFs or basis)
         self.force_dofs = np.zeros(0, dtype=int) if force_dofs is None else np.asarray(force_dofs, dtype=int)
-        self._rigid = rigid_body_modes(self.model.K + self.K_link, self.model.M)
+        # the tabulated bearings at rest hold the structure too (as the mesh receptance's)
+        self._rigid = rigid_body_modes(self.model.stiffness(0.0) + self.K_link, self.model.M)
         check_balanced(self._rigid, self.static_force, "static_force", "the static loads")
         self.mean = MeanProblem(
             self.model, self.K_link, self.P, self.static_force, self._rigid, self._speed_dependent

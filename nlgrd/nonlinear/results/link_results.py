@@ -20,6 +20,7 @@ __all__ = [
     "LinkContinuationResult",
     "LinkSweepResult",
     "bearing_columns",
+    "link_column",
     "link_rows",
     "metric_names",
     "output_names",
@@ -46,6 +47,49 @@ def with_links(frame: pd.DataFrame, links: pd.DataFrame) -> pd.DataFrame:
     drop = [c for c in frame.columns if c.startswith(("dte_", "force_", "dslr", "contact_loss", "back_"))]
     frame = frame.drop(columns=drop).rename(columns={"mesh_frequency [Hz]": "base_frequency [Hz]"})
     return pd.concat([frame, links], axis=1)
+
+
+def link_column(links: pd.DataFrame, quantity: str | None, bearings: Sequence[str] = ()) -> str:
+    """The column ``<link>.<quantity> [unit]`` of ``links`` that ``quantity`` names, as
+    ``nlgrd sweep --quantity`` reads it: ``LINK.QUANTITY``, or a bare quantity of the first
+    link that has it (meshes first, the linear bearings last); None: a mesh's DSLR, else the
+    first link's largest force.
+
+    Parameters
+    ----------
+    links : pandas.DataFrame
+        The links' (and linear bearings') outputs, ``<name>.<quantity> [unit]`` columns.
+    quantity : str or None
+        The quantity asked for.
+    bearings : sequence of str
+        Which columns are the linear bearings'.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ModelError
+        (``quantity``) No column of that name.
+    """
+
+    def split(column: str) -> tuple[str, str]:
+        name, _, q = column.partition(".")
+        return name, q.split(" [")[0]
+
+    own = [c for c in links.columns if c not in bearings]
+    meshes = [split(c)[0] for c in own if split(c)[1] == "dslr"]
+    if quantity is None:
+        quantity = "dslr" if meshes or not own else f"{split(own[0])[0]}.force_max"
+    name, _, q = quantity.rpartition(".")
+    order = list(dict.fromkeys(meshes + [split(c)[0] for c in own] + [split(c)[0] for c in links.columns]))
+    for n in [name] if name else order:
+        match = [c for c in links.columns if split(c) == (n, q)]
+        if match:
+            return match[0]
+    names = ", ".join(c.split(" [")[0] for c in links.columns)
+    raise ModelError("quantity", f"no output {quantity!r}; the columns are {names}")
 
 
 @dataclass(frozen=True)
@@ -102,6 +146,28 @@ class LinkSweepResult:
                     "quantities", f"no link output {q!r}; the columns are {list(self.links.columns)}"
                 )
         return self.result.jumps_of({q: self.links[q].to_numpy() for q in qs}, rtol, ratio)
+
+    def plot(self, quantity: str | None = None, ax=None):
+        """One link's (or linear bearing's) output against the base frequency, drawn as the
+        command line draws it (:func:`nlgrd.plotting.sweep_figures.plot_link_sweep`: stable
+        filled, unstable open, points without a response marked).
+
+        Parameters
+        ----------
+        quantity : str, optional
+            ``LINK.QUANTITY`` or a bare quantity (:func:`link_column`); default a mesh's
+            DSLR, else the first link's largest force.
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure when None.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        from nlgrd.plotting.sweep_figures import plot_link_sweep
+
+        column = link_column(self.links, quantity, self.bearings)
+        return plot_link_sweep(self.to_frame(), "base_frequency [Hz]", column, None, ax=ax)
 
 
 def metric_names(link) -> list[str]:
@@ -231,3 +297,29 @@ class LinkContinuationResult:
         pandas.DataFrame
         """
         return with_links(self.curve.to_frame(), self.links)
+
+    def plot(self, quantity: str | None = None, ax=None):
+        """One link's output along the curve, stable solid and unstable dashed
+        (:func:`nlgrd.plotting.nonlinear.plot_continuation`), against the base frequency.
+
+        Parameters
+        ----------
+        quantity : str, optional
+            ``LINK.QUANTITY`` or a bare quantity (:func:`link_column`); default a mesh's
+            DSLR, else the first link's largest force.
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure when None.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        from dataclasses import replace
+
+        from nlgrd.plotting.nonlinear import plot_continuation
+
+        column = link_column(self.links, quantity)
+        points = self.curve.curve
+        metrics = {**points.metrics, column: self.links[column].to_numpy()}
+        curve = replace(self.curve, curve=replace(points, metrics=metrics))
+        return plot_continuation(curve, quantity=column, ax=ax, xaxis=("base frequency [Hz]", 1.0))

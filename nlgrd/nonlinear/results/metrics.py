@@ -113,6 +113,25 @@ class TimeHistory:
         """x = δ - e [m]."""
         return self.delta - self.lste
 
+    def to_frame(self):
+        """The period as a table: time [s], δ, e and δ - e [µm], W [N].
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        import pandas as pd
+
+        return pd.DataFrame(
+            {
+                "time [s]": self.t,
+                "dte [um]": self.delta * 1e6,
+                "lste [um]": self.lste * 1e6,
+                "mesh_deflection [um]": self.mesh_deflection * 1e6,
+                "mesh_force [N]": self.force,
+            }
+        )
+
     def plot(self, ax=None, quantity: str = "delta"):
         """Plot one quantity over the period (see :func:`nlgrd.plotting.nonlinear.plot_time_history`)."""
         from nlgrd.plotting.nonlinear import plot_time_history
