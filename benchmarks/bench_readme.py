@@ -160,8 +160,9 @@ def main(argv=None) -> int:
     ap.add_argument("--only", default=None, help="run only the examples containing this text")
     ap.add_argument("--keep", type=Path, default=None, help="copy each example's directory here")
     ap.add_argument("--list", action="store_true", help="list the examples and stop")
+    ap.add_argument("--readme", type=Path, default=ROOT / "README.md", help="file read (README.md)")
     args = ap.parse_args(argv)
-    todo = examples()
+    todo = examples(args.readme)
     if args.only:
         todo = [e for e in todo if args.only in e[1]]
     if args.list:
