@@ -58,3 +58,18 @@ def test_refined_grid_is_built_once_and_equals_a_fresh_one():
     for name in ("theta1", "theta2", "inverse", "forward", "k1", "k2"):
         assert np.array_equal(getattr(fine, name), getattr(fresh, name))
     assert g.refined((3, 1)).N1 == 11 and g.refined((3, 1)).N2 == 5  # at least 2 H + 1
+
+
+def test_converged_sweep_reports_its_phases_and_moves_no_number():
+    from nlgrd.nonlinear.tracing.harmonic_convergence import converged_sweep
+
+    rm = PAIR.reduced_model()
+    grid = np.linspace(0.8, 1.05, 6) * PAIR.natural_frequency
+    plain = converged_sweep(rm, grid, "up", ladder=(5, 7, 9))
+    seen = Calls()
+    seen.label = "sweep"
+    shown = converged_sweep(rm, grid, "up", ladder=(5, 7, 9), progress=seen)
+    assert np.array_equal(plain.harmonics, shown.harmonics)
+    assert np.array_equal(plain.floquet_max, shown.floquet_max, equal_nan=True)
+    assert seen.label == "sweep"  # the phases' labels are put back
+    assert (6, 6) in seen.calls and max(i for i, _ in seen.calls) == 6

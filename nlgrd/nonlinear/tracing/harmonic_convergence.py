@@ -485,14 +485,18 @@ def converged_sweep(
         if label is not None:
             progress.label = f"check of H = {H} at H = {H_check}"
         check = check_harmonics(model, res, H_check, tol=tol, rtol=rtol, progress=progress)
-        if label is not None:
-            progress.label = label
         if stability:  # the error is over the response's points: known by converged verdicts
-            settled = converge_verdicts(model, res, check.solutions, ladder=ladder, tol=tol, polished=shot)
+            if label is not None:
+                progress.label = f"stability verdicts at H = {H}"
+            settled = converge_verdicts(
+                model, res, check.solutions, ladder=ladder, tol=tol, polished=shot, progress=progress
+            )
             changed = np.any(settled.stable != res.stable)
             res = settled
             if changed:
                 check = check_harmonics(model, res, H_check, tol=tol, rtol=rtol)
+        if label is not None:
+            progress.label = label
         history.append(check.history[0])
         if check.passed(rtol):
             break
@@ -606,6 +610,8 @@ def converged_continuation(
         _warn_exhausted(check, rtol)
     curve = _finish(res.curve, check, history, rtol)
     if kwargs.get("stability", True):
-        settled = converge_verdicts(model, curve, check.solutions, ladder=ladder, tol=tol)
+        if label is not None:
+            progress.label = f"{label}: stability verdicts"
+        settled = converge_verdicts(model, curve, check.solutions, ladder=ladder, tol=tol, progress=progress)
         curve = replace(settled, no_stable=curve.no_stable)  # a curve draws its unstable parts
     return replace(res, curve=curve)
