@@ -189,6 +189,7 @@ def cmd_report(args) -> int:
         scheduler=args.scheduler,
         workers=args.workers,
         connect_timeout=args.connect_timeout,
+        progress=sys.stderr.isatty(),
     )
     for name, rec in records.items():
         print(f"  {name}: {'done' if rec['error'] is None else 'failed: ' + rec['error']}")

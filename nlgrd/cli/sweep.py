@@ -223,6 +223,7 @@ def time_answers(args, system, res, period, model=None):
         stability=not args.no_stability,
         time_domain=not args.no_time_domain,
         progress=ProgressBar("time domain"),
+        torus_progress=ProgressBar("tori"),
         **periods,
     )
 
@@ -519,6 +520,7 @@ def _continuation(args, system, view, unit, omegas, count, quantity, out, png) -
                 "ds_max": ds_max,
                 "max_steps": max(defaults["max_steps"], 10 * count),
             }
+        kwargs["progress"] = ProgressBar(f"continuation {name}")
         res, frame = view.continuation(begin, end, args.harmonics, quantity, not args.no_stability, **kwargs)
         traces[name] = res
         frame.insert(1, "trace", name)

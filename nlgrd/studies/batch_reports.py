@@ -24,6 +24,7 @@ import html
 import os
 import re
 import shutil
+import sys
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -112,7 +113,7 @@ def read_batch(path: str | os.PathLike | None, common: dict[str, Any]) -> list[R
     return out
 
 
-def run_report(notebook: str, target: str, parameters: dict) -> dict[str, Any]:
+def run_report(notebook: str, target: str, parameters: dict, progress: bool = False) -> dict[str, Any]:
     """Execute one run into ``target`` (via a staging folder); returns its record.
 
     Parameters
@@ -123,6 +124,8 @@ def run_report(notebook: str, target: str, parameters: dict) -> dict[str, Any]:
         The run's folder (replaced when the run succeeds).
     parameters : dict
         Notebook parameters (``out_dir`` is set to the staging folder).
+    progress : bool
+        A tqdm bar over the notebook's cells on standard error.
 
     Returns
     -------
@@ -133,7 +136,7 @@ def run_report(notebook: str, target: str, parameters: dict) -> dict[str, Any]:
     stage = target_path.with_name(f".{target_path.name}.partial")
     shutil.rmtree(stage, ignore_errors=True)
     try:
-        executed = run_notebook(notebook, stage, parameters)
+        executed = run_notebook(notebook, stage, parameters, progress_bar=progress)
         make_deterministic(executed, out_dir=relative_path(target_path, Path(notebook).parent))
         export_html(executed)
     except Exception as err:  # recorded in the index; the batch goes on
@@ -174,6 +177,22 @@ def _index(title: str, runs: list[ReportRun], records: dict[str, dict]) -> str:
     )
 
 
+def _runs_bar(total: int, enabled: bool):
+    """A tqdm bar over the runs of a batch on standard error (disabled: counts nothing)."""
+    from tqdm import tqdm
+
+    return tqdm(total=total, disable=not enabled, unit="run", file=sys.stderr, dynamic_ncols=True)
+
+
+def _gather(client, futures: list, bar) -> list:
+    """The futures' results in their order, ``bar`` advanced as each finishes."""
+    from distributed import as_completed
+
+    for _ in as_completed(futures):
+        bar.update()
+    return client.gather(futures)
+
+
 def run_batch(
     notebook: str | os.PathLike,
     runs: list[ReportRun],
@@ -183,6 +202,7 @@ def run_batch(
     scheduler: str | None = None,
     workers: int | None = None,
     connect_timeout: float | None = None,
+    progress: bool = False,
 ) -> dict[str, dict]:
     """Run every run of a batch, then write ``out/index.html``; returns the records by name.
 
@@ -202,6 +222,9 @@ def run_batch(
         Worker processes of the embedded cluster.
     connect_timeout : float or None
         Seconds allowed to reach ``scheduler`` [s].
+    progress : bool
+        A tqdm bar on standard error: over the cells of a batch of one run, else over the
+        runs.
 
     Returns
     -------
@@ -222,9 +245,14 @@ def run_batch(
             raise ModelError(f"{run.name}: {err.key}", err.message, err.file) from None
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    jobs = [(notebook, str(out / r.name), r.parameters) for r in runs]
+    cells = progress and len(runs) == 1  # one run: its cells; several: the runs
+    jobs = [(notebook, str(out / r.name), r.parameters, cells) for r in runs]
+    bar = _runs_bar(len(jobs), progress and not cells)
     if scheduler is None and executor == "serial":
-        results = [run_report(*job) for job in jobs]
+        results = []
+        for job in jobs:
+            results.append(run_report(*job))
+            bar.update()
     else:
         from distributed import Client
 
@@ -232,13 +260,14 @@ def run_batch(
 
         if scheduler is not None:
             with connect(scheduler, connect_timeout) as client:
-                results = client.gather([client.submit(run_report, *j, pure=False) for j in jobs])
+                results = _gather(client, [client.submit(run_report, *j, pure=False) for j in jobs], bar)
         else:
             with (
                 local_cluster(workers or min(len(jobs), default_workers())) as cluster,
                 Client(cluster) as client,
             ):
-                results = client.gather([client.submit(run_report, *j, pure=False) for j in jobs])
+                results = _gather(client, [client.submit(run_report, *j, pure=False) for j in jobs], bar)
+    bar.close()
     records = {r.name: rec for r, rec in zip(runs, results, strict=True)}
     write_text(out / "index.html", _index(f"{Path(notebook).stem}: batch of {len(runs)}", runs, records))
     write_json(out / "batch.json", {r.name: {"parameters": r.parameters, **records[r.name]} for r in runs})

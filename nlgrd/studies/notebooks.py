@@ -148,6 +148,7 @@ def run_notebook(
     timeout: float = CELL_TIMEOUT,
     stream=None,
     kernel_log: str | os.PathLike | None = None,
+    progress_bar: bool = False,
 ) -> Path:
     """Execute ``notebook`` with papermill; returns the executed notebook in ``out_dir``.
 
@@ -178,6 +179,8 @@ def run_notebook(
         Receives the notebook's printed output as it runs; None for none.
     kernel_log : str or os.PathLike or None
         File the kernel process appends its standard error to; None to leave it on ours.
+    progress_bar : bool
+        Papermill's tqdm bar over the cells on standard error.
 
     Returns
     -------
@@ -207,7 +210,7 @@ def run_notebook(
         parameters=params,
         kernel_name=kernel_name,
         cwd=str(notebook.parent),
-        progress_bar=False,
+        progress_bar=progress_bar,
         stdout_file=stream,
         stderr_file=None,
         execution_timeout=timeout,

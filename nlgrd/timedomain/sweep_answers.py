@@ -91,6 +91,8 @@ def answer_gaps(
     gaps = np.asarray(result.converged, bool) & np.asarray(result.no_stable, bool)
     rows = np.nonzero(gaps & ~np.asarray(result.time_answered, bool))[0]  # a torus's stays
     answers: dict[int, TimeAnswer] = {}
+    if progress is not None and rows.size:  # the bar from the start: a point takes seconds
+        progress(0, rows.size)
     for n, i in enumerate(rows):
         z = base_harmonics(result.harmonics[i], int(result.base))
         a = time_answer(model, float(result.omega[i]), harmonics=z, **options)
@@ -222,7 +224,7 @@ def _ns_points(res: SweepResult) -> NDArray:
     )
 
 
-def _tori(res: SweepResult, model, target, rtol: float, step: int) -> dict:
+def _tori(res: SweepResult, model, target, rtol: float, step: int, progress=None) -> dict:
     """The accepted tori (:func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori`) at the
     Neimark-Sacker rows of ``res``, each direction's in the sweep's order, by row."""
     from nlgrd.nonlinear.tracing.torus_sweep import converged_tori
@@ -233,7 +235,9 @@ def _tori(res: SweepResult, model, target, rtol: float, step: int) -> dict:
         rows = np.nonzero(ns & (np.asarray(res.direction) == d))[0]
         z = np.array([base_harmonics(res.harmonics[i], int(res.base)) for i in rows])
         z = z.reshape(rows.size, -1, z.shape[-1])
-        tori = converged_tori(model, res.omega[rows], z, H=int(res.H), rtol=rtol, target=target, step=step)
+        tori = converged_tori(
+            model, res.omega[rows], z, H=int(res.H), rtol=rtol, target=target, step=step, progress=progress
+        )
         for i, a in zip(rows, tori, strict=True):
             if a is not None:
                 found[int(i)] = a
@@ -270,7 +274,14 @@ def _with_tori(res: SweepResult, found: dict, coord: int) -> SweepResult:
     )
 
 
-def with_torus_answers(result, system=None, *, model: LinkModel | None = None, rtol: float = OUTPUT_RTOL):
+def with_torus_answers(
+    result,
+    system=None,
+    *,
+    model: LinkModel | None = None,
+    rtol: float = OUTPUT_RTOL,
+    progress: Callable[[int, int], None] | None = None,
+):
     """A sweep with its Neimark-Sacker points answered by the torus harmonic balance
     where it converges within ``rtol`` (:func:`nlgrd.nonlinear.tracing.torus_sweep.converged_tori`):
     every converged point whose period-1 orbit lost stability to a complex pair
@@ -296,6 +307,8 @@ def with_torus_answers(result, system=None, *, model: LinkModel | None = None, r
         The link model a link sweep was made on (built from ``system`` when None).
     rtol : float
         The sweep's tolerance on its outputs [-].
+    progress : callable, optional
+        ``progress(done, total)`` after each point of each direction and rung.
 
     Returns
     -------
@@ -310,7 +323,7 @@ def with_torus_answers(result, system=None, *, model: LinkModel | None = None, r
     from nlgrd.nonlinear.tracing.torus_sweep import TORUS_LADDER, TORUS_MAX_H
 
     if isinstance(result, LinkSweepResult):
-        return _link_torus_answers(result, system, model, rtol)
+        return _link_torus_answers(result, system, model, rtol, progress)
     system = system if system is not None else getattr(model, "system", None)
     if not isinstance(result, GearedSweepResult) or system is None:
         return result
@@ -322,7 +335,7 @@ def with_torus_answers(result, system=None, *, model: LinkModel | None = None, r
     H = int(mesh.H)
     top = min(max(H, TORUS_MAX_H), H + max(TORUS_LADDER))
     geared = build_geared_model(system, float(np.max(mesh.omega)) * 1.0001, H=top + 4)
-    found = _tori(mesh, geared, GearedTorus(geared), rtol, 1)
+    found = _tori(mesh, geared, GearedTorus(geared), rtol, 1, progress)
     if not found:
         return result
     fields = list(BearingResponse.__dataclass_fields__)
@@ -333,7 +346,7 @@ def with_torus_answers(result, system=None, *, model: LinkModel | None = None, r
     return dc.replace(result, mesh=_with_tori(mesh, found, 0), bearings=BearingResponse(**bearings))
 
 
-def _link_torus_answers(result: LinkSweepResult, system, model: LinkModel | None, rtol: float):
+def _link_torus_answers(result: LinkSweepResult, system, model: LinkModel | None, rtol: float, progress=None):
     """:func:`with_torus_answers` of a link sweep."""
     from nlgrd.nonlinear.tracing.link_torus import LinkTorus
     from nlgrd.nonlinear.tracing.torus_sweep import TORUS_LADDER, TORUS_MAX_H
@@ -351,7 +364,7 @@ def _link_torus_answers(result: LinkSweepResult, system, model: LinkModel | None
     H = int(res.H)
     top = min(max(H, step * TORUS_MAX_H), H + step * max(TORUS_LADDER)) + 4 * step
     model.receptance.prepare(top * float(np.max(np.abs(res.omega))) * 1.0001)
-    found = _tori(res, model, LinkTorus(model), rtol, step)
+    found = _tori(res, model, LinkTorus(model), rtol, step, progress)
     if not found:
         return result
     mesh = getattr(model.reduced.metrics, "mesh", None)
@@ -375,6 +388,7 @@ def answer_sweep(
     torus: bool = True,
     rtol: float = OUTPUT_RTOL,
     progress: Callable[[int, int], None] | None = None,
+    torus_progress: Callable[[int, int], None] | None = None,
     **options,
 ):
     """The one rule of every sweep (``nlgrd.sweep``, ``nlgrd sweep``, a study's task): when
@@ -406,7 +420,9 @@ def answer_sweep(
         The sweep's tolerance on its outputs, which a torus's convergence estimate must
         meet [-].
     progress : callable, optional
-        ``progress(done, total)`` after each point answered.
+        ``progress(done, total)`` after each point answered in the time domain.
+    torus_progress : callable, optional
+        ``progress(done, total)`` after each torus tried (:func:`with_torus_answers`).
     **options
         Options of :func:`~nlgrd.timedomain.time_answer.time_answer` (``periods``,
         ``max_periods``, ...).
@@ -423,7 +439,7 @@ def answer_sweep(
     if not (time_domain and stability and period == "auto"):
         return result
     if torus and (system is not None or model is not None):
-        result = with_torus_answers(result, system, model=model, rtol=rtol)
+        result = with_torus_answers(result, system, model=model, rtol=rtol, progress=torus_progress)
     if model is None:
         if system is None:
             raise ModelError("system", "answer_sweep needs the model or its system")

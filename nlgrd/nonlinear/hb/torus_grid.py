@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
 
 
@@ -85,6 +86,25 @@ class TorusGrid:
         weight = np.full(self.n_real, 2.0 / (N1 * N2))
         weight[0] = 1.0 / (N1 * N2)
         self.forward = weight[:, None] * self.inverse.T
+        self.cache = BoundedCache(4)
+
+    def refined(self, n_samples: tuple[int, int]) -> TorusGrid:
+        """The grid of the same index set on ``n_samples`` (at least 2 H + 1 each way), built
+        once per grid: a torus's outputs, its bearings' and its back contact are sampled on
+        it, at every torus of a sweep that shares this grid.
+
+        Parameters
+        ----------
+        n_samples : tuple of int
+            Samples along θ₁ and θ₂ asked for [-].
+
+        Returns
+        -------
+        TorusGrid
+            Not to be modified (shared).
+        """
+        N1, N2 = max(int(n_samples[0]), 2 * self.H1 + 1), max(int(n_samples[1]), 2 * self.H2 + 1)
+        return self.cache.get((N1, N2), lambda: TorusGrid(self.H1, self.H2, N1, N2))
 
     @staticmethod
     def n_real_of(H1: int, H2: int) -> int:

@@ -136,6 +136,7 @@ def converge_verdicts(
     ladder: Sequence[int] = (),
     tol: float = 1e-10,
     polished: dict | None = None,
+    progress=None,
 ) -> SweepResult:
     """``result`` with every verdict checked (module docstring) and ``verdict_converged`` set.
 
@@ -155,6 +156,8 @@ def converge_verdicts(
     polished : dict, optional
         {ω: [(harmonics of an exact orbit, max |μ|, dominant μ)]}, filled and reused: the
         exact orbit does not depend on H, so a sweep's rungs shoot each orbit once.
+    progress : callable, optional
+        ``progress(done, total)`` after each point whose verdict was checked.
 
     Returns
     -------
@@ -168,7 +171,10 @@ def converge_verdicts(
     ok = np.ones(n, dtype=bool)
     known = result.converged & result.stability_known
     exact = shootable(model)
-    for i in np.nonzero(known)[0]:
+    rows = np.nonzero(known)[0]
+    for done, i in enumerate(rows):
+        if progress is not None:  # before each point: its verdict may end early (continue)
+            progress(done, rows.size)
         w, z = float(result.omega[i]), result.harmonics[i]
         sol = solutions.get(i)
         fine = None if sol is None else _floquet(model, sol.harmonics, w)
@@ -190,6 +196,8 @@ def converge_verdicts(
             ok[i] = False
         else:
             fmax[i], dom[i] = top
+    if progress is not None and rows.size:
+        progress(rows.size, rows.size)
     with np.errstate(invalid="ignore"):
         stable = result.converged & np.isfinite(fmax) & (fmax < 1 + STABLE_RTOL)
     changed = known & ok & (stable != result.stable)  # the sweep's verdict was wrong

@@ -39,6 +39,10 @@ def _turning(omega: NDArray, s: NDArray, tangents_w: NDArray) -> tuple[NDArray, 
     return idx, np.asarray(omegas)
 
 
+#: The steps of a continuation's progress over its range (:func:`continuation`).
+PROGRESS_STEPS = 1000
+
+
 @single_blas_thread
 def continuation(
     model: ReducedModel,
@@ -54,6 +58,7 @@ def continuation(
     tol: float = 1e-9,
     stability: bool = True,
     n_samples: int = 2048,
+    progress=None,
 ) -> ContinuationResult:
     """Trace the harmonic-balance solution curve from ``omega_start`` towards ``omega_end``.
 
@@ -80,6 +85,10 @@ def continuation(
         Floquet multipliers per point (needs ``model.state_space``).
     n_samples : int
         Samples per period for the force extremes of the metrics.
+    progress : callable, optional
+        ``progress(done, PROGRESS_STEPS)`` after each point traced, ``done`` the share of
+        the range reached so far (in 1/PROGRESS_STEPS); then ``progress(k, n)`` after the
+        stability and outputs of each of the n points.
 
     Returns
     -------
@@ -101,8 +110,13 @@ def continuation(
     direction = 1 if omega_end >= omega_start else -1
     pts: list[CurvePoint] = []
     complete = False
+    reached = 0
     for p in tracer.trace(first.harmonics, omega_start, direction, ds, ds_min, ds_max, max_steps):
         pts.append(p)
+        if progress is not None and span > 0:
+            share = (p.omega - omega_start) * direction / span
+            reached = max(reached, min(PROGRESS_STEPS, int(PROGRESS_STEPS * share)))
+            progress(reached, PROGRESS_STEPS)
         if len(pts) > 1 and not (lo - 1e-9 * span <= p.omega <= hi + 1e-9 * span):
             # left the range: complete only past omega_end (not back out at the start)
             complete = (p.omega - omega_start) * direction > 0
@@ -119,6 +133,8 @@ def continuation(
             )
         fm.append(f)
         mets.append(model.metrics.of(z, w, n_samples))
+        if progress is not None:
+            progress(len(mets), len(zs))
     curve = assemble_result(
         ws,
         ["curve"] * len(pts),

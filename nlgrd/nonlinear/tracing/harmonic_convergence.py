@@ -180,6 +180,7 @@ def check_harmonics(
     tol: float = 1e-10,
     rtol: float = OUTPUT_RTOL,
     jumps: bool = True,
+    progress=None,
 ) -> HarmonicCheck:
     """Estimate the harmonic truncation error of ``result`` by re-solving at ``H_check``.
 
@@ -202,6 +203,8 @@ def check_harmonics(
         the point after the jump within ``rtol``.
     jumps : bool
         Check that every jump holds at H'.
+    progress : callable, optional
+        ``progress(done, total)`` after each converged point re-solved at H'.
 
     Returns
     -------
@@ -233,9 +236,12 @@ def check_harmonics(
     error = np.full(n, np.nan)
     fine_values = np.full_like(values, np.nan, dtype=float)
     sols: dict = {}  # every converged point re-solved (the unstable ones for lifting only)
-    for i in np.nonzero(result.converged)[0]:
+    rows = np.nonzero(result.converged)[0]
+    for done, i in enumerate(rows, 1):
         w = float(result.omega[i])
         sols[i] = sol = _resolve(model, w, result.harmonics[i], H2, tol)
+        if progress is not None:
+            progress(done, rows.size)
         if not checked[i]:
             continue
         if sol is None:
@@ -469,18 +475,28 @@ def converged_sweep(
     history = []
     res = None
     shot: dict = {}  # exact orbits shot for the verdicts, kept across the rungs
+    progress = kwargs.get("progress")
+    label = getattr(progress, "label", None)  # a progress bar's label names the phase
     for H, H_check in zip(ladder[:-1], ladder[1:], strict=True):
         if on_rung is not None:
             on_rung(H)
         if res is None:
             res = sweep(model, omegas, H, directions, tol=tol, stability=stability, **kwargs)
-        check = check_harmonics(model, res, H_check, tol=tol, rtol=rtol)
+        if label is not None:
+            progress.label = f"check of H = {H} at H = {H_check}"
+        check = check_harmonics(model, res, H_check, tol=tol, rtol=rtol, progress=progress)
         if stability:  # the error is over the response's points: known by converged verdicts
-            settled = converge_verdicts(model, res, check.solutions, ladder=ladder, tol=tol, polished=shot)
+            if label is not None:
+                progress.label = f"stability verdicts at H = {H}"
+            settled = converge_verdicts(
+                model, res, check.solutions, ladder=ladder, tol=tol, polished=shot, progress=progress
+            )
             changed = np.any(settled.stable != res.stable)
             res = settled
             if changed:
                 check = check_harmonics(model, res, H_check, tol=tol, rtol=rtol)
+        if label is not None:
+            progress.label = label
         history.append(check.history[0])
         if check.passed(rtol):
             break
@@ -577,9 +593,16 @@ def converged_continuation(
         raise ModelError("ladder", f"must be at least two increasing harmonic counts, got {tuple(ladder)}")
     tol = kwargs.get("tol", 1e-9)
     history = []
+    progress = kwargs.get("progress")
+    label = getattr(progress, "label", None)  # a progress bar's label names the rung
     for H, H_check in zip(ladder[:-1], ladder[1:], strict=True):
+        if label is not None:
+            progress.label = f"{label} (H = {H})"
         res = continuation(model, omega_start, omega_end, H, **kwargs)
-        check = _fold_band(check_harmonics(model, res.curve, H_check, tol=tol, rtol=rtol, jumps=False), res)
+        if label is not None:
+            progress.label = f"check of H = {H} at H = {H_check}"
+        check = check_harmonics(model, res.curve, H_check, tol=tol, rtol=rtol, jumps=False, progress=progress)
+        check = _fold_band(check, res)
         history.append(check.history[0])
         if check.passed(rtol):
             break
@@ -587,6 +610,8 @@ def converged_continuation(
         _warn_exhausted(check, rtol)
     curve = _finish(res.curve, check, history, rtol)
     if kwargs.get("stability", True):
-        settled = converge_verdicts(model, curve, check.solutions, ladder=ladder, tol=tol)
+        if label is not None:
+            progress.label = f"{label}: stability verdicts"
+        settled = converge_verdicts(model, curve, check.solutions, ladder=ladder, tol=tol, progress=progress)
         curve = replace(settled, no_stable=curve.no_stable)  # a curve draws its unstable parts
     return replace(res, curve=curve)

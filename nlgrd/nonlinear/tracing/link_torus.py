@@ -24,7 +24,6 @@ from numpy.typing import NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.fourier.harmonics import complex_to_real, real_to_complex
 from nlgrd.nonlinear.hb import quasi_periodic as qp
-from nlgrd.nonlinear.hb import torus_grid as tg
 from nlgrd.nonlinear.results.bearing_loads import BEARING_OUTPUTS, bearing_names, bearing_node_dofs
 from nlgrd.nonlinear.tracing.torus_outputs import (
     CHECKED,
@@ -158,7 +157,7 @@ def torus_link_columns(
         SI, as the link sweep's columns.
     """
     g = sol.grid
-    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
+    fine = g.refined(n_samples)
     names = list(TORUS_OUTPUTS)
     out: dict[str, float] = {}
     for link, sl in zip(model.links, model.receptance.slices, strict=True):

@@ -21,7 +21,6 @@ from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.hb import quasi_periodic as qp
-from nlgrd.nonlinear.hb import torus_grid as tg
 
 #: Output names of a torus point, in the order of a torus sweep's outputs (SI), with the
 #: unit and factor of their table column.
@@ -224,7 +223,7 @@ def torus_outputs(
     if not sol.converged:
         return np.full(len(TORUS_OUTPUTS), np.nan)
     g = sol.grid
-    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
+    fine = g.refined(n_samples)
     Y = sol.Y[coord : coord + 1]
     d = fine.samples(Y)[0]
     dd = fine.samples(Y, derivative=(sol.omega, sol.secondary))[0]
@@ -387,7 +386,7 @@ def torus_bearing_statistics(Q: NDArray, Fb: NDArray, grid, n_samples: tuple[int
     fields = ("displacement_mean", "displacement_rms", "displacement_max")
     fields += ("force_mean", "force_rms", "force_max", "force_amplitude")
     g = grid
-    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
+    fine = g.refined(n_samples)
     out = {f: np.empty(nb) for f in fields}
     for name, X in (("displacement", Q), ("force", Fb)):
         for j in range(nb):
@@ -430,7 +429,7 @@ def torus_back_contact(
     if not sol.converged or isinstance(mesh, ContactStop):
         return False
     g = sol.grid
-    fine = tg.TorusGrid(g.H1, g.H2, max(n_samples[0], 2 * g.H1 + 1), max(n_samples[1], 2 * g.H2 + 1))
+    fine = g.refined(n_samples)
     d = fine.samples(sol.Y[coord : coord + 1])[0]
     e = evaluate(mesh.offset(max(g.H1, (mesh.lste.size - 1) // 2))[0], fine.theta1)
     return bool(np.any(d - e < -mesh.half_backlash))

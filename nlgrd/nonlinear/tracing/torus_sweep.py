@@ -257,6 +257,8 @@ def torus_sweep(
     error = np.full(n, np.nan)
     hist: list[tuple[float, qp.TorusSolution]] = []
     Zp = None
+    if progress is not None:  # the bar from the start: a torus takes seconds
+        progress(0, n)
     for i, w in enumerate(omegas):
         t0 = time.perf_counter()
         sol = None
@@ -414,7 +416,7 @@ def converged_tori(
     H2 : int
         Harmonics of the secondary frequency [-].
     progress : callable (done, total), optional
-        Called after each rung.
+        Called after each point of each rung (``total`` the points of the rung).
     target : GearedTorus or LinkTorus, optional
         What is solved and reported (:func:`torus_sweep`; default ``GearedTorus(model)``).
     step : int
@@ -440,7 +442,7 @@ def converged_tori(
     z_all = z_all.reshape(len(omegas), -1, z_all.shape[-1])
     n_c = z_all.shape[1]
     rungs = [h for h in rungs if n_c * tg.TorusGrid.n_real_of(h + 4 * step, H2 + 2) <= TORUS_MAX_UNKNOWNS]
-    for k, Hr in enumerate(rungs):
+    for Hr in rungs:
         if not pending.size:
             break
         z = z_all[pending]
@@ -458,6 +460,7 @@ def converged_tori(
             start_sizes=ANSWER_START_SIZES,
             target=target,
             check_step=step,
+            progress=progress,
         )
         spent[pending] += res.seconds
         err = res.error  # NaN: the check did not converge
@@ -472,8 +475,6 @@ def converged_tori(
         # torus near the orbit, e.g. a chaotic band) is not sought again at a higher H₁
         climb = [i for row, i in enumerate(pending) if answers[i] is None and np.isfinite(err[row])]
         pending = np.array(climb, dtype=int)
-        if progress is not None:
-            progress(k + 1, len(rungs))
     return [None if a is None else dc.replace(a, seconds=float(spent[i])) for i, a in enumerate(answers)]
 
 
