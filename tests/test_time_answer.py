@@ -222,3 +222,22 @@ def test_link_sweep_answers_its_gaps():
     assert out.bearings and all(np.isfinite(frame[c].iloc[1]) for c in out.bearings)
     unc = [uncertainty_column(c) for c in out.bearings]
     assert all(frame[c].iloc[1] > 0 for c in unc) and frame[unc].iloc[0].isna().all()
+
+
+def test_a_time_answer_samples_every_harmonic_of_the_forcing():
+    """data/models/two_stage.toml runs on the base 5 Ω: mesh 0's LSTE reaches base harmonic
+    150, more than 256 steps per period can sample (the forcing needs > 2H samples), and the
+    time answer stopped with "n_samples: needs more than 2H = 300 samples, got 256" (the README
+    example's grid at 9 speeds, found by benchmarks/bench_readme.py). It now takes 512 steps;
+    a model whose forcing has 30 harmonics keeps 256. ~10 s."""
+    from nlgrd.timedomain.time_answer import BATCHES, answer_steps
+
+    two_stage = build_link_model(nlgrd.load("data/models/two_stage.toml"))
+    assert [lk.excitation_harmonics for lk in two_stage.links] == [150, 60]
+    assert answer_steps(two_stage) == 512
+    assert answer_steps(build_link_model(nlgrd.load("data/case_studies/kubo.toml"))) == 256
+    omega = 3000 * 2 * np.pi / 60 / two_stage.receptance.plan.speed_per_base  # 3000 rpm
+    ans = time_answer(two_stage, omega, periods=4 * BATCHES, max_periods=4 * BATCHES)
+    assert ans.kind in (TIME_DOMAIN, CHAOTIC)
+    rms = [ans.links[f"{lk.name}.dte_rms [m]"].value for lk in two_stage.links]
+    assert all(np.isfinite(rms)) and min(rms) > 0, rms

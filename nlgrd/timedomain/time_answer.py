@@ -510,6 +510,29 @@ def _targets_met(links: dict, rtol: float) -> bool:
     return True
 
 
+#: HHT-α steps per base period of a time answer when the forcing needs no more [-].
+STEPS = 256
+
+
+def answer_steps(model: LinkModel) -> int:
+    """Steps per base period of a time answer: :data:`STEPS`, or the next power of two above
+    twice the highest base harmonic of any link's excitation (the forcing is sampled at the
+    steps, so it must hold more than 2H samples: a two-stage train on the base 5 Ω carries
+    150 base harmonics of its LSTE and needs 512) [-].
+
+    Parameters
+    ----------
+    model : LinkModel
+        The model; its links' ``excitation_harmonics`` (0 for a link without one).
+
+    Returns
+    -------
+    int
+    """
+    top = max([30] + [int(getattr(lk, "excitation_harmonics", 0)) for lk in model.links])
+    return max(STEPS, 1 << (2 * top).bit_length())
+
+
 @single_blas_thread
 def time_answer(
     model: LinkModel,
@@ -519,7 +542,7 @@ def time_answer(
     state0: tuple | None = None,
     periods: int = 512,
     max_periods: int = 4096,
-    steps_per_period: int = 256,
+    steps_per_period: int | None = None,
     alpha: float = -0.05,
     rtol: float = 0.01,
     H: int = 15,
@@ -544,8 +567,9 @@ def time_answer(
         Periods of the first record [-].
     max_periods : int
         Cap on the periods integrated (the record doubles up to it) [-].
-    steps_per_period : int
-        HHT-α steps per base period [-].
+    steps_per_period : int, optional
+        HHT-α steps per base period [-]; None: :func:`answer_steps` (256, or more where a
+        link's excitation has more base harmonics than 256 steps sample).
     alpha : float
         HHT-α parameter [-].
     rtol : float
@@ -569,7 +593,8 @@ def time_answer(
     if periods < 4 * BATCHES or max_periods < periods:
         raise ModelError("periods", f"needs {4 * BATCHES} <= periods <= max_periods, got {periods}")
     t0 = time.perf_counter()
-    integ = LinkIntegrator(model, omega, steps_per_period=steps_per_period, alpha=alpha)
+    steps = answer_steps(model) if steps_per_period is None else int(steps_per_period)
+    integ = LinkIntegrator(model, omega, steps_per_period=steps, alpha=alpha)
     N = integ.N
     if state0 is None and harmonics is not None:
         z = np.asarray(harmonics, dtype=float)
