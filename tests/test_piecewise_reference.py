@@ -17,7 +17,10 @@ with a stiff one-sided spring (issue 35, part 1), before anything is compared wi
   length), and at each one the critical multiplier is on the unit circle to 1e-6;
 - the preloaded variant (a static force on mass 2): its closed-stop linear limit, and the
   fold of its lifted-off branch (two steps agree to 1e-9, a multiplier at +1, the orbit
-  beside it under DOP853).
+  beside it under DOP853);
+- the period-2 branch born at the period doubling: it ends its stable part at a second
+  period doubling (two steps agree to 1e-9, a multiplier at -1) and has no fold up to
+  1.80 rad/s.
 """
 
 from __future__ import annotations
@@ -179,3 +182,44 @@ def test_preloaded_fold(preloaded_fold):
     T = 2 * np.pi / wd
     ref = solve_ivp(rhs(wd, PRELOADED), (0, 3 * T), s0, method="DOP853", rtol=1e-12, atol=1e-14).y[:, -1]
     assert np.max(np.abs(ref - s0)) < 1e-7 * (np.ptp(s0[:2]) + pr.SEAT)
+
+
+#: A start on the gap-free chain's period-2 branch (born supercritically at the period
+#: doubling 1.618338501 rad/s): the reference's period-2 orbit at 1.64 rad/s, shot from the
+#: period-1 orbit there plus 0.3 of its flip eigenvector (5 digits: a start for its Newton,
+#: not a result).
+P2_START = (1.64, np.array([-1.93060, 0.88016, -0.72824, 0.64253]))
+
+
+@pytest.fixture(scope="module")
+def period_two():
+    """The period-2 branch from 1.64 rad/s up: to 1.80 rad/s with one step, past its second
+    period doubling with another, and the bifurcations located on each."""
+    w, s = P2_START
+    coarse = pr.continue_branch(s, w, 1.80, nu=2, ds=0.05, max_points=2000)
+    fine = pr.continue_branch(s, w, 1.68, nu=2, ds=0.03, max_points=2000)
+    return coarse, pr.locate(coarse, nu=2), pr.locate(fine, nu=2)
+
+
+@pytest.mark.slow  # two continuations of the period-2 branch on the exact flow (~2 min)
+def test_period_two_branch(period_two):
+    """The gap-free chain's period-2 branch (tests/test_verdicts.py::PD2): stable from its
+    birth at the period doubling up to a second period doubling at 1.6708020066 rad/s (a
+    multiplier of the period-2 map at -1 to 1e-6, two continuation steps agree to 1e-9),
+    flip-unstable (a real μ down to -2.25) to a third at 1.7747604 rad/s, stable past it.
+    No fold: along the whole branch 1.64-1.80 rad/s the fold test Π(1 - μ) keeps its sign,
+    every multiplier stays at least 0.05 from +1 (a fold needs one at +1; the
+    closest, 0.107, is one of two real multipliers 0.89 at 1.707 rad/s) and ω grows at
+    every point (the tangent's ω component > 0: no turning point)."""
+    branch, coarse, fine = period_two
+    assert [k for k, *_ in coarse] == ["period doubling", "period doubling"], coarse
+    assert [k for k, *_ in fine] == ["period doubling"], fine
+    (_, w, mu, _), (_, w2, _, _) = coarse[0], fine[0]
+    print(f"second period doubling {w:.10f} (other step {w2:.10f}), third {coarse[1][1]:.10f}")
+    assert abs(w - w2) < 1e-9 and pr.kind_of(mu, "period doubling") and pr.kind_of(coarse[1][2], "period doubling")
+    assert abs(w - 1.6708020066) < 1e-9  # tests/test_verdicts.py's PD2
+    assert branch[-1].omega >= 1.80
+    folds = np.array([pr.test_functions(p.mu)["fold"] for p in branch])
+    assert np.all(folds > 0) or np.all(folds < 0)
+    assert min(np.min(np.abs(p.mu - 1)) for p in branch) > 0.05
+    assert all(p.tangent[4] > 0 for p in branch)
