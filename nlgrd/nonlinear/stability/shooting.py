@@ -40,6 +40,13 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: Contact changes are located to this fraction of the period.
 EVENT_RTOL = 1e-13
+#: Contact changes in a row with no time between them (each within EVENT_RTOL of the
+#: period) after which the flow is stuck: at a grazing where each contact state's margin
+#: leaves that state at once, the event search flips between them at one instant forever
+#: (the preloaded chain of tests/test_folds.py near 1.4324 rad/s). A law switches once per
+#: instant, so more changes in a row than this are a cycle: the flow returns NaN (no orbit
+#: through it) instead. Far above the laws of any model switching at one instant.
+STILL_EVENTS = 50
 
 
 @dataclass(frozen=True)
@@ -210,10 +217,11 @@ class _Flow:
         return s, Phi, events
 
     def run(self, s: NDArray, t0: float, t1: float, sigma: tuple | None = None):
-        """s(t1), ∂s(t1)/∂s(t0), the contact-change times and the contact state at t1."""
+        """s(t1), ∂s(t1)/∂s(t0), the contact-change times and the contact state at t1
+        (s(t1) and ∂s(t1)/∂s(t0) NaN where the flow is stuck: :data:`STILL_EVENTS`)."""
         t = t0
         sigma = self.state_at(t0, s) if sigma is None else sigma
-        Phi, events = np.eye(s.size), []
+        Phi, events, still = np.eye(s.size), [], 0
         while t < t1 - 1e-15 * self.T:
             step = min(self.dt, t1 - t)
             sn, E = self.at(sigma, t, s, step)
@@ -235,6 +243,10 @@ class _Flow:
                     hit = np.array([bad[0, 1]])
             if hit.size:
                 tau, which = self._locate(sigma, t, s, step, hit)
+                still = still + 1 if tau <= EVENT_RTOL * self.T else 0
+                if still > STILL_EVENTS:  # stuck at a grazing (STILL_EVENTS): no orbit through it
+                    nan = np.full(s.size, np.nan)
+                    return nan, np.full((s.size, s.size), np.nan), np.array(events), sigma
                 s, E = self.at(sigma, t, s, tau)
                 Phi = E @ Phi  # saltation = identity: the contact force is continuous
                 t += tau
@@ -399,6 +411,8 @@ def shoot_orbit(
     for it in range(max_iter + 1):
         end, Phi, events = flow.period(s)
         r = end - s
+        if not np.all(np.isfinite(r)):  # the flow is stuck at a grazing: no orbit
+            return ShootingOrbit(s, np.full(2 * N, np.nan + 0j), Phi, omega * events, np.inf, it, False)
         err = error(r, s)
         if err <= tol or it == max_iter:
             break
