@@ -18,6 +18,9 @@ with a stiff one-sided spring (issue 35, part 1), before anything is compared wi
 - the preloaded variant (a static force on mass 2): its closed-stop linear limit, and the
   fold of its lifted-off branch (two steps agree to 1e-9, a multiplier at +1, the orbit
   beside it under DOP853);
+- the preloaded variant's upper branch (the orbit the default sweeps reach at 1.43 rad/s):
+  its fold 1.4297822766 and the Neimark-Sacker point 4e-6 rad/s above it (two steps agree
+  to 1e-9, a multiplier at +1, a complex pair on the unit circle);
 - the period-2 branch born at the period doubling: it ends its stable part at a second
   period doubling (two steps agree to 1e-9, a multiplier at -1) and has no fold up to
   1.80 rad/s.
@@ -216,10 +219,42 @@ def test_period_two_branch(period_two):
     assert [k for k, *_ in fine] == ["period doubling"], fine
     (_, w, mu, _), (_, w2, _, _) = coarse[0], fine[0]
     print(f"second period doubling {w:.10f} (other step {w2:.10f}), third {coarse[1][1]:.10f}")
-    assert abs(w - w2) < 1e-9 and pr.kind_of(mu, "period doubling") and pr.kind_of(coarse[1][2], "period doubling")
+    assert abs(w - w2) < 1e-9 and pr.kind_of(mu, "period doubling")
+    assert pr.kind_of(coarse[1][2], "period doubling")
     assert abs(w - 1.6708020066) < 1e-9  # tests/test_verdicts.py's PD2
     assert branch[-1].omega >= 1.80
     folds = np.array([pr.test_functions(p.mu)["fold"] for p in branch])
     assert np.all(folds > 0) or np.all(folds < 0)
     assert min(np.min(np.abs(p.mu - 1)) for p in branch) > 0.05
     assert all(p.tangent[4] > 0 for p in branch)
+
+
+#: A start on the preloaded chain's upper branch: the reference's orbit at 1.43 rad/s shot
+#: from the default sweep's row there (tests/test_folds.py::default_both; 5 digits: a start
+#: for its Newton, not a result). Stable, |μ| 0.956 and 0.917 (two complex pairs).
+UPPER = (1.43, np.array([-8.60016, 1.05191, 13.49172, 0.13198]))
+
+
+@pytest.fixture(scope="module")
+def upper_fold():
+    """The upper branch from 1.43 rad/s down, with two continuation steps (through its fold)."""
+    w, s = UPPER
+    return [
+        pr.locate(pr.continue_branch(s, w, 1.40, ds=ds, max_points=n, stop=PRELOADED), stop=PRELOADED)
+        for ds, n in ((0.02, 20), (0.025, 16))
+    ]
+
+
+@pytest.mark.slow  # two short continuations on the exact flow (~10 s)
+def test_preloaded_upper_fold(upper_fold):
+    """The preloaded chain's upper branch (tests/test_folds.py::UPPER_FOLD): from 1.43 rad/s
+    down it is stable to a Neimark-Sacker point at 1.4297863185 rad/s (a complex pair on the
+    unit circle to 1e-6), then unstable to its fold at 1.4297822766 (a multiplier at +1 to
+    1e-6), where it turns back up, unstable (a real μ up to 6.8); both located to 1e-12 in arc
+    length, and the two steps agree to 1e-9 in ω."""
+    coarse, fine = upper_fold
+    assert [k for k, *_ in coarse] == ["Neimark-Sacker", "fold"] == [k for k, *_ in fine], (coarse, fine)
+    for (k, w, mu, _), (_, w2, _, _) in zip(coarse, fine, strict=True):
+        print(f"{k}: omega {w:.10f} rad/s (other step {w2:.10f}), multipliers {np.round(mu, 6)}")
+        assert abs(w - w2) < 1e-9 and pr.kind_of(mu, k)
+    assert abs(coarse[1][1] - 1.4297822766) < 1e-9 and abs(coarse[0][1] - 1.4297863185) < 1e-9
