@@ -382,3 +382,37 @@ def test_preloaded_chain_with_defaults_bifurcations(default_both):
     print(f"{found}: {time.process_time() - t0:.1f} s CPU")
     assert [(d, k) for d, k, _ in found] == [("up", "fold"), ("down", "fold")], found
     assert abs(found[0][2] - FOLDS_CLOSED[0]) < 1e-8 and abs(found[1][2] - UPPER_FOLD) < 1e-8
+
+
+#: A state at θ = 0 near the upper branch (the corrector's iterate at 1.4323 rad/s of the
+#: continuation from the default sweep's row at 1.43 up, full digits: the case itself) whose
+#: orbit touches the stop at t = 0.794979 T (a grazing, its margin's slope zero there).
+GRAZING = (
+    1.432336625583852,
+    np.array([-8.586779900864656, 1.0609701108303236, 12.051341372227704, 0.14352451848658895]),
+)
+
+
+def test_a_flow_at_a_grazing_touch_returns():
+    """At the touch the library's event search finds the contact change at the same instant
+    in both contact states and used to flip between them forever (the fold search from the
+    row at 1.43 rad/s never returned). Now, after STILL_EVENTS such changes, the period map
+    is NaN (no orbit through it: the branch follower halves its step), in well under 5 s of
+    CPU time (0.1 s here; before, never).
+    The reference passes the touch (three changes at 0.794979 T, then on: its period map
+    returns to the start within 1e-9, an orbit): the library's answer there is a limitation,
+    never a wrong state, and this test says so: NaN, or the reference's state to 1e-8."""
+    import time
+
+    from nlgrd.nonlinear.stability.shooting import model_flow
+
+    w, s = GRAZING
+    ref, _, events = pr.Flow(w, pr.Stop(0.0, PRELOAD)).advance(s, 1)
+    assert (
+        np.max(np.abs(ref - s)) < 1e-9 * np.max(np.abs(s))
+        and np.sum(np.abs(events * w / (2 * np.pi) - 0.794979) < 1e-6) == 3
+    )
+    t0 = time.process_time()
+    end, Phi, _ = model_flow(preloaded_chain(), w).period(s)
+    assert time.process_time() - t0 < 5.0
+    assert np.all(np.isnan(end)) or np.max(np.abs(end - ref)) < 1e-8 * np.max(np.abs(ref))
