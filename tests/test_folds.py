@@ -398,7 +398,7 @@ def test_a_flow_at_a_grazing_touch_returns():
     in both contact states and used to flip between them forever (the fold search from the
     row at 1.43 rad/s never returned). Now, after STILL_EVENTS such changes, the period map
     is NaN (no orbit through it: the branch follower halves its step), in well under 5 s of
-    CPU time (0.1 s here; before, never).
+    CPU time (0.03 s here; before, never).
     The reference passes the touch (three changes at 0.794979 T, then on: its period map
     returns to the start within 1e-9, an orbit): the library's answer there is a limitation,
     never a wrong state, and this test says so: NaN, or the reference's state to 1e-8."""
