@@ -360,7 +360,7 @@ FOLD_REACH = 0.01
 #: step and the truncation's offset of the harmonic-balance fold, 0.5 % of ω at H = 13 on
 #: the preloaded chain of tests/test_folds.py); the steps grow from FIRST_STEP to MAX_STEP
 #: of :mod:`~nlgrd.nonlinear.stability.exact_branch` (a fraction of the orbit's size) in 4
-#: steps, so 50 steps follow the branch over about twice the orbit's size. The folds of the
+#: steps, so 50 steps follow the branch over up to 2.4 times the orbit's size. The folds of the
 #: preloaded chain take 7 (period 2, 1.36287 -> 1.35174 rad/s), 11 accepted (the closed stop,
 #: 1.382 -> 1.38455) and 37 (the lifted-off branch from its unstable row at 1.30 to its fold
 #: at 1.28955, 11 of them halved); a branch without a fold (the gap-free chain's period-2
