@@ -258,3 +258,27 @@ def test_preloaded_upper_fold(upper_fold):
         print(f"{k}: omega {w:.10f} rad/s (other step {w2:.10f}), multipliers {np.round(mu, 6)}")
         assert abs(w - w2) < 1e-9 and pr.kind_of(mu, k)
     assert abs(coarse[1][1] - 1.4297822766) < 1e-9 and abs(coarse[0][1] - 1.4297863185) < 1e-9
+
+
+@pytest.mark.slow  # ~30 shots on the exact flow (~1 s)
+def test_preloaded_upper_branch_folds_above():
+    """The same upper branch followed up from 1.43 rad/s (Newton at fixed ω, each orbit from
+    the last, 5e-4 then 1e-6 then 1e-7 rad/s apart): orbits up to 1.4324095 rad/s, where a
+    real multiplier has risen to 0.9979 (0.9935 at 1.432409), and none near the last above
+    it at 1.4324096: a fold (tests/test_folds.py::TOP_FOLD) inside that 1e-7 bracket (the
+    zero of (1 - μ)² extrapolated through the last two: 1.43240956)."""
+    w, s = UPPER
+    steps = [
+        *np.arange(1.4305, 1.4324, 5e-4),
+        *(1.4324 + 1e-6 * np.arange(10)),
+        *(1.432409 + 1e-7 * np.arange(1, 6)),
+    ]
+    for w in steps:
+        s1, Phi, ok = pr.shoot(s, w, stop=PRELOADED)
+        assert ok and np.linalg.norm(s1 - s) < 0.5, w
+        s = s1
+    mu = np.linalg.eigvals(Phi)
+    real = mu[np.abs(mu.imag) < 1e-9].real
+    assert w == pytest.approx(1.4324095, abs=1e-12) and 0.99 < real.max() < 1
+    s1, _, ok = pr.shoot(s, w + 1e-7, stop=PRELOADED)
+    assert not ok or np.linalg.norm(s1 - s) > 0.05  # no orbit near it: past the fold

@@ -47,6 +47,9 @@ EVENT_RTOL = 1e-13
 #: instant, so more changes in a row than this are a cycle: the flow returns NaN (no orbit
 #: through it) instead. Far above the laws of any model switching at one instant.
 STILL_EVENTS = 50
+#: Points at which the margin is sampled inside a step that a trajectory enters and leaves
+#: (:meth:`_Flow._after_entry`), as the Hermite test of a double crossing samples (32).
+ENTRY_SAMPLES = 32
 
 
 @dataclass(frozen=True)
@@ -268,6 +271,24 @@ class _Flow:
             out[:, j] = self.ss.W.T @ s[: self.N]
         return out
 
+    def _after_entry(self, sigma, t, s, step, i, bracket):
+        """A bracket (a, m(a), b, m(b)) of the zero of margin ``i`` after the trajectory has
+        entered σ at t (its margin 0 there, < 0 at the step's end: it leaves again within
+        the step, e.g. a contact shorter than the step at a grazing touch): the first of
+        :data:`ENTRY_SAMPLES` points inside the step where the margin is positive, and the
+        next where it is not; ``bracket`` (the start's zero) when none is positive (the
+        trajectory leaves σ at once)."""
+        r = np.arange(1, ENTRY_SAMPLES + 1) * step / ENTRY_SAMPLES
+        m = np.array([self.margins(sigma, t + x, self.at(sigma, t, s, x)[0])[i] for x in r])
+        inside = np.nonzero(m > 0)[0]
+        if inside.size:
+            k = int(inside[0])
+            out = np.nonzero(m[k:] <= 0)[0]
+            if out.size:
+                j = k + int(out[0])
+                return float(r[k]), float(m[k]), float(r[j]), float(m[j])
+        return bracket
+
     def _locate(self, sigma, t, s, step, hit) -> tuple[float, int]:
         """The earliest zero in (0, step] of the margins ``hit``, by bracketed Newton."""
         best = (step, int(hit[0]))
@@ -277,6 +298,8 @@ class _Flow:
             mb = self.margins(sigma, t + b, self.at(sigma, t, s, b)[0])[i]
             if mb >= 0:  # inside the step by the Hermite test: bisect its first dip
                 b = step
+            if ma <= 0:  # on the boundary just crossed into σ: the zero sought is the next one
+                a, ma, b, mb = self._after_entry(sigma, t, s, step, i, (a, ma, b, mb))
             tau = a + (b - a) * ma / (ma - mb) if ma != mb else 0.5 * (a + b)
             for _ in range(100):
                 st = self.at(sigma, t, s, tau)[0]
