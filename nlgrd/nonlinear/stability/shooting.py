@@ -41,11 +41,12 @@ if TYPE_CHECKING:  # pragma: no cover
 #: Contact changes are located to this fraction of the period.
 EVENT_RTOL = 1e-13
 #: Contact changes in a row with no time between them (each within EVENT_RTOL of the
-#: period) after which the flow is stuck: at a grazing where each contact state's margin
-#: leaves that state at once, the event search flips between them at one instant forever
-#: (the preloaded chain of tests/test_folds.py near 1.4324 rad/s). A law switches once per
-#: instant, so more changes in a row than this are a cycle: the flow returns NaN (no orbit
-#: through it) instead. Far above the laws of any model switching at one instant.
+#: period) after which the flow is stuck: where each contact state's margin leaves that
+#: state at once (a tangency that :meth:`_Flow._after_entry` finds no positive margin to
+#: bracket), the event search would flip between them at one instant forever (before
+#: _after_entry, the preloaded chain of tests/test_folds.py near 1.4324 rad/s did). A law
+#: switches once per instant, so more changes in a row than this are a cycle: the flow
+#: returns NaN (no orbit through it) instead. Far above the laws of any model.
 STILL_EVENTS = 50
 #: Points at which the margin is sampled inside a step that a trajectory enters and leaves
 #: (:meth:`_Flow._after_entry`), as the Hermite test of a double crossing samples (32).
