@@ -17,7 +17,13 @@ with a stiff one-sided spring (issue 35, part 1), before anything is compared wi
   length), and at each one the critical multiplier is on the unit circle to 1e-6;
 - the preloaded variant (a static force on mass 2): its closed-stop linear limit, and the
   fold of its lifted-off branch (two steps agree to 1e-9, a multiplier at +1, the orbit
-  beside it under DOP853).
+  beside it under DOP853);
+- the preloaded variant's upper branch (the orbit the default sweeps reach at 1.43 rad/s):
+  its fold 1.4297822766 and the Neimark-Sacker point 4e-6 rad/s above it (two steps agree
+  to 1e-9, a multiplier at +1, a complex pair on the unit circle);
+- the period-2 branch born at the period doubling: it ends its stable part at a second
+  period doubling (two steps agree to 1e-9, a multiplier at -1) and has no fold up to
+  1.80 rad/s.
 """
 
 from __future__ import annotations
@@ -179,3 +185,100 @@ def test_preloaded_fold(preloaded_fold):
     T = 2 * np.pi / wd
     ref = solve_ivp(rhs(wd, PRELOADED), (0, 3 * T), s0, method="DOP853", rtol=1e-12, atol=1e-14).y[:, -1]
     assert np.max(np.abs(ref - s0)) < 1e-7 * (np.ptp(s0[:2]) + pr.SEAT)
+
+
+#: A start on the gap-free chain's period-2 branch (born supercritically at the period
+#: doubling 1.618338501 rad/s): the reference's period-2 orbit at 1.64 rad/s, shot from the
+#: period-1 orbit there plus 0.3 of its flip eigenvector (5 digits: a start for its Newton,
+#: not a result).
+P2_START = (1.64, np.array([-1.93060, 0.88016, -0.72824, 0.64253]))
+
+
+@pytest.fixture(scope="module")
+def period_two():
+    """The period-2 branch from 1.64 rad/s up: to the band's top, 1.70 rad/s, with one step,
+    past its second period doubling with another, and the bifurcations located on each."""
+    w, s = P2_START
+    coarse = pr.continue_branch(s, w, 1.70, nu=2, ds=0.05, max_points=2000)
+    fine = pr.continue_branch(s, w, 1.68, nu=2, ds=0.03, max_points=2000)
+    return coarse, pr.locate(coarse, nu=2), pr.locate(fine, nu=2)
+
+
+@pytest.mark.slow  # two continuations of the period-2 branch on the exact flow (~1 min)
+def test_period_two_branch(period_two):
+    """The gap-free chain's period-2 branch (tests/test_verdicts.py::PD2): stable from its
+    birth at the period doubling up to a second period doubling at 1.6708020066 rad/s (a
+    multiplier of the period-2 map at -1 to 1e-6, two continuation steps agree to 1e-9),
+    flip-unstable past it (a real μ down to -2.25). No fold in the band: along the branch
+    1.64-1.70 rad/s the fold test Π(1 - μ) keeps its sign, every multiplier stays at least
+    0.05 from +1 (a fold needs one at +1) and ω grows at every point (the tangent's ω
+    component > 0: no turning point). Measured once beyond the band (the same continuation
+    to 1.80 rad/s, 612 points, ~4 min): a third period doubling at 1.7747604 rad/s, stable
+    past it, still no fold (closest multiplier to +1: 0.107, at 1.707 rad/s)."""
+    branch, coarse, fine = period_two
+    assert [k for k, *_ in coarse] == ["period doubling"], coarse
+    assert [k for k, *_ in fine] == ["period doubling"], fine
+    (_, w, mu, _), (_, w2, _, _) = coarse[0], fine[0]
+    print(f"second period doubling {w:.10f} (other step {w2:.10f})")
+    assert abs(w - w2) < 1e-9 and pr.kind_of(mu, "period doubling")
+    assert abs(w - 1.6708020066) < 1e-9  # tests/test_verdicts.py's PD2
+    assert branch[-1].omega >= 1.70
+    folds = np.array([pr.test_functions(p.mu)["fold"] for p in branch])
+    assert np.all(folds > 0) or np.all(folds < 0)
+    assert min(np.min(np.abs(p.mu - 1)) for p in branch) > 0.05
+    assert all(p.tangent[4] > 0 for p in branch)
+
+
+#: A start on the preloaded chain's upper branch: the reference's orbit at 1.43 rad/s shot
+#: from the default sweep's row there (tests/test_folds.py::default_both; 5 digits: a start
+#: for its Newton, not a result). Stable, |μ| 0.956 and 0.917 (two complex pairs).
+UPPER = (1.43, np.array([-8.60016, 1.05191, 13.49172, 0.13198]))
+
+
+@pytest.fixture(scope="module")
+def upper_fold():
+    """The upper branch from 1.43 rad/s down, with two continuation steps (through its fold)."""
+    w, s = UPPER
+    return [
+        pr.locate(pr.continue_branch(s, w, 1.40, ds=ds, max_points=n, stop=PRELOADED), stop=PRELOADED)
+        for ds, n in ((0.02, 20), (0.025, 16))
+    ]
+
+
+@pytest.mark.slow  # two short continuations on the exact flow (~10 s)
+def test_preloaded_upper_fold(upper_fold):
+    """The preloaded chain's upper branch (tests/test_folds.py::UPPER_FOLD): from 1.43 rad/s
+    down it is stable to a Neimark-Sacker point at 1.4297863185 rad/s (a complex pair on the
+    unit circle to 1e-6), then unstable to its fold at 1.4297822766 (a multiplier at +1 to
+    1e-6), where it turns back up, unstable (a real μ up to 6.8); both located to 1e-12 in arc
+    length, and the two steps agree to 1e-9 in ω."""
+    coarse, fine = upper_fold
+    assert [k for k, *_ in coarse] == ["Neimark-Sacker", "fold"] == [k for k, *_ in fine], (coarse, fine)
+    for (k, w, mu, _), (_, w2, _, _) in zip(coarse, fine, strict=True):
+        print(f"{k}: omega {w:.10f} rad/s (other step {w2:.10f}), multipliers {np.round(mu, 6)}")
+        assert abs(w - w2) < 1e-9 and pr.kind_of(mu, k)
+    assert abs(coarse[1][1] - 1.4297822766) < 1e-9 and abs(coarse[0][1] - 1.4297863185) < 1e-9
+
+
+@pytest.mark.slow  # ~30 shots on the exact flow (~1 s)
+def test_preloaded_upper_branch_folds_above():
+    """The same upper branch followed up from 1.43 rad/s (Newton at fixed ω, each orbit from
+    the last, 5e-4 then 1e-6 then 1e-7 rad/s apart): orbits up to 1.4324095 rad/s, where a
+    real multiplier has risen to 0.9979 (0.9935 at 1.432409), and none near the last above
+    it at 1.4324096: a fold (tests/test_folds.py::TOP_FOLD) inside that 1e-7 bracket (the
+    zero of (1 - μ)² extrapolated through the last two: 1.43240956)."""
+    w, s = UPPER
+    steps = [
+        *np.arange(1.4305, 1.4324, 5e-4),
+        *(1.4324 + 1e-6 * np.arange(10)),
+        *(1.432409 + 1e-7 * np.arange(1, 6)),
+    ]
+    for w in steps:
+        s1, Phi, ok = pr.shoot(s, w, stop=PRELOADED)
+        assert ok and np.linalg.norm(s1 - s) < 0.5, w
+        s = s1
+    mu = np.linalg.eigvals(Phi)
+    real = mu[np.abs(mu.imag) < 1e-9].real
+    assert w == pytest.approx(1.4324095, abs=1e-12) and 0.99 < real.max() < 1
+    s1, _, ok = pr.shoot(s, w + 1e-7, stop=PRELOADED)
+    assert not ok or np.linalg.norm(s1 - s) > 0.05  # no orbit near it: past the fold

@@ -41,6 +41,13 @@ from nlgrd.nonlinear.tracing.sweep import sweep
 #: The reference's bifurcations (tests/piecewise_reference.py, located to 1e-9).
 NS = (1.364089063, 1.432756685)
 PD = 1.618338501
+#: The reference's second period doubling, of the period-2 branch born at :data:`PD` (its
+#: multiplier of the period-2 map at -1; tests/test_piecewise_reference.py::test_period_two_branch:
+#: two continuation steps agree to 1e-9, and the orbits shot 1e-6 rad/s either side have
+#: that multiplier at -0.999804 and -1.000195, so the crossing is within 1e-9 of this). The
+#: branch is stable from PD to here and has no fold up to 1.80 rad/s (the same test), so the
+#: band 1.30-1.70 rad/s has no period-2 fold: its bifurcations are NS, PD and this one.
+PD2 = 1.6708020066
 
 
 def chain(nu: int = 1) -> ReducedModel:
@@ -157,17 +164,26 @@ def test_ladder_is_bounded_by_memory():
     assert ladder_for(chain(), memory=1e5)[-1] < LADDER[-1]  # little memory: fewer rungs
 
 
+@pytest.fixture(scope="module")
+def default_chain():
+    """The chain with defaults over 51 frequencies, 1.30-1.70 rad/s, up: the period-1 sweep,
+    and ``beyond_period_one``'s answer and period-2 sweep (~2.5 min)."""
+    omegas = np.linspace(1.30, 1.70, 51)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", HarmonicsWarning)
+        p1 = converged_sweep(chain(), omegas, "up")
+    res, p2 = beyond_period_one(p1, "auto", lambda: chain(2), omegas, "up", 2 * next_harmonics(p1.H), 5e-3)
+    return p1, res, p2
+
+
 @pytest.mark.slow  # the default sweep over 51 frequencies (~3 min) and the reference at each
-def test_stiff_stop_chain_with_defaults_against_the_reference():
+def test_stiff_stop_chain_with_defaults_against_the_reference(default_chain):
     """Acceptance (issue 35): the chain with defaults over 51 frequencies, 1.30-1.70 rad/s,
     up: every verdict settled and the same as the reference's at every point (0
     disagreements); the two NS and the PD located within 1e-3 (bisection on the exact flow:
     within 1e-5); the period-2 branch found by ``period="auto"`` past the PD."""
     model = chain()
-    omegas = np.linspace(1.30, 1.70, 51)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", HarmonicsWarning)
-        p1 = converged_sweep(model, omegas, "up")
+    p1, res, p2 = default_chain
     assert p1.converged.all() and p1.verdict_converged.all()
     wrong = [
         float(w)
@@ -180,13 +196,32 @@ def test_stiff_stop_chain_with_defaults_against_the_reference():
     assert kinds == ["Neimark-Sacker", "Neimark-Sacker", "period doubling"], found
     for (_, _, w), ref in zip(found, (*NS, PD), strict=True):
         assert abs(w - ref) < 1e-5
-    res, p2 = beyond_period_one(p1, "auto", lambda: chain(2), omegas, "up", 2 * next_harmonics(p1.H), 5e-3)
     two = np.nonzero(res.period == 2)[0]
     assert two.size >= 3 and res.omega[two].min() > PD
     for i in two:
         assert bool(res.stable[i]) == (reference_max(chain(2), res.harmonics[i], float(res.omega[i]), 2) < 1)
     kinds = [t.kind for t in transitions(res)]
     assert "period doubling" in kinds and "Neimark-Sacker" in kinds
+
+
+@pytest.mark.slow  # with the sweep above; the bisection and one bounded fold search (~1 min)
+def test_period_two_branch_with_defaults(default_chain):
+    """Acceptance (issue 35), the period-2 branch: locate_bifurcations on the period-2 rows of
+    ``beyond_period_one`` (the base ω/2 model, ``nu`` = 2) finds where its stable part ends,
+    the second period doubling :data:`PD2`, within 1e-5 rad/s (bisection to rtol = 1e-6
+    relative, a 1.7e-6 rad/s bracket; the reference to 1e-9; the issue asks 1e-3), and
+    nothing else: no fold (the reference has none on this branch), the verdicts of its rows
+    the reference's (stable at 1.620-1.668, flip-unstable at 1.676-1.700 rad/s)."""
+    _, _, p2 = default_chain
+    settled = p2.converged & p2.verdict_converged
+    for i in np.nonzero(settled)[0]:
+        w = float(p2.omega[i])
+        assert bool(p2.stable[i]) == (reference_max(chain(2), p2.harmonics[i], w, 2) < 1 + 1e-6), w
+    assert p2.stable[settled & (p2.omega < PD2)].all() and not p2.stable[settled & (p2.omega > PD2)].any()
+    found = locate_bifurcations(chain(2), p2, nu=2)
+    print(found, PD2)
+    assert [k for _, k, _ in found] == ["period doubling"], found
+    assert abs(found[0][2] - PD2) < 1e-5
 
 
 def test_result_default_verdict_is_converged():

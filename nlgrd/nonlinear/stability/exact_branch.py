@@ -96,7 +96,11 @@ class _Branch:
 
 
 def _point(branch, v, Phi, prev_t):
+    """(v, Φ, J, tangent) at a corrected point, or None where the flow beside it is stuck
+    (:data:`~nlgrd.nonlinear.stability.shooting.STILL_EVENTS`: a NaN ∂r/∂ω)."""
     J = branch.jacobian(v, Phi)
+    if not np.all(np.isfinite(J)):
+        return None
     return v, Phi, J, branch.tangent(J, prev_t)
 
 
@@ -141,7 +145,10 @@ def fold_on_branch(
     r, Phi, err = br.residual(v0)
     if not err <= 1e3 * TOL:
         return None
-    v, Phi, J, t = _point(br, v0, Phi, None)
+    first = _point(br, v0, Phi, None)
+    if first is None:
+        return None
+    v, Phi, J, t = first
     if t[-1] * sign < 0:
         t = -t
     h = FIRST_STEP
@@ -149,10 +156,12 @@ def fold_on_branch(
         if h < MIN_STEP:
             return None
         got = br.correct(v + h * t, t, J)
-        if got is None or np.linalg.norm(got[0] - (v + h * t)) > HOP_RTOL * h:
+        hop = got is None or np.linalg.norm(got[0] - (v + h * t)) > HOP_RTOL * h
+        point = None if hop else _point(br, got[0], got[1], t)
+        if point is None:
             h *= 0.5
             continue
-        vn, Phin, Jn, tn = _point(br, got[0], got[1], t)
+        vn, Phin, Jn, tn = point
         if tn @ t < 0.5:  # the tangent turned too far for one step: smaller steps
             h *= 0.5
             continue
@@ -189,9 +198,10 @@ def _locate(br: _Branch, start, end, rtol: float) -> float | None:
         if not lo < mid < hi:
             mid = 0.5 * (lo + hi)
         got = br.correct(v0 + mid * t0, t0, J0)
-        if got is None:
+        J = None if got is None else br.jacobian(got[0], got[1])
+        if J is None or not np.all(np.isfinite(J)):
             return None
-        t = br.tangent(br.jacobian(got[0], got[1]), t0)
+        t = br.tangent(J, t0)
         d, w = t[-1] / (t @ t0), br.unpack(got[0])[1]
         if d * d_lo > 0:
             lo, d_lo, f_lo, w_lo = mid, d, d, w

@@ -40,6 +40,17 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: Contact changes are located to this fraction of the period.
 EVENT_RTOL = 1e-13
+#: Contact changes in a row with no time between them (each within EVENT_RTOL of the
+#: period) after which the flow is stuck: where each contact state's margin leaves that
+#: state at once (a tangency that :meth:`_Flow._after_entry` finds no positive margin to
+#: bracket), the event search would flip between them at one instant forever (before
+#: _after_entry, the preloaded chain of tests/test_folds.py near 1.4324 rad/s did). A law
+#: switches once per instant, so more changes in a row than this are a cycle: the flow
+#: returns NaN (no orbit through it) instead. Far above the laws of any model.
+STILL_EVENTS = 50
+#: Points at which the margin is sampled inside a step that a trajectory enters and leaves
+#: (:meth:`_Flow._after_entry`), as the Hermite test of a double crossing samples (32).
+ENTRY_SAMPLES = 32
 
 
 @dataclass(frozen=True)
@@ -210,10 +221,11 @@ class _Flow:
         return s, Phi, events
 
     def run(self, s: NDArray, t0: float, t1: float, sigma: tuple | None = None):
-        """s(t1), ∂s(t1)/∂s(t0), the contact-change times and the contact state at t1."""
+        """s(t1), ∂s(t1)/∂s(t0), the contact-change times and the contact state at t1
+        (s(t1) and ∂s(t1)/∂s(t0) NaN where the flow is stuck: :data:`STILL_EVENTS`)."""
         t = t0
         sigma = self.state_at(t0, s) if sigma is None else sigma
-        Phi, events = np.eye(s.size), []
+        Phi, events, still = np.eye(s.size), [], 0
         while t < t1 - 1e-15 * self.T:
             step = min(self.dt, t1 - t)
             sn, E = self.at(sigma, t, s, step)
@@ -235,6 +247,10 @@ class _Flow:
                     hit = np.array([bad[0, 1]])
             if hit.size:
                 tau, which = self._locate(sigma, t, s, step, hit)
+                still = still + 1 if tau <= EVENT_RTOL * self.T else 0
+                if still > STILL_EVENTS:  # stuck at a grazing (STILL_EVENTS): no orbit through it
+                    nan = np.full(s.size, np.nan)
+                    return nan, np.full((s.size, s.size), np.nan), np.array(events), sigma
                 s, E = self.at(sigma, t, s, tau)
                 Phi = E @ Phi  # saltation = identity: the contact force is continuous
                 t += tau
@@ -256,6 +272,24 @@ class _Flow:
             out[:, j] = self.ss.W.T @ s[: self.N]
         return out
 
+    def _after_entry(self, sigma, t, s, step, i, bracket):
+        """A bracket (a, m(a), b, m(b)) of the zero of margin ``i`` after the trajectory has
+        entered σ at t (its margin 0 there, < 0 at the step's end: it leaves again within
+        the step, e.g. a contact shorter than the step at a grazing touch): the first of
+        :data:`ENTRY_SAMPLES` points inside the step where the margin is positive, and the
+        next where it is not; ``bracket`` (the start's zero) when none is positive (the
+        trajectory leaves σ at once)."""
+        r = np.arange(1, ENTRY_SAMPLES + 1) * step / ENTRY_SAMPLES
+        m = np.array([self.margins(sigma, t + x, self.at(sigma, t, s, x)[0])[i] for x in r])
+        inside = np.nonzero(m > 0)[0]
+        if inside.size:
+            k = int(inside[0])
+            out = np.nonzero(m[k:] <= 0)[0]
+            if out.size:
+                j = k + int(out[0])
+                return float(r[k]), float(m[k]), float(r[j]), float(m[j])
+        return bracket
+
     def _locate(self, sigma, t, s, step, hit) -> tuple[float, int]:
         """The earliest zero in (0, step] of the margins ``hit``, by bracketed Newton."""
         best = (step, int(hit[0]))
@@ -265,6 +299,8 @@ class _Flow:
             mb = self.margins(sigma, t + b, self.at(sigma, t, s, b)[0])[i]
             if mb >= 0:  # inside the step by the Hermite test: bisect its first dip
                 b = step
+            if ma <= 0:  # on the boundary just crossed into σ: the zero sought is the next one
+                a, ma, b, mb = self._after_entry(sigma, t, s, step, i, (a, ma, b, mb))
             tau = a + (b - a) * ma / (ma - mb) if ma != mb else 0.5 * (a + b)
             for _ in range(100):
                 st = self.at(sigma, t, s, tau)[0]
@@ -399,6 +435,8 @@ def shoot_orbit(
     for it in range(max_iter + 1):
         end, Phi, events = flow.period(s)
         r = end - s
+        if not np.all(np.isfinite(r)):  # the flow is stuck at a grazing: no orbit
+            return ShootingOrbit(s, np.full(2 * N, np.nan + 0j), Phi, omega * events, np.inf, it, False)
         err = error(r, s)
         if err <= tol or it == max_iter:
             break

@@ -257,7 +257,8 @@ def locate_bifurcations(
     (:meth:`~nlgrd.nonlinear.results.sweep_results.SweepResult.jumps`) or its branch ends
     (a row with a converged verdict: its orbit is an exact one),
     and from the first unstable row where a branch turns unstable, the branch is followed
-    on the exact flow, stable or not, to :data:`FOLD_REACH` past the sweep's end; where it
+    on the exact flow, stable or not, to :data:`FOLD_REACH` past the sweep's end and for
+    at most :data:`FOLD_STEPS` arc-length steps (the bound on the cost of each); where it
     ends, the fold that ends it (a multiplier +1 no verdict change shows; a stable-seeking
     sweep leaves an unstable branch before its fold).
 
@@ -316,7 +317,8 @@ def locate_bifurcations(
         w_far = end + sign * FOLD_REACH * abs(end)  # each branch followed past the sweep's end
         ends = {i for i, _ in _branch_ends(result, d) if ok[i]}  # an exact orbit to start from
         for i in sorted(ends | set(starts)) if folds else ():
-            w = locate_fold(model, result.harmonics[i], float(result.omega[i]), w_far, rtol=1e-3 * rtol)
+            z, w_on = result.harmonics[i], float(result.omega[i])
+            w = locate_fold(model, z, w_on, w_far, rtol=1e-3 * rtol, max_steps=FOLD_STEPS)
             if w is not None and not any(k == "fold" and abs(w - v) <= rtol * abs(v) for _, k, v in found):
                 found.append((d, "fold", w))
         out += sorted(found, key=lambda f: sign * f[2])
@@ -361,12 +363,29 @@ def _bisect(model, z, w_stable, w_unstable, rtol):
 
 #: :func:`locate_bifurcations` follows a branch to this fraction of ω past the sweep's end.
 FOLD_REACH = 0.01
+#: ... and for at most this many arc-length steps (accepted or halved) from each row. The
+#: fold it looks for ends the branch the sweep was on, next to the row (within the grid
+#: step and the truncation's offset of the harmonic-balance fold, 0.5 % of ω at H = 13 on
+#: the preloaded chain of tests/test_folds.py); the steps grow from FIRST_STEP to MAX_STEP
+#: of :mod:`~nlgrd.nonlinear.stability.exact_branch` (a fraction of the orbit's size) in 4
+#: steps, so 50 steps follow the branch over up to 2.4 times the orbit's size. The folds of the
+#: preloaded chain take 7 (period 2, 1.36287 -> 1.35174 rad/s), 11 accepted (the closed stop,
+#: 1.382 -> 1.38455) and 37 (the lifted-off branch from its unstable row at 1.30 to its fold
+#: at 1.28955, 11 of them halved); a branch without a fold (the gap-free chain's period-2
+#: branch from 1.676 rad/s) takes all, each a few period maps: the bound on the cost.
+FOLD_STEPS = 50
 #: Orbits kept as harmonics between the shots of the bisection (the next shot's start).
 FOLD_HARMONICS = 64
 
 
 def locate_fold(
-    model: ReducedModel, harmonics: NDArray, omega_on: float, omega_off: float, *, rtol: float = 1e-9
+    model: ReducedModel,
+    harmonics: NDArray,
+    omega_on: float,
+    omega_off: float,
+    *,
+    rtol: float = 1e-9,
+    max_steps: int = 80,
 ) -> float | None:
     """The fold (turning point) that ends the branch through an orbit, on the exact flow.
 
@@ -391,17 +410,19 @@ def locate_fold(
         Base frequency past the fold [rad/s] (above or below ``omega_on``).
     rtol : float
         Relative tolerance of the fold frequency [-].
+    max_steps : int
+        Continuation steps at most (accepted or halved).
 
     Returns
     -------
     float or None
         The fold's base frequency [rad/s]; None when the model is not shootable, no
-        exact orbit is found at ``omega_on``, or the branch reaches ``omega_off`` or ends
-        without a multiplier at +1.
+        exact orbit is found at ``omega_on``, the branch reaches ``omega_off``, ends
+        without a multiplier at +1, or has no fold within ``max_steps``.
     """
     if not shootable(model):
         return None
     first = polish(model, harmonics, omega_on)
     if first is None:
         return None
-    return fold_on_branch(model, first.state, omega_on, omega_off, rtol=rtol)
+    return fold_on_branch(model, first.state, omega_on, omega_off, rtol=rtol, max_steps=max_steps)
