@@ -26,7 +26,14 @@ Three ways to solve with Z_k (``method``):
   solves (:data:`MODAL_CHECK_RTOL`); the mean problem stays exact;
 - ``"direct"``: Z_k factorised once per harmonic and frequency (dense LU up to
   :data:`DENSE_LIMIT` DOFs, sparse LU above), the factors kept, bounded, for the
-  recovery of the same point.
+  recovery of the same point;
+- ``"banded"``: the single-mesh path's direct solver
+  (:class:`~nlgrd.nonlinear.reduction.direct_receptance.DirectSolver`) on the links'
+  coordinates: on the connected components of Z's sparsity graph that hold a link or a
+  forced DOF, banded LU (reverse Cuthill-McKee order) of Z_k without the links' damping
+  P C_L Pᵀ, which comes back by the Sherman-Morrison-Woodbury identity (sparse LU of Z_k
+  where the band is wider than ``BAND_LIMIT`` or the identity ill-conditioned); all
+  harmonics of a frequency at once, recovery by one more solve.
 """
 
 from __future__ import annotations
@@ -45,6 +52,7 @@ from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.fourier.harmonics import real_to_complex
 from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
+from nlgrd.nonlinear.reduction.direct_receptance import DirectSolver, coupled_dofs
 from nlgrd.nonlinear.reduction.link_mean import MeanProblem
 from nlgrd.nonlinear.reduction.link_poles import LinkPoleForm
 from nlgrd.nonlinear.reduction.modal_basis import (
@@ -95,7 +103,7 @@ class LinkReceptance:
     harmonic_force : callable (omega, H) -> (H+1, n_dofs) complex, optional
         Harmonics of the external forces on the DOFs [N]: a polynomial of degree <= 2 in
         ω (an unbalance's m e Ω²), for the frequency derivatives.
-    method : {"auto", "poles", "direct", "modal"}
+    method : {"auto", "poles", "direct", "modal", "banded"}
         How Z_k is solved (module docstring); "auto" is "poles" up to
         :data:`DENSE_LIMIT` DOFs and "modal" above (once :meth:`prepare` knows the
         highest frequency; "direct" until then and with tabulated bearings or a loss
@@ -139,8 +147,8 @@ class LinkReceptance:
             np.hstack([link.projection(system) for link in self.links]) if self.links else np.zeros((n, 0))
         )
         self.k_link = sla.block_diag(*[link.linear_stiffness() for link in self.links])
-        c_link = sla.block_diag(*[link.linear_damping() for link in self.links])
-        self.C_link = sp.csc_matrix(self.P @ c_link @ self.P.T)
+        self.c_link = sla.block_diag(*[link.linear_damping() for link in self.links])
+        self.C_link = sp.csc_matrix(self.P @ self.c_link @ self.P.T)
         self.K_link = sp.csc_matrix(self.P @ self.k_link @ self.P.T)
         self.static_force = np.zeros(n) if static_force is None else np.asarray(static_force, dtype=float)
         self.harmonic_force = harmonic_force
@@ -166,8 +174,10 @@ class LinkReceptance:
         self._factors = BoundedCache(64)
         self._terms = BoundedCache(4096)
         poles_apply = self._dense and self.has_derivatives
-        if method not in ("auto", "poles", "direct", "modal"):
-            raise ModelError("method", f"must be 'auto', 'poles', 'direct' or 'modal', got {method!r}")
+        if method not in ("auto", "poles", "direct", "modal", "banded"):
+            raise ModelError(
+                "method", f"must be 'auto', 'poles', 'direct', 'modal' or 'banded', got {method!r}"
+            )
         if method == "poles" and not poles_apply:
             raise ModelError(
                 "method", f"'poles' needs at most {DENSE_LIMIT} DOFs, no tabulated bearing or loss factor"
@@ -182,6 +192,7 @@ class LinkReceptance:
             "poles" if method == "auto" and poles_apply else ("direct" if method == "auto" else method)
         )
         self._poles = BoundedCache(256)
+        self._banded = BoundedCache(8)  # the banded solvers, per tuple of output DOFs
         self.pole_check: dict[int, float] = {}
         if method == "modal" and max_frequency is None:
             raise ModelError("max_frequency", "the modal method needs the highest excitation frequency")
@@ -343,6 +354,24 @@ class LinkReceptance:
 
         return self._factors.get(("k", k, float(omega)), make)
 
+    def _band_solver(self, dofs=()) -> DirectSolver:
+        """The ``"banded"`` solver (:mod:`nlgrd.nonlinear.reduction.direct_receptance`) on the
+        components of Z's graph holding a link, a forced DOF (all DOFs when the harmonic
+        forces' DOFs are not given) or one of ``dofs``, Z_k⁻¹ returned at ``dofs``."""
+        dofs = tuple(int(i) for i in dofs)
+
+        def make():
+            m = self.model
+            full = replace(m, C=(m.C + self.C_link).tocsc())
+            out = np.asarray(dofs, dtype=int)
+            forced = self.force_dofs
+            if self.harmonic_force is not None and not forced.size:
+                forced = np.arange(m.n_dofs)
+            keep = coupled_dofs(full, self.P, np.concatenate([forced, out]))
+            return DirectSolver(full, m, self.P, self.c_link, keep, out, self.plan.speed_per_base)
+
+        return self._banded.get(dofs, make)
+
     def _pole_form(self, k: int) -> LinkPoleForm | None:
         """The shifted pole-residue form of harmonic k (:mod:`nlgrd.nonlinear.reduction.link_poles`),
         or None (solve directly)."""
@@ -401,6 +430,13 @@ class LinkReceptance:
             frc[0] = hr_inv @ ph
             Lf = self._pole_forces(omega, H) if self.method in ("poles", "modal") else None
             Ps, f = self._Ps, None
+            if self.method == "banded" and H:
+                sol = self._band_solver().solve_forced(
+                    np.arange(1, H + 1), omega, False, ext[1:] + phi[1:] @ self.P.T
+                )
+                kap[1:] = np.linalg.inv(sol.h)
+                frc[1:] = (kap[1:] @ sol.g[:, :, None])[:, :, 0]
+                return kap, frc
             for k in range(1, H + 1):
                 pf = self._pole_form(k)
                 if pf is not None:
@@ -470,6 +506,12 @@ class LinkReceptance:
             else:
                 Kc, M, G = m.Kc, m.M, m.G
                 C = (m.C + m.Ci + self.C_link).tocsc()
+            if self.method == "banded" and H:
+                sol = self._band_solver().solve_forced(np.arange(1, H + 1), omega, True, f[1:], df[1:])
+                kh = kap[1:]
+                dkap[1:] = -kh @ sol.dh @ kh
+                dfrc[1:] = (dkap[1:] @ sol.g[:, :, None] + kh @ sol.dg[:, :, None])[:, :, 0]
+                return dkap, dfrc
             A = B = None
             for k in range(1, H + 1):
                 pf = self._pole_form(k)
@@ -519,7 +561,10 @@ class LinkReceptance:
         rhs0 = f[0].real - self.P @ (G[0].real - self.k_link @ Y[0].real)
         out[0] = self.mean.solve(speed, rhs0[:, None])[dofs, 0]
         V = self.basis
-        for k in range(1, H + 1):
+        if self.method == "banded" and H:
+            rhs = f[1:] - G[1:] @ self.P.T
+            out[1:] = self._band_solver(dofs).solve_forced(np.arange(1, H + 1), omega, False, rhs).Ug
+        for k in range(1, H + 1 if self.method != "banded" else 1):
             pf = self._pole_form(k)
             rhs = f[k] - self.P @ G[k]
             if V is None:

@@ -52,10 +52,13 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
-from scipy.sparse.csgraph import connected_components
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.reduction.direct_receptance import DirectSolver, dynamic_stiffness_derivative
+from nlgrd.nonlinear.reduction.direct_receptance import (
+    DirectSolver,
+    coupled_dofs,
+    dynamic_stiffness_derivative,
+)
 from nlgrd.nonlinear.reduction.modal_basis import (
     STABILITY_MODE_CAP,
     attachment_basis,
@@ -318,12 +321,7 @@ class MeshReceptance:
     def _mesh_component(self, extra=()) -> NDArray:
         """DOFs in the connected components of Z's sparsity graph that hold a mesh DOF
         (or one of ``extra``): the rest is decoupled from every mesh exactly."""
-        pat = self.model._pattern
-        n = self.model.n_dofs
-        g = sp.csc_matrix((np.ones(len(pat["indices"])), pat["indices"], pat["indptr"]), shape=(n, n))
-        _, label = connected_components(g, directed=False)
-        need = np.concatenate([np.flatnonzero(np.any(self.W != 0, axis=1)), np.asarray(extra, dtype=int)])
-        return np.flatnonzero(np.isin(label, label[need]))
+        return coupled_dofs(self.model, self.W, extra)
 
     def _direct(self) -> DirectSolver:
         """The per-frequency factorisation (:mod:`nlgrd.nonlinear.reduction.direct_receptance`) on
