@@ -52,7 +52,7 @@ from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.fourier.harmonics import real_to_complex
 from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
-from nlgrd.nonlinear.reduction.direct_receptance import DirectSolver, coupled_dofs
+from nlgrd.nonlinear.reduction.direct_receptance import DirectSolution, DirectSolver, coupled_dofs
 from nlgrd.nonlinear.reduction.link_mean import MeanProblem
 from nlgrd.nonlinear.reduction.link_poles import LinkPoleForm
 from nlgrd.nonlinear.reduction.modal_basis import (
@@ -193,6 +193,9 @@ class LinkReceptance:
         )
         self._poles = BoundedCache(256)
         self._banded = BoundedCache(8)  # the banded solvers, per tuple of output DOFs
+        # their solves of all harmonics per (ω, H, output DOFs), and the DOFs recovered last
+        # (the next frequencies' solves return them: the recovery needs no solve of its own)
+        self._band_sols, self._band_out = BoundedCache(64), ()
         self.pole_check: dict[int, float] = {}
         if method == "modal" and max_frequency is None:
             raise ModelError("max_frequency", "the modal method needs the highest excitation frequency")
@@ -372,6 +375,16 @@ class LinkReceptance:
 
         return self._banded.get(dofs, make)
 
+    def _band_solve(self, omega: float, H: int, dofs: tuple, f: NDArray | None = None) -> DirectSolution:
+        """Harmonics 1..H of the ``"banded"`` solver for output ``dofs`` at ``omega``, with
+        the forces f_k (default :meth:`forces`), kept per (ω, H, dofs)."""
+
+        def make():
+            rhs = self.forces(omega, H)[1:] if f is None else f
+            return self._band_solver(dofs).solve_forced(np.arange(1, H + 1), omega, False, rhs)
+
+        return self._band_sols.get((float(omega), int(H), dofs), make)
+
     def _pole_form(self, k: int) -> LinkPoleForm | None:
         """The shifted pole-residue form of harmonic k (:mod:`nlgrd.nonlinear.reduction.link_poles`),
         or None (solve directly)."""
@@ -431,9 +444,7 @@ class LinkReceptance:
             Lf = self._pole_forces(omega, H) if self.method in ("poles", "modal") else None
             Ps, f = self._Ps, None
             if self.method == "banded" and H:
-                sol = self._band_solver().solve_forced(
-                    np.arange(1, H + 1), omega, False, ext[1:] + phi[1:] @ self.P.T
-                )
+                sol = self._band_solve(omega, H, self._band_out, ext[1:] + phi[1:] @ self.P.T)
                 kap[1:] = np.linalg.inv(sol.h)
                 frc[1:] = (kap[1:] @ sol.g[:, :, None])[:, :, 0]
                 return kap, frc
@@ -507,7 +518,8 @@ class LinkReceptance:
                 Kc, M, G = m.Kc, m.M, m.G
                 C = (m.C + m.Ci + self.C_link).tocsc()
             if self.method == "banded" and H:
-                sol = self._band_solver().solve_forced(np.arange(1, H + 1), omega, True, f[1:], df[1:])
+                solver = self._band_solver(self._band_out)
+                sol = solver.solve_forced(np.arange(1, H + 1), omega, True, f[1:], df[1:])
                 kh = kap[1:]
                 dkap[1:] = -kh @ sol.dh @ kh
                 dfrc[1:] = (dkap[1:] @ sol.g[:, :, None] + kh @ sol.dg[:, :, None])[:, :, 0]
@@ -562,8 +574,9 @@ class LinkReceptance:
         out[0] = self.mean.solve(speed, rhs0[:, None])[dofs, 0]
         V = self.basis
         if self.method == "banded" and H:
-            rhs = f[1:] - G[1:] @ self.P.T
-            out[1:] = self._band_solver(dofs).solve_forced(np.arange(1, H + 1), omega, False, rhs).Ug
+            self._band_out = key = tuple(int(i) for i in dofs)
+            sol = self._band_solve(omega, H, key)  # Z⁻¹ (f - P G) = Z⁻¹ f - (Z⁻¹ P) G
+            out[1:] = sol.Ug - np.einsum("kij,kj->ki", sol.U, G[1:])
         for k in range(1, H + 1 if self.method != "banded" else 1):
             pf = self._pole_form(k)
             rhs = f[k] - self.P @ G[k]
