@@ -11,7 +11,10 @@ single path takes them on the modes below 3x the highest mesh frequency
 truncation and the verdicts must agree.
 
 Models: ``data/models/two_shaft.toml`` and ``data/case_studies/kubo.toml``, as loaded
-and modified in memory (:func:`system`):
+and modified in memory (:func:`system`). The link path's default reduction is the one the
+single path would take (issue 33 item 3): its banded LU on two_shaft (110 DOFs coupled to
+the mesh) and on every tabulated or loss-factor variant, the pole-residue form on kubo's
+base and cross variants (54 DOFs):
 
 - ``cross``: every bearing cross-coupled, k_yz = 0.2 k_yy = -k_zy, c_yz = 0.1 c_yy = -c_zy;
 - ``tabulated``: one more bearing, tabulated against speed (at 100 and 3000 rad/s:
@@ -273,7 +276,7 @@ def _clearance_system(unbalance: bool):
     "case", ["two_shaft", "kubo", "two_shaft_clearance", "two_shaft_clearance_unbalance"]
 )
 def test_banded_link_strategy_equals_the_other_link_strategies(case):
-    """``"banded"`` against the link path's pole-residue form (the default here) and its
+    """``"banded"`` against the link path's pole-residue form and its
     dense LU (``"direct"``) at three frequencies, with the bearing clearance of
     data/models/two_shaft_clearance.toml (3 link coordinates, the Woodbury matrix 3 x 3)
     and with two unbalances besides (forces off the links): κ_k, F_k, dκ_k/dω, dF_k/dω as
@@ -283,8 +286,8 @@ def test_banded_link_strategy_equals_the_other_link_strategies(case):
         s, pts = system(case), POINTS_HZ[case]
     else:
         s, pts = _clearance_system(case.endswith("unbalance")), POINTS_HZ["two_shaft"]
-    b, poles, direct = (build_link_model(s, method=m).receptance for m in ("banded", "auto", "direct"))
-    assert poles.method == "poles" and direct.method == "direct"
+    b, poles, direct = (build_link_model(s, method=m).receptance for m in ("banded", "poles", "direct"))
+    assert b.method == "banded" and poles.method == "poles" and direct.method == "direct"
     d = b.n_coords
     rng = np.random.default_rng(1)
     worst: dict = {}
@@ -302,6 +305,27 @@ def test_banded_link_strategy_equals_the_other_link_strategies(case):
     print(f"{case} (d = {d}): banded vs poles, direct " + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
     assert b._band_solver().n_sparse == 0 and len(worst) == 6
     assert max(worst.values()) <= REDUCTION_RTOL
+
+
+def test_link_path_chooses_as_the_single_path():
+    """``method="auto"`` on the link path as on the single path (``MeshReceptance``): the
+    pole-residue form up to 100 DOFs coupled to the mesh (kubo: 54), the banded LU above
+    (two_shaft: 110) and with a tabulated bearing or a loss factor (where the link path's
+    pole-residue form does not apply: it took dense or sparse LU); several link coordinates
+    (the clearance model) keep the pole-residue form."""
+    for name, variant, method in (
+        ("kubo", "base", "poles"),
+        ("kubo", "tabulated", "banded"),
+        ("kubo", "loss", "banded"),
+        ("two_shaft", "base", "banded"),
+        ("two_shaft", "tabulated", "banded"),
+    ):
+        g, lk = models(name, variant)
+        assert lk.receptance.method == method, (name, variant)
+        if variant == "base":
+            assert g.receptance.method == ("poles" if method == "poles" else "direct")
+            assert g.receptance._direct().banded
+    assert build_link_model(_clearance_system(False)).receptance.method == "poles"
 
 
 def test_banded_link_strategy_sparse_fallback(monkeypatch):

@@ -14,10 +14,11 @@ diag(k_j) and F_0 = (Pᵀ K_r⁻¹ P)⁻¹ Pᵀ K_r⁻¹ f_0 (static loads and g
 k_j > 0; rigid-body modes of K_r (a drive line's rotation) are removed by a bordered solve.
 Any DOF follows as Q_k = Z_k⁻¹ (f_k - P G_k) (mean: K_r⁻¹ (f_0 - P (G_0 - diag(k_j) Y_0))).
 
-Three ways to solve with Z_k (``method``):
+Four ways to solve with Z_k (``method``; "auto" as the single-mesh path decides:
+:meth:`LinkReceptance._auto_method`):
 
-- ``"poles"`` (the default up to :data:`DENSE_LIMIT` DOFs without tabulated bearings or
-  hysteretic damping): Z_k(ω) is a quadratic polynomial in ω, so one eigendecomposition
+- ``"poles"`` (the default up to :data:`POLES_LIMIT` DOFs coupled to a link, without
+  tabulated bearings or hysteretic damping): Z_k(ω) is a quadratic polynomial in ω, so one eigendecomposition
   per harmonic gives its pole-residue form (of Z_k + K_L, :mod:`nlgrd.nonlinear.reduction.link_poles`)
   and a point costs a few matrix-vector products; each harmonic is checked against a direct
   solve at five frequencies and solved directly when the check fails;
@@ -33,7 +34,9 @@ Three ways to solve with Z_k (``method``):
   forced DOF, banded LU (reverse Cuthill-McKee order) of Z_k without the links' damping
   P C_L Pᵀ, which comes back by the Sherman-Morrison-Woodbury identity (sparse LU of Z_k
   where the band is wider than ``BAND_LIMIT`` or the identity ill-conditioned); all
-  harmonics of a frequency at once, recovery by one more solve.
+  harmonics of a frequency at once, Z_k⁻¹ P and Z_k⁻¹ f_k kept at the DOFs recovered last
+  (the default for one link coordinate above :data:`POLES_LIMIT` coupled DOFs, and with
+  tabulated bearings or a loss factor, where the band is narrow).
 """
 
 from __future__ import annotations
@@ -72,6 +75,9 @@ from nlgrd.rotor.system import RotorSystem
 DENSE_STABILITY_LIMIT = 600
 #: Up to this many DOFs Z_k is factorised as a dense matrix (faster than sparse LU there).
 DENSE_LIMIT = 300
+#: Up to this many DOFs coupled to a link or a forced DOF, ``method="auto"`` takes the
+#: pole-residue form; above, the banded LU where the band is narrow (the single path's rule).
+POLES_LIMIT = 100
 #: Dynamic attachment vectors at j / ATTACHMENT_POINTS of the top frequency (docs/verification.md).
 ATTACHMENT_POINTS = 32
 #: A modal basis farther than this from direct solves warns.
@@ -104,7 +110,9 @@ class LinkReceptance:
         Harmonics of the external forces on the DOFs [N]: a polynomial of degree <= 2 in
         ω (an unbalance's m e Ω²), for the frequency derivatives.
     method : {"auto", "poles", "direct", "modal", "banded"}
-        How Z_k is solved (module docstring); "auto" is "poles" up to
+        How Z_k is solved (module docstring); "auto": :meth:`_auto_method` (the single-mesh
+        path's rule: "poles" up to :data:`POLES_LIMIT` coupled DOFs, "banded" above where
+        the band is narrow, "poles" kept for several link coordinates). Before issue 33 it was "poles" up to
         :data:`DENSE_LIMIT` DOFs and "modal" above (once :meth:`prepare` knows the
         highest frequency; "direct" until then and with tabulated bearings or a loss
         factor).
@@ -188,19 +196,39 @@ class LinkReceptance:
             raise ModelError("force_dofs", "the modal basis needs the DOFs the harmonic forces load")
         self._auto_modal = method == "auto" and not self._dense and self.has_derivatives
         self._auto_modal &= harmonic_force is None or force_dofs is not None
-        self.method = (
-            "poles" if method == "auto" and poles_apply else ("direct" if method == "auto" else method)
-        )
         self._poles = BoundedCache(256)
         self._banded = BoundedCache(8)  # the banded solvers, per tuple of output DOFs
         # their solves of all harmonics per (ω, H, output DOFs), and the DOFs recovered last
         # (the next frequencies' solves return them: the recovery needs no solve of its own)
         self._band_sols, self._band_out = BoundedCache(64), ()
+        self.method = self._auto_method(poles_apply) if method == "auto" else method
         self.pole_check: dict[int, float] = {}
         if method == "modal" and max_frequency is None:
             raise ModelError("max_frequency", "the modal method needs the highest excitation frequency")
         if max_frequency is not None:
             self.prepare(max_frequency)
+
+    def _auto_method(self, poles_apply: bool) -> str:
+        """What ``method="auto"`` takes, as the single-mesh path decides
+        (:class:`~nlgrd.nonlinear.reduction.receptance.MeshReceptance`): the pole-residue form
+        up to :data:`POLES_LIMIT` DOFs coupled to a link or a forced DOF, else the banded LU
+        where the band is narrow (``direct_receptance.BAND_LIMIT``), else the pole-residue
+        form or direct LU as before; above :data:`DENSE_LIMIT` DOFs with exact derivatives,
+        the modal basis once :meth:`prepare` knows the top frequency (direct LU until then).
+        One difference: with more than one link coordinate the pole-residue form stays the
+        default where it applies (per evaluation of κ, F and their derivatives, 2026-12-07:
+        idler train H = 9 0.8-4.3 ms against 7.2-8.1 ms banded, two-stage H = 45 3.9-11.6
+        ms against 24.5-35.4 ms, its set-up apart)."""
+        if self._auto_modal:
+            return "direct"
+        if not self.n_coords:  # no link: nothing to reduce onto
+            return "poles" if poles_apply else "direct"
+        solver = self._band_solver()
+        if poles_apply and (solver.keep.size <= POLES_LIMIT or self.n_coords > 1):
+            return "poles"
+        if solver.banded:
+            return "banded"
+        return "poles" if poles_apply else "direct"
 
     def _dense_matrices(self, dense: Callable) -> dict[str, NDArray]:
         m = self.model

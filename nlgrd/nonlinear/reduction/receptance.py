@@ -59,6 +59,7 @@ from nlgrd.nonlinear.reduction.direct_receptance import (
     coupled_dofs,
     dynamic_stiffness_derivative,
 )
+from nlgrd.nonlinear.reduction.link_reduction import POLES_LIMIT
 from nlgrd.nonlinear.reduction.modal_basis import (
     STABILITY_MODE_CAP,
     attachment_basis,
@@ -72,9 +73,9 @@ from nlgrd.rotor.system import RotorSystem
 
 #: Above this many DOFs ``method="auto"`` uses the modal basis.
 DIRECT_LIMIT = 3000
-#: Up to this many DOFs reached by a mesh, ``method="auto"`` uses the pole-residue form of
-#: the whole model (one eigendecomposition per harmonic: 60 ms at 83 DOFs, 250 ms at 210).
-POLES_LIMIT = 100
+#: POLES_LIMIT (link_reduction's): up to this many DOFs reached by a mesh, ``method="auto"``
+#: uses the pole-residue form of the whole model (one eigendecomposition per harmonic: 60 ms
+#: at 83 DOFs, 250 ms at 210).
 #: Up to this many, "auto" solves POLES_AFTER new frequencies by sparse LU (a short sweep),
 #: then turns to the pole-residue form (a long sweep: cheaper than the solves it replaces).
 #: A narrow band (direct_receptance.BAND_LIMIT) stays direct: 0.05 ms per harmonic at 210
