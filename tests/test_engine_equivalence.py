@@ -247,9 +247,9 @@ def test_banded_link_strategy_equals_the_single_path(name, variant):
     """The link path's ``"banded"`` strategy (the single path's banded LU and Woodbury
     identity on the links' coordinates) against the single path (two_shaft: its banded
     direct solver; kubo: its pole-residue form) at three mesh frequencies: κ_k, F_k (also
-    F_1..F_5 on their own scale) and, without tabulated bearing or loss factor, dκ_k/dω and
-    dF_k/dω (k >= 1) to REDUCTION_RTOL; every harmonic solved by band (none by the sparse
-    fallback)."""
+    F_1..F_5 on their own scale), dκ_k/dω and dF_k/dω (k >= 1; analytic on both paths, with
+    the tabulated bearing and the loss factor too) to REDUCTION_RTOL; every harmonic solved
+    by band (none by the sparse fallback)."""
     g, _ = models(name, variant)
     lb = banded(name, variant)
     worst: dict = {}
@@ -258,7 +258,7 @@ def test_banded_link_strategy_equals_the_single_path(name, variant):
     solver = lb.receptance._band_solver()
     print(f"{name} {variant}: banded link vs single " + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
     assert lb.receptance.method == "banded" and solver.banded and solver.n_sparse == 0 and solver.n_band > 0
-    assert ("dkappa" in worst) == (variant in ("base", "cross"))
+    assert "dkappa" in worst and "dF_k" in worst  # analytic on every variant
     assert max(worst.values()) <= REDUCTION_RTOL
 
 
@@ -305,6 +305,33 @@ def test_banded_link_strategy_equals_the_other_link_strategies(case):
     print(f"{case} (d = {d}): banded vs poles, direct " + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
     assert b._band_solver().n_sparse == 0 and len(worst) == 6
     assert max(worst.values()) <= REDUCTION_RTOL
+
+
+@pytest.mark.parametrize("variant", ("tabulated", "loss"))
+@pytest.mark.parametrize("name", FILES)
+def test_banded_link_derivatives_against_differences(name, variant):
+    """With a tabulated bearing or a loss factor only the banded LU gives the link path
+    analytic derivatives: dκ_k/dω (k = 0..5) and dF_k/dω (k = 1..5; dF_0 is the same central
+    difference of the mean on every strategy) against Richardson differences of the banded
+    κ_k, F_k, within 1e-9 of their scale plus ten times the differences' own error."""
+    lb = banded(name, variant)
+    rec = lb.receptance
+    assert rec.has_derivatives and lb.reduced.kappa_derivative is not None
+    excess = 0.0
+    for w in 2 * np.pi * np.array(POINTS_HZ[name]):
+        analytic = [_flat(a) for a in rec.derivatives(w, H)]
+        for i, rows in ((0, slice(None)), (1, slice(1, None))):
+
+            def f(x, h_, i=i):
+                return rec.terms(x, h_)[i]
+
+            a, d1, d2 = (
+                x[rows] for x in (analytic[i], _richardson(f, w, 2e-5 * w), _richardson(f, w, 1e-5 * w))
+            )
+            scale = np.max(np.abs(d2))
+            excess = max(excess, _rel(a, d2, scale) / (1e-9 + 10 * _rel(d1, d2, scale)))
+    print(f"{name} {variant}: banded analytic vs differences, excess {excess:.2f}")
+    assert excess <= 1.0
 
 
 def test_link_path_chooses_as_the_single_path():

@@ -181,7 +181,9 @@ class LinkReceptance:
         )
         self._factors = BoundedCache(64)
         self._terms = BoundedCache(4096)
-        poles_apply = self._dense and self.has_derivatives
+        # no tabulated bearing or hysteretic part: every method's derivatives are exact
+        self._plain = not (self.model.tabulated_bearings or self.model.hysteretic_parts)
+        poles_apply = self._dense and self._plain
         if method not in ("auto", "poles", "direct", "modal", "banded"):
             raise ModelError(
                 "method", f"must be 'auto', 'poles', 'direct', 'modal' or 'banded', got {method!r}"
@@ -190,11 +192,11 @@ class LinkReceptance:
             raise ModelError(
                 "method", f"'poles' needs at most {DENSE_LIMIT} DOFs, no tabulated bearing or loss factor"
             )
-        if method == "modal" and not self.has_derivatives:
+        if method == "modal" and not self._plain:
             raise ModelError("method", "'modal' needs a model without tabulated bearings or loss factor")
         if method == "modal" and harmonic_force is not None and force_dofs is None:
             raise ModelError("force_dofs", "the modal basis needs the DOFs the harmonic forces load")
-        self._auto_modal = method == "auto" and not self._dense and self.has_derivatives
+        self._auto_modal = method == "auto" and not self._dense and self._plain
         self._auto_modal &= harmonic_force is None or force_dofs is not None
         self._poles = BoundedCache(256)
         self._banded = BoundedCache(8)  # the banded solvers, per tuple of output DOFs
@@ -491,8 +493,11 @@ class LinkReceptance:
 
     @property
     def has_derivatives(self) -> bool:
-        """Whether :meth:`derivatives` is exact (no tabulated bearing or hysteretic part)."""
-        return not (self.model.tabulated_bearings or self.model.hysteretic_parts)
+        """Whether :meth:`derivatives` is exact: no tabulated bearing or hysteretic part, or
+        the ``"banded"`` LU, whose dZ_k/dω holds the slopes of the bearings' tables
+        (:func:`~nlgrd.nonlinear.reduction.direct_receptance.model_stiffness_derivative`) and
+        the hysteretic part constant (its whirl signs, of k - r s, do not change with ω > 0)."""
+        return self._plain or self.method == "banded"
 
     def derivatives(self, omega: float, H: int) -> tuple[NDArray, NDArray]:
         """dκ_k/dω (H+1, d, d) [N s/m] and dF_k/dω (H+1, d) [N s], k = 0..H, analytic.
@@ -500,8 +505,10 @@ class LinkReceptance:
         With h_k = Pᵀ Z_k⁻¹ P: dκ_k = κ_k Pᵀ Z_k⁻¹ Z_k' Z_k⁻¹ P κ_k and, with
         u_k = Z_k⁻¹ f_k, dF_k = dκ_k Pᵀ u_k + κ_k Pᵀ Z_k⁻¹ (f_k' - Z_k' u_k), where
         Z_k' = s K_c - 2 k² ω M + i k (C + Ω G) + i k ω s G (Ω = s ω the shaft speed).
-        It reuses the factors of :meth:`terms` (no new factorisation), or differentiates
-        the pole-residue form; f_k' by a central difference of the forces (exact for their
+        It reuses the factors of :meth:`terms` (no new factorisation), differentiates
+        the pole-residue form, or (``"banded"``) solves again with the Woodbury identity's
+        derivative (:mod:`nlgrd.nonlinear.reduction.direct_receptance`, tabulated bearings and
+        loss factor included); f_k' by a central difference of the forces (exact for their
         degree <= 2 in ω). κ_0 and F_0 do not depend on ω unless the stiffness does on the
         speed (then by central differences).
 
