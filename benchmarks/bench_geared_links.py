@@ -1,9 +1,10 @@
 """Per-point cost of geared link models (issue 11): one mesh on the link path against the
 single-mesh mesh-receptance path, a mesh with a bearing clearance, two meshes.
 
-Run from the repository root (``--evaluations``: only the per-evaluation timing)::
+Run from the repository root (``--evaluations``: only the per-evaluation timing;
+``--banded``: only the single mesh on the link path's strategies against ``geared_sweep``)::
 
-    .venv/bin/python benchmarks/bench_geared_links.py [--evaluations]
+    .venv/bin/python benchmarks/bench_geared_links.py [--evaluations | --banded]
 
 Up sweeps with Floquet stability, one BLAS thread, fixed H, the same grid for the two
 paths of the single mesh (data/models/two_shaft.toml, 132 DOFs, H = 9, mesh frequency
@@ -12,8 +13,9 @@ and the general link reduction (`nlgrd.nonlinear.models.link_model.link_sweep`) 
 then two_shaft with the pinion's free-end bearing replaced by a 20 µm radial clearance
 with Hertzian contact (2 links, 3 coordinates), the idler train (2 meshes, 198 DOFs) and
 the two-stage reduction (2 meshes, base = 5 x the input speed, H = 45), each on its own
-grid. The link path runs with the pole-residue reduction (the default) and, for the
-trains, also with a direct LU of Z_k per point (``method="direct"``); the pole-residue
+grid. The link path runs with the pole-residue reduction (the default, but for the single
+mesh whose default is now the banded LU, issue 33: forced here, the banded LU a row of its
+own) and, for the trains, also with a direct LU of Z_k per point (``method="direct"``); the pole-residue
 set-up (one eigendecomposition per harmonic) is timed apart, in the warm-up on two
 points. Figures and machine in benchmarks/README.md.
 """
@@ -29,7 +31,7 @@ from threadpoolctl import threadpool_limits
 
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.links.contract import BearingClearance
-from nlgrd.nonlinear.models.geared import geared_sweep
+from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
 from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 
 MODELS = Path(__file__).resolve().parents[1] / "data" / "models"
@@ -82,8 +84,9 @@ def main() -> None:
     )
     idler, stage = load_model(MODELS / "idler_train.toml"), load_model(MODELS / "two_stage.toml")
     cases = [
-        ("two_shaft, 1 mesh, link path", build_link_model(two), grid, 9),
+        ("two_shaft, 1 mesh, link path", build_link_model(two, method="poles"), grid, 9),
         ("two_shaft, 1 mesh, link path, direct LU", build_link_model(two, method="direct"), grid, 9),
+        ("two_shaft, 1 mesh, link path, banded LU", build_link_model(two, method="banded"), grid, 9),
         ("two_shaft, mesh + clearance (2 links)", build_link_model(clear), grid, 9),
         ("idler_train, 2 meshes", build_link_model(idler), grid, 9),
         ("idler_train, 2 meshes, direct LU", build_link_model(idler, method="direct"), grid, 9),
@@ -118,6 +121,60 @@ def main() -> None:
     print(f"single mesh, the two paths' harmonics differ by {diff:.1e} of their largest", flush=True)
 
 
+def banded(rounds: int = 2) -> None:
+    """One mesh: ``geared_sweep`` (the single path, its model built once) against
+    ``link_sweep`` with the link path's banded LU (``method="banded"``), its pole-residue
+    form (forced) and its dense LU, on two_shaft.toml and kubo.toml, H = 9, up sweeps
+    of 15 mesh frequencies 1000-1700 Hz, stability on and off. Each model built and warmed
+    up on two points (set-up timed apart); then ``rounds`` rounds of the four in turn, the
+    fastest round of each reported (the machine is shared). Last, the largest difference of
+    the banded link path's harmonics from the single path's over the converged points."""
+    grid = 2 * np.pi * np.linspace(1000.0, 1700.0, 15)
+    H = 9
+    files = (("two_shaft", MODELS / "two_shaft.toml"), ("kubo", MODELS.parent / "case_studies" / "kubo.toml"))
+    for name, path in files:
+        system = load_model(path)
+        for stability in (True, False):
+            head, runs = f"{name}, stability {stability}", {}
+            t0 = time.perf_counter()
+            geared = build_geared_model(system, grid[-1], H)
+            geared_sweep(system, omegas=grid[:2], H=H, directions="up", model=geared, stability=stability)
+            label = f"geared_sweep ({geared.receptance.method})"
+            print(f"{head}, {label}: set-up, 2 points {time.perf_counter() - t0:.2f} s", flush=True)
+
+            def single(system=system, stability=stability, geared=geared):
+                sweep = geared_sweep(system, grid, H=H, directions="up", model=geared, stability=stability)
+                return sweep.mesh
+
+            runs["single"] = (label, single)
+            for method in ("banded", "poles", "direct"):
+                t0 = time.perf_counter()
+                model = build_link_model(system, method=method)
+                link_sweep(model, grid[:2], H=H, directions="up", stability=stability)
+                label = f"link_sweep ({model.receptance.method})"
+                print(f"{head}, {label}: set-up, 2 points {time.perf_counter() - t0:.2f} s", flush=True)
+
+                def link(model=model, stability=stability):
+                    return link_sweep(model, grid, H=H, directions="up", stability=stability).result
+
+                runs[method] = (label, link)
+            best, out = {}, {}
+            for _ in range(rounds):
+                for key, (_, run) in runs.items():
+                    t0 = time.perf_counter()
+                    out[key] = run()
+                    best[key] = min(best.get(key, np.inf), 1e3 * (time.perf_counter() - t0) / grid.size)
+            for key, per in best.items():
+                r = out[key]
+                ok = int(np.sum(r.converged & (r.stable.astype(bool) | (not stability))))
+                tag = "stable" if stability else "converged"
+                print(f"{head}, {runs[key][0]}: {per:.1f} ms per point ({ok}/15 {tag})", flush=True)
+            a, b = out["single"], out["banded"]
+            both = a.converged & b.converged
+            diff = np.max(np.abs(a.harmonics[both] - b.harmonics[both])) / np.max(np.abs(a.harmonics[both]))
+            print(f"{head}: banded link path and single path harmonics differ by {diff:.1e}", flush=True)
+
+
 def _clearance_model(system):
     """``system`` with the pinion's free-end bearing replaced by a 20 µm Hertzian clearance."""
     node = system.bearings[1].node
@@ -131,7 +188,8 @@ def _clearance_model(system):
 def scaling(factors=(1, 8, 25, 83), only: str | None = None) -> None:
     """Per-point cost against model size: two_shaft.toml with every element split in
     ``factors`` (132 to 9 972 DOFs), one mesh (with and without stability) and mesh +
-    clearance, the default method (pole-residue up to 300 DOFs, modal basis above) and,
+    clearance, the default method (pole-residue up to 300 DOFs, modal basis above; since
+    issue 33 the banded LU for the single mesh at 132 DOFs) and,
     at the smallest size, the modal basis too. Set-up (basis, pole-residue forms, mean
     factor, two warm-up points) timed apart."""
     from nlgrd.rotor.system import refined
@@ -175,6 +233,8 @@ if __name__ == "__main__":
             scaling()
         elif "--scaling-clearance" in sys.argv:  # the mesh + clearance rows alone
             scaling(only="mesh + clearance")
+        elif "--banded" in sys.argv:
+            banded()
         else:
             evaluations()
             if "--evaluations" not in sys.argv:

@@ -11,7 +11,10 @@ single path takes them on the modes below 3x the highest mesh frequency
 truncation and the verdicts must agree.
 
 Models: ``data/models/two_shaft.toml`` and ``data/case_studies/kubo.toml``, as loaded
-and modified in memory (:func:`system`):
+and modified in memory (:func:`system`). The link path's default reduction is the one the
+single path would take (issue 33 item 3): its banded LU on two_shaft (110 DOFs coupled to
+the mesh) and on every tabulated or loss-factor variant, the pole-residue form on kubo's
+base and cross variants (54 DOFs):
 
 - ``cross``: every bearing cross-coupled, k_yz = 0.2 k_yy = -k_zy, c_yz = 0.1 c_yy = -c_zy;
 - ``tabulated``: one more bearing, tabulated against speed (at 100 and 3000 rad/s:
@@ -29,6 +32,7 @@ brake added (k_tt = 2e3 N m/rad) and the tabulated bearing, dκ_0/dω by differe
 
 from __future__ import annotations
 
+import dataclasses
 import tomllib
 from functools import cache
 from pathlib import Path
@@ -197,6 +201,177 @@ def test_kappa_derivative_with_a_tabulated_bearing_against_differences(name):
 def test_force_derivative_with_a_tabulated_bearing_against_differences(name):
     """As the loss-factor test, dF_k/dω with the speed-tabulated bearing."""
     assert _derivatives_against_differences(name, "tabulated", ("force",)) <= 1.0
+
+
+# ------------------------------------------------ the link path's banded strategy (issue 33)
+
+
+@cache
+def banded(name: str, variant: str = "base"):
+    """The link model of :func:`system` with ``method="banded"``."""
+    return build_link_model(system(name, variant), method="banded")
+
+
+def _banded_worst(a, b, w: float) -> dict:
+    """Worst differences of κ_k, F_k (against max|F| and, k >= 1, max|F_k>=1|) and, where
+    both have them, dκ_k/dω and dF_k/dω (k >= 1) of two link receptances ``a`` (the banded)
+    and ``b``, or of the single path's reduced model ``b``, at ``w``."""
+    single = not hasattr(b, "terms")
+    (ka, fa), da = a.terms(w, H), a.derivatives(w, H) if a.has_derivatives else None
+    if single:
+        kb, fb = _flat(b.kappa(w, H)), _flat(b.force(w, H))
+        db = (_flat(b.kappa_derivative(w, H)), _flat(b.force_derivative(w, H))) if da is not None else None
+    else:
+        (kb, fb), db = b.terms(w, H), b.derivatives(w, H) if da is not None else None
+    ka, fa, kb, fb = _flat(ka), _flat(fa), _flat(kb), _flat(fb)
+    out = {
+        "kappa": _rel(ka, kb, np.max(np.abs(ka[1:]))),
+        "F": _rel(fa, fb, np.max(np.abs(fa))),
+        "F_k": _rel(fa[1:], fb[1:], np.max(np.abs(fa[1:]))),
+    }
+    if db is not None:
+        dka, dfa = _flat(da[0]), _flat(da[1])
+        dkb, dfb = _flat(db[0]), _flat(db[1])
+        out["dkappa"] = _rel(dka, dkb, np.max(np.abs(dka)))
+        out["dF_k"] = _rel(dfa[1:], dfb[1:], np.max(np.abs(dfa[1:])))
+    return out
+
+
+def _merge(worst: dict, new: dict) -> dict:
+    return {k: max(worst.get(k, 0.0), new.get(k, 0.0)) for k in {**worst, **new}}
+
+
+@pytest.mark.parametrize("variant", VARIANTS)
+@pytest.mark.parametrize("name", FILES)
+def test_banded_link_strategy_equals_the_single_path(name, variant):
+    """The link path's ``"banded"`` strategy (the single path's banded LU and Woodbury
+    identity on the links' coordinates) against the single path (two_shaft: its banded
+    direct solver; kubo: its pole-residue form) at three mesh frequencies: κ_k, F_k (also
+    F_1..F_5 on their own scale), dκ_k/dω and dF_k/dω (k >= 1; analytic on both paths, with
+    the tabulated bearing and the loss factor too) to REDUCTION_RTOL; every harmonic solved
+    by band (none by the sparse fallback)."""
+    g, _ = models(name, variant)
+    lb = banded(name, variant)
+    worst: dict = {}
+    for w in 2 * np.pi * np.array(POINTS_HZ[name]):
+        worst = _merge(worst, _banded_worst(lb.receptance, g.reduced, w))
+    solver = lb.receptance._band_solver()
+    print(f"{name} {variant}: banded link vs single " + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
+    assert lb.receptance.method == "banded" and solver.banded and solver.n_sparse == 0 and solver.n_band > 0
+    assert "dkappa" in worst and "dF_k" in worst  # analytic on every variant
+    assert max(worst.values()) <= REDUCTION_RTOL
+
+
+def _clearance_system(unbalance: bool):
+    from nlgrd.io.model_file import load_model
+    from nlgrd.rotor.system import Unbalance
+
+    s = load_model(ROOT / "data" / "models" / "two_shaft_clearance.toml")
+    if unbalance:
+        s = dataclasses.replace(s, unbalance=(Unbalance(0, 4, 1e-4, 0.3), Unbalance(1, 2, 2e-4, 1.0)))
+    return s
+
+
+@pytest.mark.parametrize(
+    "case", ["two_shaft", "kubo", "two_shaft_clearance", "two_shaft_clearance_unbalance"]
+)
+def test_banded_link_strategy_equals_the_other_link_strategies(case):
+    """``"banded"`` against the link path's pole-residue form and its
+    dense LU (``"direct"``) at three frequencies, with the bearing clearance of
+    data/models/two_shaft_clearance.toml (3 link coordinates, the Woodbury matrix 3 x 3)
+    and with two unbalances besides (forces off the links): κ_k, F_k, dκ_k/dω, dF_k/dω as
+    above and the recovery of every third DOF from random (Y, G), its mean and alternating
+    harmonics each on its own scale, to REDUCTION_RTOL."""
+    if case in FILES:
+        s, pts = system(case), POINTS_HZ[case]
+    else:
+        s, pts = _clearance_system(case.endswith("unbalance")), POINTS_HZ["two_shaft"]
+    b, poles, direct = (build_link_model(s, method=m).receptance for m in ("banded", "poles", "direct"))
+    assert b.method == "banded" and poles.method == "poles" and direct.method == "direct"
+    d = b.n_coords
+    rng = np.random.default_rng(1)
+    worst: dict = {}
+    dofs = np.arange(0, s.n_dofs, 3)
+    for w in 2 * np.pi * np.array(pts):
+        Y, G = 1e-6 * rng.standard_normal((d, 2 * H + 1)), 1e2 * rng.standard_normal((d, 2 * H + 1))
+        qb = b.recover(w, H, Y, G, dofs)
+        for other in (poles, direct):
+            worst = _merge(worst, _banded_worst(b, other, w))
+            q = other.recover(w, H, Y, G, dofs)
+            rec = max(
+                _rel(qb[:, p], q[:, p], np.max(np.abs(qb[:, p]))) for p in (slice(0, 1), slice(1, None))
+            )
+            worst = _merge(worst, {"recover": rec})
+    print(f"{case} (d = {d}): banded vs poles, direct " + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
+    assert b._band_solver().n_sparse == 0 and len(worst) == 6
+    assert max(worst.values()) <= REDUCTION_RTOL
+
+
+@pytest.mark.parametrize("variant", ("tabulated", "loss"))
+@pytest.mark.parametrize("name", FILES)
+def test_banded_link_derivatives_against_differences(name, variant):
+    """With a tabulated bearing or a loss factor only the banded LU gives the link path
+    analytic derivatives: dκ_k/dω (k = 0..5) and dF_k/dω (k = 1..5; dF_0 is the same central
+    difference of the mean on every strategy) against Richardson differences of the banded
+    κ_k, F_k, within 1e-9 of their scale plus ten times the differences' own error."""
+    lb = banded(name, variant)
+    rec = lb.receptance
+    assert rec.has_derivatives and lb.reduced.kappa_derivative is not None
+    excess = 0.0
+    for w in 2 * np.pi * np.array(POINTS_HZ[name]):
+        analytic = [_flat(a) for a in rec.derivatives(w, H)]
+        for i, rows in ((0, slice(None)), (1, slice(1, None))):
+
+            def f(x, h_, i=i):
+                return rec.terms(x, h_)[i]
+
+            a, d1, d2 = (
+                x[rows] for x in (analytic[i], _richardson(f, w, 2e-5 * w), _richardson(f, w, 1e-5 * w))
+            )
+            scale = np.max(np.abs(d2))
+            excess = max(excess, _rel(a, d2, scale) / (1e-9 + 10 * _rel(d1, d2, scale)))
+    print(f"{name} {variant}: banded analytic vs differences, excess {excess:.2f}")
+    assert excess <= 1.0
+
+
+def test_link_path_chooses_as_the_single_path():
+    """``method="auto"`` on the link path as on the single path (``MeshReceptance``): the
+    pole-residue form up to 100 DOFs coupled to the mesh (kubo: 54), the banded LU above
+    (two_shaft: 110) and with a tabulated bearing or a loss factor (where the link path's
+    pole-residue form does not apply: it took dense or sparse LU); several link coordinates
+    (the clearance model) keep the pole-residue form."""
+    for name, variant, method in (
+        ("kubo", "base", "poles"),
+        ("kubo", "tabulated", "banded"),
+        ("kubo", "loss", "banded"),
+        ("two_shaft", "base", "banded"),
+        ("two_shaft", "tabulated", "banded"),
+    ):
+        g, lk = models(name, variant)
+        assert lk.receptance.method == method, (name, variant)
+        if variant == "base":
+            assert g.receptance.method == ("poles" if method == "poles" else "direct")
+            assert g.receptance._direct().banded
+    assert build_link_model(_clearance_system(False)).receptance.method == "poles"
+
+
+def test_banded_link_strategy_sparse_fallback(monkeypatch):
+    """With no band allowed (``BAND_LIMIT`` below every band) the banded strategy falls
+    back to sparse LU of Z_k for every harmonic, forcing and derivatives included, and
+    agrees with the band to REDUCTION_RTOL (two_shaft with the clearance and unbalances)."""
+    from nlgrd.nonlinear.reduction import direct_receptance as dr
+
+    s = _clearance_system(True)
+    band = build_link_model(s, method="banded").receptance
+    assert band._band_solver().banded  # built before the limit is lowered
+    monkeypatch.setattr(dr, "BAND_LIMIT", -1)
+    sparse = build_link_model(s, method="banded").receptance
+    worst: dict = {}
+    for w in 2 * np.pi * np.array(POINTS_HZ["two_shaft"]):
+        worst = _merge(worst, _banded_worst(band, sparse, w))
+    print("banded vs its sparse fallback " + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
+    assert not sparse._band_solver().banded and sparse._band_solver().n_sparse > 0
+    assert len(worst) == 5 and max(worst.values()) <= REDUCTION_RTOL
 
 
 # ----------------------------------------------------------------------------- recovery

@@ -89,6 +89,11 @@ class LinkModel:
         """Models derived from this one (:func:`period_model`)."""
         return BoundedCache(4)
 
+    @cached_property
+    def output_cache(self) -> BoundedCache:
+        """Tables the per-point outputs reuse (the period's samples of the bearing maxima, per H)."""
+        return BoundedCache(8)
+
     def link_harmonics(self, harmonics: NDArray, name: str) -> NDArray:
         """The rows of the link ``name`` in the harmonics (d_total, 2H+1) of a point [m].
 

@@ -7,10 +7,17 @@ the shafts' own, which a reverse Cuthill-McKee ordering turns into a narrow band
 bandwidth 7 on the two-shaft example against 26 with the mesh damping), factorised by
 LAPACK's banded LU (``zgbtrf``, O(n b²)). The mesh damping comes back by the
 Sherman-Morrison-Woodbury identity (Golub & Van Loan, Matrix Computations, 4th ed., §2.1.4),
-with D = i kω diag(c_m), h' = Wᵀ Z'⁻¹ W and S = (I + D h')⁻¹:
+with D = i kω C_W (C_W = diag(c_m) for meshes, any damping matrix on the coordinates of
+links: :class:`~nlgrd.nonlinear.reduction.link_reduction.LinkReceptance`'s ``"banded"``),
+h' = Wᵀ Z'⁻¹ W, S = (I + D h')⁻¹ and T = I - h D = (I + h' D)⁻¹:
 
     h = h' S,   Z⁻¹ W = Z'⁻¹ W S,
-    dh/dω = (I - h D) (dh'/dω) S - h (dD/dω) h,   dh'/dω = -(Z'⁻ᵀ W)ᵀ (dZ'/dω) (Z'⁻¹ W).
+    dh/dω = T (dh'/dω) S - h (dD/dω) h,   dh'/dω = -(Z'⁻ᵀ W)ᵀ (dZ'/dω) (Z'⁻¹ W),
+
+and for a forcing f (``rhs``), with x' = Z'⁻¹ f and g' = Wᵀ x':
+
+    x = Z⁻¹ f = x' - Z'⁻¹ W S D g',   g = Wᵀ x = T g',
+    dg/dω = T (Z'⁻ᵀ W)ᵀ (df/dω - (dZ'/dω) x) - h (dD/dω) g.
 
 Z' can be nearly singular where Z is not (a shaft mode that only the mesh damps). The
 banded LU is backward stable, so the computed h' is exact for Z' + E with E of rounding
@@ -23,12 +30,14 @@ is wider than ``BAND_LIMIT`` or Z' exactly singular, Z itself is factorised by s
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 from scipy.linalg.lapack import zgbtrf, zgbtrs
-from scipy.sparse.csgraph import reverse_cuthill_mckee
+from scipy.sparse.csgraph import connected_components, reverse_cuthill_mckee
 
 from nlgrd.rotor.assembly import LinearModel, plain_dynamic_stiffness
 
@@ -103,6 +112,59 @@ def model_stiffness_derivative(model: LinearModel, harmonic: int, omega: float, 
     return data
 
 
+def coupled_dofs(model: LinearModel, W: NDArray, extra=()) -> NDArray:
+    """DOFs in the connected components of Z's sparsity graph (``model``'s pattern) that
+    hold a DOF ``W`` loads (a non-zero row) or one of ``extra``: the rest is decoupled from
+    them exactly.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+    W : ndarray (n, n_nl)
+        Projection vectors.
+    extra : sequence of int
+        More DOFs whose components are kept.
+
+    Returns
+    -------
+    ndarray of int
+    """
+    pat = model._pattern
+    n = model.n_dofs
+    g = sp.csc_matrix((np.ones(len(pat["indices"])), pat["indices"], pat["indptr"]), shape=(n, n))
+    _, label = connected_components(g, directed=False)
+    need = np.concatenate([np.flatnonzero(np.any(W != 0, axis=1)), np.asarray(extra, dtype=int)])
+    return np.flatnonzero(np.isin(label, label[need]))
+
+
+class DirectSolution(NamedTuple):
+    """What :meth:`DirectSolver.solve_forced` returns (K harmonics, n_nl coordinates).
+
+    Attributes
+    ----------
+    h : ndarray (K, n_nl, n_nl)
+        h_k = Wᵀ Z_k⁻¹ W [m/N].
+    U : ndarray (K, n_out, n_nl)
+        Z_k⁻¹ W at the output DOFs [m/N, rad/N].
+    dh : ndarray (K, n_nl, n_nl) or None
+        dh_k/dω [m s/N].
+    g : ndarray (K, n_nl) or None
+        Wᵀ Z_k⁻¹ f_k [m].
+    Ug : ndarray (K, n_out) or None
+        Z_k⁻¹ f_k at the output DOFs [m, rad].
+    dg : ndarray (K, n_nl) or None
+        d(Wᵀ Z_k⁻¹ f_k)/dω [m s].
+    """
+
+    h: NDArray
+    U: NDArray
+    dh: NDArray | None
+    g: NDArray | None
+    Ug: NDArray | None
+    dg: NDArray | None
+
+
 class _Restriction:
     """A model's pattern restricted to the DOFs ``keep``: selected non-zeros, their rows and
     columns in the restricted numbering, and a CSC matrix whose data a solve replaces."""
@@ -156,22 +218,24 @@ class _Band:
 
 
 class DirectSolver:
-    """h_k, Z_k⁻¹ W at output DOFs and dh_k/dω, by a factorisation per harmonic and frequency.
+    """h_k, Z_k⁻¹ W at output DOFs and dh_k/dω, by a factorisation per harmonic and frequency;
+    with a forcing f_k also Wᵀ Z_k⁻¹ f_k, Z_k⁻¹ f_k at the output DOFs and d(Wᵀ Z_k⁻¹ f_k)/dω.
 
     Parameters
     ----------
     model : LinearModel
-        The linear model with the mesh damping and without the mesh stiffness.
+        The linear model with the damping W C_W Wᵀ and without the stiffness on W.
     bare : LinearModel
-        The same without the mesh damping (the band's pattern).
+        The same without the damping W C_W Wᵀ (the band's pattern).
     W : ndarray (n, n_nl)
-        The meshes' projection vectors.
-    c_m : ndarray (n_nl,)
-        The meshes' damping coefficients [N s/m].
+        The projection vectors (meshes' or links').
+    c_m : ndarray (n_nl,) or (n_nl, n_nl)
+        C_W: the meshes' damping coefficients, or the links' damping matrix [N s/m].
     keep : ndarray of int
-        DOFs of the connected components holding a mesh or an output DOF.
+        DOFs of the connected components holding a DOF of W, a forced or an output DOF
+        (:func:`coupled_dofs`).
     output_dofs : ndarray of int
-        DOFs whose responses Z_k⁻¹ W are returned.
+        DOFs whose responses Z_k⁻¹ W (and Z_k⁻¹ f_k) are returned.
     speed_per : float
         Reference speed per mesh frequency (Ω = ``speed_per`` ω).
     """
@@ -180,10 +244,12 @@ class DirectSolver:
         self.keep = np.asarray(keep, dtype=int)
         self.full = _Restriction(model, self.keep)
         self.bare = _Restriction(bare, self.keep)
-        self.c_m = np.asarray(c_m, dtype=float)
+        c = np.asarray(c_m, dtype=float)
+        self.c_w = np.diag(c) if c.ndim == 1 else c
         self.speed_per = float(speed_per)
         self.W = np.ascontiguousarray(W[keep], dtype=complex)
         self.out = self.full.new[np.asarray(output_dofs, dtype=int)]
+        self.outside = np.flatnonzero(self.full.new < 0)
         band = _Band(self.bare) if self.keep.size else None
         self.band = band if band is not None and band.half_width <= BAND_LIMIT else None
         if self.band is not None:
@@ -239,79 +305,142 @@ class DirectSolver:
         dh : ndarray (K, n_nl, n_nl) or None
             dh_k/dω [m s/N] when ``derivative``.
         """
+        return self.solve_forced(harmonics, omega, derivative)[:3]
+
+    def solve_forced(
+        self,
+        harmonics,
+        omega: float,
+        derivative: bool,
+        rhs: NDArray | None = None,
+        drhs: NDArray | None = None,
+    ) -> DirectSolution:
+        """:meth:`solve`, and with a forcing f_k (``rhs``) its responses too.
+
+        Parameters
+        ----------
+        harmonics : array_like of int
+            The harmonics k.
+        omega : float
+            Base frequency ω [rad/s].
+        derivative : bool
+            Also return dh_k/dω (and dg_k/dω, which needs ``drhs``).
+        rhs : ndarray (K, n), optional
+            f_k on the DOFs, zero outside ``keep`` [N].
+        drhs : ndarray (K, n), optional
+            df_k/dω [N s], with ``derivative``.
+
+        Returns
+        -------
+        DirectSolution
+        """
         ks = np.asarray(harmonics, dtype=int)
-        nc = self.W.shape[1]
-        h = np.empty((len(ks), nc, nc), dtype=complex)
-        U = np.empty((len(ks), len(self.out), nc), dtype=complex)
-        dh = np.empty((len(ks), nc, nc), dtype=complex) if derivative else None
-        if self.keep.size == 0:  # no DOF a mesh reaches
-            h[:], U[:] = 0.0, 0.0
+        nc, K = self.W.shape[1], len(ks)
+        forced = rhs is not None
+        f = df = None
+        if forced:
+            rhs = np.asarray(rhs, dtype=complex)
+            if self.outside.size and np.any(rhs[:, self.outside] != 0):
+                raise ValueError("a forcing outside the components kept")
+            f = rhs[:, self.keep]
             if derivative:
-                dh[:] = 0.0
-            return h, U, dh
-        todo = np.ones(len(ks), dtype=bool)
+                df = np.asarray(drhs, dtype=complex)[:, self.keep]
+        h = np.zeros((K, nc, nc), dtype=complex)
+        U = np.zeros((K, len(self.out), nc), dtype=complex)
+        dh = np.zeros((K, nc, nc), dtype=complex) if derivative else None
+        g = np.zeros((K, nc), dtype=complex) if forced else None
+        Ug = np.zeros((K, len(self.out)), dtype=complex) if forced else None
+        dg = np.zeros((K, nc), dtype=complex) if forced and derivative else None
+        out = DirectSolution(h, U, dh, g, Ug, dg)
+        if self.keep.size == 0:  # no DOF a mesh reaches
+            return out
+        todo = np.ones(K, dtype=bool)
         if self.band is not None:
-            done = self._woodbury(ks, omega, derivative, h, U, dh)
+            done = self._woodbury(ks, omega, derivative, out, f, df)
             todo = ~done
             self.n_band += int(np.sum(done))
         for i in np.flatnonzero(todo):
             self.n_sparse += 1
-            h[i], U[i], d = self._sparse(int(ks[i]), omega, derivative)
-            if derivative:
-                dh[i] = d
-        return h, U, dh
+            self._sparse(i, int(ks[i]), omega, derivative, out, f, df)
+        return out
 
-    def _woodbury(self, ks, omega, derivative, h, U, dh) -> NDArray:
+    def _woodbury(self, ks, omega, derivative, out: DirectSolution, f, df) -> NDArray:
         """Band solves of Z'_k and the identity, in place; which harmonics succeeded."""
         b, Wp = self.band, self.W_perm
         data = self._band_data(ks, omega)
         nc = Wp.shape[1]
+        forced = f is not None
+        B = np.asfortranarray(np.column_stack([Wp, np.zeros(b.n)])) if forced else Wp
         ok = np.zeros(len(ks), dtype=bool)
-        Y = np.zeros((len(ks), b.n, nc), dtype=complex)
-        V = np.zeros_like(Y) if derivative else None
+        Y = np.zeros((len(ks), b.n, B.shape[1]), dtype=complex)  # Z'⁻¹ [W f] in the band's order
+        V = np.zeros((len(ks), b.n, nc), dtype=complex) if derivative else None
         for i in range(len(ks)):
             fac = b.factor(data[i])
             if fac is None:
                 continue
             ok[i] = True
-            Y[i] = b.solve(fac, Wp)  # Z'⁻¹ W in the band's order
+            if forced:
+                B[:, nc] = f[i, b.perm]
+            Y[i] = b.solve(fac, B)
             if derivative:
                 V[i] = b.solve(fac, Wp, trans=1)
-        hp = Wp.T.real @ Y
-        D = 1j * omega * ks[:, None] * self.c_m  # (K, n_nl): the diagonals of D_k
-        A = np.eye(nc) + D[:, :, None] * hp
+        Yw = Y[:, :, :nc]
+        hp = Wp.T.real @ Yw
+        D = 1j * omega * ks[:, None, None] * self.c_w  # (K, n_nl, n_nl)
+        A = np.eye(nc) + D @ hp
         if nc > 1:
             with np.errstate(all="ignore"):
                 ok &= np.linalg.cond(A) <= (COND_MAX_DERIVATIVE if derivative else COND_MAX)
         A[~ok] = np.eye(nc)
         S = np.linalg.inv(A)
         hk = hp @ S
-        h[ok] = hk[ok]
-        U[ok] = (Y[:, b.inv[self.out], :] @ S)[ok]
+        out.h[ok] = hk[ok]
+        out.U[ok] = (Yw[:, b.inv[self.out], :] @ S)[ok]
+        left = np.eye(nc) - hk @ D  # T = I - h D
+        if forced:
+            gp = np.einsum("ri,kr->ki", Wp.real, Y[:, :, nc])
+            x = Y[:, :, nc] - (Yw @ (S @ (D @ gp[:, :, None])))[:, :, 0]
+            g = (left @ gp[:, :, None])[:, :, 0]
+            out.g[ok] = g[ok]
+            out.Ug[ok] = x[:, b.inv[self.out]][ok]
         if derivative:
             dZ = self._band_derivative(ks, omega)
-            dhp = -np.einsum("kri,kr,krj->kij", V[:, b.ri], dZ, Y[:, b.ci])
-            dD = 1j * ks[:, None] * self.c_m
-            left = np.eye(nc) - hk * D[:, None, :]  # I - h D
-            dh[ok] = (left @ dhp @ S - (hk * dD[:, None, :]) @ hk)[ok]
+            dhp = -np.einsum("kri,kr,krj->kij", V[:, b.ri], dZ, Yw[:, b.ci])
+            dD = 1j * ks[:, None, None] * self.c_w
+            hdD = hk @ dD
+            out.dh[ok] = (left @ dhp @ S - hdD @ hk)[ok]
+            if forced:
+                r = np.einsum("kri,kr->ki", V, df[:, b.perm])
+                r -= np.einsum("kri,kr,kr->ki", V[:, b.ri], dZ, x[:, b.ci])
+                dg = (left @ r[:, :, None])[:, :, 0] - (hdD @ g[:, :, None])[:, :, 0]
+                out.dg[ok] = dg[ok]
         return ok
 
-    def _sparse(self, k: int, omega: float, derivative: bool):
+    def _sparse(self, i: int, k: int, omega: float, derivative: bool, out: DirectSolution, f, df) -> None:
+        """Harmonic ``k`` (row ``i``) by sparse LU of Z_k, in place."""
         r = self.full
+        nc = self.W.shape[1]
         r.Z.data = r.model.dynamic_stiffness_data(k * omega, self.speed_per * omega)[r.sel]
         lu = spla.splu(r.Z, permc_spec="MMD_AT_PLUS_A")
-        u = lu.solve(self.W)
-        h = self.W.T.real @ u
-        dh = None
+        forced = f is not None
+        u = lu.solve(np.column_stack([self.W, f[i]]) if forced else self.W)
+        out.h[i] = self.W.T.real @ u[:, :nc]
+        out.U[i] = u[self.out, :nc]
+        if forced:
+            out.g[i] = self.W.T.real @ u[:, nc]
+            out.Ug[i] = u[self.out, nc]
         if derivative:  # dh = -vᵀ dZ u, summed over the non-zeros of dZ
             v = lu.solve(self.W, trans="T")
             d = model_stiffness_derivative(r.model, k, omega, self.speed_per)[r.sel]
-            dh = -np.einsum("ri,r,rj->ij", v[r.rows], d, u[r.cols])
-        return h, u[self.out], dh
+            out.dh[i] = -np.einsum("ri,r,rj->ij", v[r.rows], d, u[r.cols, :nc])
+            if forced:
+                out.dg[i] = v.T @ df[i] - np.einsum("ri,r,r->i", v[r.rows], d, u[r.cols, nc])
 
 
 __all__ = [
     "DirectSolver",
+    "DirectSolution",
+    "coupled_dofs",
     "dynamic_stiffness_derivative",
     "model_stiffness_derivative",
     "BAND_LIMIT",

@@ -14,10 +14,11 @@ diag(k_j) and F_0 = (Pᵀ K_r⁻¹ P)⁻¹ Pᵀ K_r⁻¹ f_0 (static loads and g
 k_j > 0; rigid-body modes of K_r (a drive line's rotation) are removed by a bordered solve.
 Any DOF follows as Q_k = Z_k⁻¹ (f_k - P G_k) (mean: K_r⁻¹ (f_0 - P (G_0 - diag(k_j) Y_0))).
 
-Three ways to solve with Z_k (``method``):
+Four ways to solve with Z_k (``method``; "auto" as the single-mesh path decides:
+:meth:`LinkReceptance._auto_method`):
 
-- ``"poles"`` (the default up to :data:`DENSE_LIMIT` DOFs without tabulated bearings or
-  hysteretic damping): Z_k(ω) is a quadratic polynomial in ω, so one eigendecomposition
+- ``"poles"`` (the default up to :data:`POLES_LIMIT` DOFs coupled to a link, without
+  tabulated bearings or hysteretic damping): Z_k(ω) is a quadratic polynomial in ω, so one eigendecomposition
   per harmonic gives its pole-residue form (of Z_k + K_L, :mod:`nlgrd.nonlinear.reduction.link_poles`)
   and a point costs a few matrix-vector products; each harmonic is checked against a direct
   solve at five frequencies and solved directly when the check fails;
@@ -26,7 +27,16 @@ Three ways to solve with Z_k (``method``):
   solves (:data:`MODAL_CHECK_RTOL`); the mean problem stays exact;
 - ``"direct"``: Z_k factorised once per harmonic and frequency (dense LU up to
   :data:`DENSE_LIMIT` DOFs, sparse LU above), the factors kept, bounded, for the
-  recovery of the same point.
+  recovery of the same point;
+- ``"banded"``: the single-mesh path's direct solver
+  (:class:`~nlgrd.nonlinear.reduction.direct_receptance.DirectSolver`) on the links'
+  coordinates: on the connected components of Z's sparsity graph that hold a link or a
+  forced DOF, banded LU (reverse Cuthill-McKee order) of Z_k without the links' damping
+  P C_L Pᵀ, which comes back by the Sherman-Morrison-Woodbury identity (sparse LU of Z_k
+  where the band is wider than ``BAND_LIMIT`` or the identity ill-conditioned); all
+  harmonics of a frequency at once, Z_k⁻¹ P and Z_k⁻¹ f_k kept at the DOFs recovered last
+  (the default for one link coordinate above :data:`POLES_LIMIT` coupled DOFs, and with
+  tabulated bearings or a loss factor, where the band is narrow).
 """
 
 from __future__ import annotations
@@ -45,6 +55,7 @@ from nlgrd.cache import BoundedCache
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.fourier.harmonics import real_to_complex
 from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
+from nlgrd.nonlinear.reduction.direct_receptance import DirectSolution, DirectSolver, coupled_dofs
 from nlgrd.nonlinear.reduction.link_mean import MeanProblem
 from nlgrd.nonlinear.reduction.link_poles import LinkPoleForm
 from nlgrd.nonlinear.reduction.modal_basis import (
@@ -64,6 +75,9 @@ from nlgrd.rotor.system import RotorSystem
 DENSE_STABILITY_LIMIT = 600
 #: Up to this many DOFs Z_k is factorised as a dense matrix (faster than sparse LU there).
 DENSE_LIMIT = 300
+#: Up to this many DOFs coupled to a link or a forced DOF, ``method="auto"`` takes the
+#: pole-residue form; above, the banded LU where the band is narrow (the single path's rule).
+POLES_LIMIT = 100
 #: Dynamic attachment vectors at j / ATTACHMENT_POINTS of the top frequency (docs/verification.md).
 ATTACHMENT_POINTS = 32
 #: A modal basis farther than this from direct solves warns.
@@ -95,8 +109,10 @@ class LinkReceptance:
     harmonic_force : callable (omega, H) -> (H+1, n_dofs) complex, optional
         Harmonics of the external forces on the DOFs [N]: a polynomial of degree <= 2 in
         ω (an unbalance's m e Ω²), for the frequency derivatives.
-    method : {"auto", "poles", "direct", "modal"}
-        How Z_k is solved (module docstring); "auto" is "poles" up to
+    method : {"auto", "poles", "direct", "modal", "banded"}
+        How Z_k is solved (module docstring); "auto": :meth:`_auto_method` (the single-mesh
+        path's rule: "poles" up to :data:`POLES_LIMIT` coupled DOFs, "banded" above where
+        the band is narrow, "poles" kept for several link coordinates). Before issue 33 it was "poles" up to
         :data:`DENSE_LIMIT` DOFs and "modal" above (once :meth:`prepare` knows the
         highest frequency; "direct" until then and with tabulated bearings or a loss
         factor).
@@ -139,8 +155,8 @@ class LinkReceptance:
             np.hstack([link.projection(system) for link in self.links]) if self.links else np.zeros((n, 0))
         )
         self.k_link = sla.block_diag(*[link.linear_stiffness() for link in self.links])
-        c_link = sla.block_diag(*[link.linear_damping() for link in self.links])
-        self.C_link = sp.csc_matrix(self.P @ c_link @ self.P.T)
+        self.c_link = sla.block_diag(*[link.linear_damping() for link in self.links])
+        self.C_link = sp.csc_matrix(self.P @ self.c_link @ self.P.T)
         self.K_link = sp.csc_matrix(self.P @ self.k_link @ self.P.T)
         self.static_force = np.zeros(n) if static_force is None else np.asarray(static_force, dtype=float)
         self.harmonic_force = harmonic_force
@@ -165,28 +181,56 @@ class LinkReceptance:
         )
         self._factors = BoundedCache(64)
         self._terms = BoundedCache(4096)
-        poles_apply = self._dense and self.has_derivatives
-        if method not in ("auto", "poles", "direct", "modal"):
-            raise ModelError("method", f"must be 'auto', 'poles', 'direct' or 'modal', got {method!r}")
+        # no tabulated bearing or hysteretic part: every method's derivatives are exact
+        self._plain = not (self.model.tabulated_bearings or self.model.hysteretic_parts)
+        poles_apply = self._dense and self._plain
+        if method not in ("auto", "poles", "direct", "modal", "banded"):
+            raise ModelError(
+                "method", f"must be 'auto', 'poles', 'direct', 'modal' or 'banded', got {method!r}"
+            )
         if method == "poles" and not poles_apply:
             raise ModelError(
                 "method", f"'poles' needs at most {DENSE_LIMIT} DOFs, no tabulated bearing or loss factor"
             )
-        if method == "modal" and not self.has_derivatives:
+        if method == "modal" and not self._plain:
             raise ModelError("method", "'modal' needs a model without tabulated bearings or loss factor")
         if method == "modal" and harmonic_force is not None and force_dofs is None:
             raise ModelError("force_dofs", "the modal basis needs the DOFs the harmonic forces load")
-        self._auto_modal = method == "auto" and not self._dense and self.has_derivatives
+        self._auto_modal = method == "auto" and not self._dense and self._plain
         self._auto_modal &= harmonic_force is None or force_dofs is not None
-        self.method = (
-            "poles" if method == "auto" and poles_apply else ("direct" if method == "auto" else method)
-        )
         self._poles = BoundedCache(256)
+        self._banded = BoundedCache(8)  # the banded solvers, per tuple of output DOFs
+        # their solves of all harmonics per (ω, H, output DOFs), and the DOFs recovered last
+        # (the next frequencies' solves return them: the recovery needs no solve of its own)
+        self._band_sols, self._band_out = BoundedCache(64), ()
+        self.method = self._auto_method(poles_apply) if method == "auto" else method
         self.pole_check: dict[int, float] = {}
         if method == "modal" and max_frequency is None:
             raise ModelError("max_frequency", "the modal method needs the highest excitation frequency")
         if max_frequency is not None:
             self.prepare(max_frequency)
+
+    def _auto_method(self, poles_apply: bool) -> str:
+        """What ``method="auto"`` takes, as the single-mesh path decides
+        (:class:`~nlgrd.nonlinear.reduction.receptance.MeshReceptance`): the pole-residue form
+        up to :data:`POLES_LIMIT` DOFs coupled to a link or a forced DOF, else the banded LU
+        where the band is narrow (``direct_receptance.BAND_LIMIT``), else the pole-residue
+        form or direct LU as before; above :data:`DENSE_LIMIT` DOFs with exact derivatives,
+        the modal basis once :meth:`prepare` knows the top frequency (direct LU until then).
+        One difference: with more than one link coordinate the pole-residue form stays the
+        default where it applies (per evaluation of κ, F and their derivatives, 2026-12-07:
+        idler train H = 9 0.8-4.3 ms against 7.2-8.1 ms banded, two-stage H = 45 3.9-11.6
+        ms against 24.5-35.4 ms, its set-up apart)."""
+        if self._auto_modal:
+            return "direct"
+        if not self.n_coords:  # no link: nothing to reduce onto
+            return "poles" if poles_apply else "direct"
+        solver = self._band_solver()
+        if poles_apply and (solver.keep.size <= POLES_LIMIT or self.n_coords > 1):
+            return "poles"
+        if solver.banded:
+            return "banded"
+        return "poles" if poles_apply else "direct"
 
     def _dense_matrices(self, dense: Callable) -> dict[str, NDArray]:
         m = self.model
@@ -343,6 +387,34 @@ class LinkReceptance:
 
         return self._factors.get(("k", k, float(omega)), make)
 
+    def _band_solver(self, dofs=()) -> DirectSolver:
+        """The ``"banded"`` solver (:mod:`nlgrd.nonlinear.reduction.direct_receptance`) on the
+        components of Z's graph holding a link, a forced DOF (all DOFs when the harmonic
+        forces' DOFs are not given) or one of ``dofs``, Z_k⁻¹ returned at ``dofs``."""
+        dofs = tuple(int(i) for i in dofs)
+
+        def make():
+            m = self.model
+            full = replace(m, C=(m.C + self.C_link).tocsc())
+            out = np.asarray(dofs, dtype=int)
+            forced = self.force_dofs
+            if self.harmonic_force is not None and not forced.size:
+                forced = np.arange(m.n_dofs)
+            keep = coupled_dofs(full, self.P, np.concatenate([forced, out]))
+            return DirectSolver(full, m, self.P, self.c_link, keep, out, self.plan.speed_per_base)
+
+        return self._banded.get(dofs, make)
+
+    def _band_solve(self, omega: float, H: int, dofs: tuple, f: NDArray | None = None) -> DirectSolution:
+        """Harmonics 1..H of the ``"banded"`` solver for output ``dofs`` at ``omega``, with
+        the forces f_k (default :meth:`forces`), kept per (ω, H, dofs)."""
+
+        def make():
+            rhs = self.forces(omega, H)[1:] if f is None else f
+            return self._band_solver(dofs).solve_forced(np.arange(1, H + 1), omega, False, rhs)
+
+        return self._band_sols.get((float(omega), int(H), dofs), make)
+
     def _pole_form(self, k: int) -> LinkPoleForm | None:
         """The shifted pole-residue form of harmonic k (:mod:`nlgrd.nonlinear.reduction.link_poles`),
         or None (solve directly)."""
@@ -401,6 +473,11 @@ class LinkReceptance:
             frc[0] = hr_inv @ ph
             Lf = self._pole_forces(omega, H) if self.method in ("poles", "modal") else None
             Ps, f = self._Ps, None
+            if self.method == "banded" and H:
+                sol = self._band_solve(omega, H, self._band_out, ext[1:] + phi[1:] @ self.P.T)
+                kap[1:] = np.linalg.inv(sol.h)
+                frc[1:] = (kap[1:] @ sol.g[:, :, None])[:, :, 0]
+                return kap, frc
             for k in range(1, H + 1):
                 pf = self._pole_form(k)
                 if pf is not None:
@@ -416,8 +493,11 @@ class LinkReceptance:
 
     @property
     def has_derivatives(self) -> bool:
-        """Whether :meth:`derivatives` is exact (no tabulated bearing or hysteretic part)."""
-        return not (self.model.tabulated_bearings or self.model.hysteretic_parts)
+        """Whether :meth:`derivatives` is exact: no tabulated bearing or hysteretic part, or
+        the ``"banded"`` LU, whose dZ_k/dω holds the slopes of the bearings' tables
+        (:func:`~nlgrd.nonlinear.reduction.direct_receptance.model_stiffness_derivative`) and
+        the hysteretic part constant (its whirl signs, of k - r s, do not change with ω > 0)."""
+        return self._plain or self.method == "banded"
 
     def derivatives(self, omega: float, H: int) -> tuple[NDArray, NDArray]:
         """dκ_k/dω (H+1, d, d) [N s/m] and dF_k/dω (H+1, d) [N s], k = 0..H, analytic.
@@ -425,8 +505,10 @@ class LinkReceptance:
         With h_k = Pᵀ Z_k⁻¹ P: dκ_k = κ_k Pᵀ Z_k⁻¹ Z_k' Z_k⁻¹ P κ_k and, with
         u_k = Z_k⁻¹ f_k, dF_k = dκ_k Pᵀ u_k + κ_k Pᵀ Z_k⁻¹ (f_k' - Z_k' u_k), where
         Z_k' = s K_c - 2 k² ω M + i k (C + Ω G) + i k ω s G (Ω = s ω the shaft speed).
-        It reuses the factors of :meth:`terms` (no new factorisation), or differentiates
-        the pole-residue form; f_k' by a central difference of the forces (exact for their
+        It reuses the factors of :meth:`terms` (no new factorisation), differentiates
+        the pole-residue form, or (``"banded"``) solves again with the Woodbury identity's
+        derivative (:mod:`nlgrd.nonlinear.reduction.direct_receptance`, tabulated bearings and
+        loss factor included); f_k' by a central difference of the forces (exact for their
         degree <= 2 in ω). κ_0 and F_0 do not depend on ω unless the stiffness does on the
         speed (then by central differences).
 
@@ -470,6 +552,13 @@ class LinkReceptance:
             else:
                 Kc, M, G = m.Kc, m.M, m.G
                 C = (m.C + m.Ci + self.C_link).tocsc()
+            if self.method == "banded" and H:
+                solver = self._band_solver(self._band_out)
+                sol = solver.solve_forced(np.arange(1, H + 1), omega, True, f[1:], df[1:])
+                kh = kap[1:]
+                dkap[1:] = -kh @ sol.dh @ kh
+                dfrc[1:] = (dkap[1:] @ sol.g[:, :, None] + kh @ sol.dg[:, :, None])[:, :, 0]
+                return dkap, dfrc
             A = B = None
             for k in range(1, H + 1):
                 pf = self._pole_form(k)
@@ -519,7 +608,11 @@ class LinkReceptance:
         rhs0 = f[0].real - self.P @ (G[0].real - self.k_link @ Y[0].real)
         out[0] = self.mean.solve(speed, rhs0[:, None])[dofs, 0]
         V = self.basis
-        for k in range(1, H + 1):
+        if self.method == "banded" and H:
+            self._band_out = key = tuple(int(i) for i in dofs)
+            sol = self._band_solve(omega, H, key)  # Z⁻¹ (f - P G) = Z⁻¹ f - (Z⁻¹ P) G
+            out[1:] = sol.Ug - np.einsum("kij,kj->ki", sol.U, G[1:])
+        for k in range(1, H + 1 if self.method != "banded" else 1):
             pf = self._pole_form(k)
             rhs = f[k] - self.P @ G[k]
             if V is None:

@@ -52,10 +52,14 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
-from scipy.sparse.csgraph import connected_components
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.reduction.direct_receptance import DirectSolver, dynamic_stiffness_derivative
+from nlgrd.nonlinear.reduction.direct_receptance import (
+    DirectSolver,
+    coupled_dofs,
+    dynamic_stiffness_derivative,
+)
+from nlgrd.nonlinear.reduction.link_reduction import POLES_LIMIT
 from nlgrd.nonlinear.reduction.modal_basis import (
     STABILITY_MODE_CAP,
     attachment_basis,
@@ -69,9 +73,9 @@ from nlgrd.rotor.system import RotorSystem
 
 #: Above this many DOFs ``method="auto"`` uses the modal basis.
 DIRECT_LIMIT = 3000
-#: Up to this many DOFs reached by a mesh, ``method="auto"`` uses the pole-residue form of
-#: the whole model (one eigendecomposition per harmonic: 60 ms at 83 DOFs, 250 ms at 210).
-POLES_LIMIT = 100
+#: POLES_LIMIT (link_reduction's): up to this many DOFs reached by a mesh, ``method="auto"``
+#: uses the pole-residue form of the whole model (one eigendecomposition per harmonic: 60 ms
+#: at 83 DOFs, 250 ms at 210).
 #: Up to this many, "auto" solves POLES_AFTER new frequencies by sparse LU (a short sweep),
 #: then turns to the pole-residue form (a long sweep: cheaper than the solves it replaces).
 #: A narrow band (direct_receptance.BAND_LIMIT) stays direct: 0.05 ms per harmonic at 210
@@ -318,12 +322,7 @@ class MeshReceptance:
     def _mesh_component(self, extra=()) -> NDArray:
         """DOFs in the connected components of Z's sparsity graph that hold a mesh DOF
         (or one of ``extra``): the rest is decoupled from every mesh exactly."""
-        pat = self.model._pattern
-        n = self.model.n_dofs
-        g = sp.csc_matrix((np.ones(len(pat["indices"])), pat["indices"], pat["indptr"]), shape=(n, n))
-        _, label = connected_components(g, directed=False)
-        need = np.concatenate([np.flatnonzero(np.any(self.W != 0, axis=1)), np.asarray(extra, dtype=int)])
-        return np.flatnonzero(np.isin(label, label[need]))
+        return coupled_dofs(self.model, self.W, extra)
 
     def _direct(self) -> DirectSolver:
         """The per-frequency factorisation (:mod:`nlgrd.nonlinear.reduction.direct_receptance`) on
