@@ -38,8 +38,13 @@ def run(capsys, *argv) -> tuple[int, str, str]:
     return rc, cap.out, cap.err
 
 
+#: A progress line of the command off a terminal ("continuation up: 32/324"), not a message.
+PROGRESS = re.compile(r"^\s*[^:]+: \d+/\d+$")
+
+
 def one_line(err: str) -> str:
-    lines = err.strip().splitlines()
+    """The one line stderr holds besides progress lines (the error)."""
+    lines = [ln for ln in err.strip().splitlines() if not PROGRESS.match(ln)]
     assert len(lines) == 1 and "Traceback" not in err, err
     return lines[0]
 
