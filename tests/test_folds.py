@@ -472,3 +472,24 @@ def test_coexisting_branch_beside_the_default_sweeps_jump(default_both):
     errors = [abs(w - v) for (_, w), (_, v) in zip(lifted[0], ref, strict=True)]
     print("errors", errors)
     assert max(errors) < 1e-3
+
+
+def test_searches_only_beside_jumps_that_leave_a_settled_row():
+    """search_frequencies takes the rows on either side of a jump only where the row left
+    has a settled verdict (an exact orbit there), each frequency once, and at most
+    ``max_jumps`` such jumps. An up sweep of six rows with jumps (branch switches) after
+    1.1, 1.3 and 1.4 rad/s; 1.3 is not settled: its jump is skipped."""
+    from dataclasses import replace
+
+    from nlgrd.nonlinear.tracing.coexisting import search_frequencies
+
+    w = np.array([1.0, 1.1, 1.2, 1.3, 1.4, 1.5])
+    n = w.size
+    res = assemble_result(
+        w, ["up"] * n, np.zeros((n, 1, 5)), [True] * n, [0.0] * n, [1] * n, [0.5] * n,
+        [_point() for _ in range(n)], "test", [False, False, True, False, True, True],
+    )  # fmt: skip
+    res = replace(res, verdict_converged=np.array([True, True, True, False, True, True]))
+    assert search_frequencies(res) == [1.1, 1.2, 1.4, 1.5]
+    assert search_frequencies(res, max_jumps=1) == [1.1, 1.2]
+    assert search_frequencies(res, max_jumps=0) == []
