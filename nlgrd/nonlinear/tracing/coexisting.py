@@ -40,7 +40,11 @@ not always one branch; locate_bifurcations bisects from each stable row on the e
 and reports nothing where that row's own branch stays stable. Cost (the preloaded chain,
 the default sweep both ways, load 3 on two cores): the three jumps with a settled row, five
 searches at H = 13 and eight branches, 60 s of CPU; locate_bifurcations on the eight
-branches 160 s more.
+branches 160 s more. There, besides the lifted-off branch's fold, Neimark-Sacker point and
+period doubling (within 3.2e-7 rad/s of the exact flow's) and the upper branch's fold, it
+reports folds at 1.39524, 1.41767, 1.42588, 1.44537, 1.44803, 1.45063 and period doublings
+at 1.43107, 1.43229, 1.43496 rad/s that no exact-flow reference has checked (2026-12-07):
+the function is not called by any default flow until they are.
 """
 
 from __future__ import annotations
