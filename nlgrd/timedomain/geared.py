@@ -16,7 +16,7 @@ from nlgrd.errors import ModelError
 from nlgrd.nonlinear.fourier.harmonics import analyse, differentiate, real_to_complex, sample
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh
 from nlgrd.nonlinear.models.geared import GearedModel
-from nlgrd.nonlinear.results.metrics import MeshMetrics, TimeHistory, metrics_from_history
+from nlgrd.nonlinear.results.metrics import LastPeriod, MeshMetrics, TimeHistory, metrics_from_history
 from nlgrd.nonlinear.results.sweep_results import SweepResult, assemble_result
 from nlgrd.nonlinear.tracing.sweep import sweep_orders
 from nlgrd.threads import single_blas_thread
@@ -24,7 +24,7 @@ from nlgrd.timedomain.links import LinkIntegrator, settle
 
 
 @dataclass(frozen=True)
-class FETimeResponse:
+class FETimeResponse(LastPeriod):
     """Time integration of the FE model to periodic steady state at one mesh frequency.
 
     Attributes
@@ -67,34 +67,6 @@ class FETimeResponse:
     def metrics(self, mesh: BacklashMesh, H: int = 15) -> MeshMetrics:
         """DTE and mesh-force metrics of the last period."""
         return metrics_from_history(self.history, mesh, H)
-
-    def to_frame(self):
-        """The last period (:meth:`TimeHistory.to_frame
-        <nlgrd.nonlinear.results.metrics.TimeHistory.to_frame>`): time [s], δ, e and δ - e
-        [µm], W [N].
-
-        Returns
-        -------
-        pandas.DataFrame
-        """
-        return self.history.to_frame()
-
-    def plot(self, quantity: str = "delta", ax=None):
-        """The last period: "delta" (δ and e), "deflection" (δ - e) or "force" (W) against
-        time (:func:`nlgrd.plotting.nonlinear.plot_time_history`).
-
-        Parameters
-        ----------
-        quantity : str
-            "delta", "deflection" or "force".
-        ax : matplotlib.axes.Axes, optional
-            Axes to draw on; a new figure when None.
-
-        Returns
-        -------
-        matplotlib.axes.Axes
-        """
-        return self.history.plot(ax=ax, quantity=quantity)
 
 
 def integrate_fe(

@@ -18,13 +18,13 @@ from scipy.integrate import solve_ivp
 from nlgrd.nonlinear.fourier.harmonics import analyse, differentiate, evaluate
 from nlgrd.nonlinear.laws.describing_functions import deadzone
 from nlgrd.nonlinear.models.sdof import SDOFGearPair
-from nlgrd.nonlinear.results.metrics import TimeHistory, metrics_from_history
+from nlgrd.nonlinear.results.metrics import LastPeriod, TimeHistory, metrics_from_history
 from nlgrd.nonlinear.results.sweep_results import SweepResult, assemble_result
 from nlgrd.nonlinear.tracing.sweep import sweep_orders
 
 
 @dataclass(frozen=True)
-class TimeResponse:
+class TimeResponse(LastPeriod):
     """Result of a time integration to periodic steady state at one mesh frequency.
 
     Attributes
@@ -53,34 +53,6 @@ class TimeResponse:
     def harmonics(self, H: int) -> NDArray:
         """Real harmonics 0..H of δ over the last period (FFT of the samples)."""
         return analyse(self.history.delta, H)
-
-    def to_frame(self):
-        """The last period (:meth:`TimeHistory.to_frame
-        <nlgrd.nonlinear.results.metrics.TimeHistory.to_frame>`): time [s], δ, e and δ - e
-        [µm], W [N].
-
-        Returns
-        -------
-        pandas.DataFrame
-        """
-        return self.history.to_frame()
-
-    def plot(self, quantity: str = "delta", ax=None):
-        """The last period: "delta" (δ and e), "deflection" (δ - e) or "force" (W) against
-        time (:func:`nlgrd.plotting.nonlinear.plot_time_history`).
-
-        Parameters
-        ----------
-        quantity : str
-            "delta", "deflection" or "force".
-        ax : matplotlib.axes.Axes, optional
-            Axes to draw on; a new figure when None.
-
-        Returns
-        -------
-        matplotlib.axes.Axes
-        """
-        return self.history.plot(ax=ax, quantity=quantity)
 
 
 def _segment_rhs(mode: int, zeta2: float, w0: float, bt: float, ecoef: tuple, rho: NDArray):

@@ -139,6 +139,44 @@ class TimeHistory:
         return plot_time_history(self, quantity=quantity, ax=ax)
 
 
+class LastPeriod:
+    """What a time response tabulates and draws: its last simulated period.
+
+    Attributes
+    ----------
+    history : TimeHistory
+        The last simulated period (of the subclass's fields).
+    """
+
+    history: TimeHistory
+
+    def to_frame(self):
+        """The last period (:meth:`TimeHistory.to_frame`): time [s], δ, e and δ - e [µm], W [N].
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        return self.history.to_frame()
+
+    def plot(self, quantity: str = "delta", ax=None):
+        """The last period: "delta" (δ and e), "deflection" (δ - e) or "force" (W) against
+        time (:func:`nlgrd.plotting.nonlinear.plot_time_history`).
+
+        Parameters
+        ----------
+        quantity : str
+            "delta", "deflection" or "force".
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure when None.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        return self.history.plot(ax=ax, quantity=quantity)
+
+
 def time_history(harmonics, omega: float, mesh: BacklashMesh, n_samples: int = 1024) -> TimeHistory:
     """Reconstruct one period of δ, e and W from the harmonics of δ (1-D, real convention).
 
