@@ -158,11 +158,17 @@ def _derivatives_against_differences(name, variant, which=("kappa", "force")):
     }
     excess = 0.0
     for w in 2 * np.pi * np.array(POINTS_HZ[name]):
-        for analytic, f in (pairs[k] for k in which):
+        for k in which:
+            analytic, f = pairs[k]
             a, d1, d2 = _flat(analytic(w, H)), _richardson(f, w, 2e-5 * w), _richardson(f, w, 1e-5 * w)
-            scale = np.max(np.abs(d2))
-            bound = 1e-9 + 10 * _rel(d1, d2, scale)
-            excess = max(excess, _rel(a, d2, scale) / bound)
+            parts = [np.arange(a.size)]
+            if k == "force":  # dF_0/dω on the scale of F_0 itself, max|F|/ω (below)
+                mean = np.arange(0, a.size, 2 * H + 1)
+                parts = [np.setdiff1d(parts[0], mean), mean]
+            for i, part in enumerate(parts):
+                scale = np.max(np.abs(d2[part])) if i == 0 else np.max(np.abs(_flat(f(w, H)))) / w
+                bound = 1e-9 + 10 * _rel(d1[part], d2[part], scale)
+                excess = max(excess, _rel(a[part], d2[part], scale) / bound)
     return excess
 
 
@@ -182,24 +188,14 @@ def test_kappa_derivative_with_a_tabulated_bearing_against_differences(name):
     assert _derivatives_against_differences(name, "tabulated", ("kappa",)) <= 1.0
 
 
-@pytest.mark.parametrize(
-    "name",
-    [
-        pytest.param(
-            "two_shaft",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="dF_0/dω: the single path's is 0 exactly (F_0 the static mesh load), the link "
-                "path's F_0 = 2.3 kN varies with the tabulated bearing's speed by rounding, whose "
-                "differences are 2.4e-11 N s at 1500 Hz: 1.1e-7 of max|dF_k| (2.2e-4 N s), above the "
-                "two Richardson steps' agreement (5.4e-9); 1e-10 of max|F|/ω",
-            ),
-        ),
-        "kubo",
-    ],
-)
+@pytest.mark.parametrize("name", FILES)
 def test_force_derivative_with_a_tabulated_bearing_against_differences(name):
-    """As the loss-factor test, dF_k/dω with the speed-tabulated bearing."""
+    """As the loss-factor test, dF_k/dω with the speed-tabulated bearing. The mean term is
+    measured on its own scale, max|F|/ω: the single path's dF_0/dω is 0 exactly (F_0 the
+    static mesh load), the link path's F_0 = 2.3 kN on two_shaft varies with the tabulated
+    bearing's speed by rounding only (differences 2.4e-11 N s at 1500 Hz, 1e-10 of max|F|/ω);
+    on the scale of max|dF_k| (2.2e-4 N s) that noise was 1.1e-7, above or below the bound
+    as the BLAS kernel rounded (a strict xfail under one kernel, a pass under Sandybridge)."""
     assert _derivatives_against_differences(name, "tabulated", ("force",)) <= 1.0
 
 

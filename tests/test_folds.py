@@ -421,16 +421,18 @@ def test_a_flow_passes_a_grazing_touch():
     same sampling step of the flow: the event search, which took the zero the step starts
     on for the exit, flipped the contact state at that instant forever (the fold search from
     the row at 1.43 rad/s never returned). It now brackets the exit after the entry, and the
-    period map is the reference's (its own event search, three changes at 0.794979 T) to
-    1e-10 of the state (both exact up to contact times located to 1e-13 T; 1.4e-13 here),
-    in well under 5 s of CPU time (0.03 s here)."""
+    period map is the reference's (its own event search: one or three changes at 0.794979 T,
+    as the kernel rounds) to 1e-10 of the state (both exact up to contact times located to
+    1e-13 T; 1.4e-13 here), in well under 5 s of CPU time (0.03 s here)."""
     import time
 
     from nlgrd.nonlinear.stability.shooting import model_flow
 
     w, s = GRAZING
     ref, _, events = pr.Flow(w, pr.Stop(0.0, PRELOAD)).advance(s, 1)
-    assert np.sum(np.abs(events * w / (2 * np.pi) - 0.794979) < 1e-6) == 3
+    # the touch: one change there, or three at the same instant (in, out, in) — which, the
+    # kernel's rounding decides (Haswell 3, Sandybridge and Prescott 1); the map is the same
+    assert np.sum(np.abs(events * w / (2 * np.pi) - 0.794979) < 1e-6) in (1, 3)
     t0 = time.process_time()
     end, Phi, _ = model_flow(preloaded_chain(), w).period(s)
     assert time.process_time() - t0 < 5.0
