@@ -108,6 +108,12 @@ class Bearing:
         i = int(np.searchsorted(self.speeds, s, side="right")) - 1
         return float(np.sign(speed) * (v[i + 1] - v[i]) / (self.speeds[i + 1] - self.speeds[i]))
 
+    def _slope_matrix(self, kind: str, speed: float) -> NDArray:
+        """The 6x6 slope of the "k" or "c" coefficients: the (uy, uz) block, zero elsewhere."""
+        m = np.zeros((6, 6))
+        m[1:3, 1:3] = [[self._slope(f"{kind}{a}{b}", speed) for b in "yz"] for a in "yz"]
+        return m
+
     def K_slope(self, speed: float = 0.0) -> NDArray:
         """dK/dΩ: the change of the 6x6 stiffness with shaft speed [N s/m].
 
@@ -121,12 +127,7 @@ class Bearing:
         ndarray (6, 6)
             Zero but for the tabulated (uy, uz) coefficients.
         """
-        k = np.zeros((6, 6))
-        k[1:3, 1:3] = [
-            [self._slope("kyy", speed), self._slope("kyz", speed)],
-            [self._slope("kzy", speed), self._slope("kzz", speed)],
-        ]
-        return k
+        return self._slope_matrix("k", speed)
 
     def C_slope(self, speed: float = 0.0) -> NDArray:
         """dC/dΩ: the change of the 6x6 damping with shaft speed [N s²/m].
@@ -141,12 +142,7 @@ class Bearing:
         ndarray (6, 6)
             Zero but for the tabulated (uy, uz) coefficients.
         """
-        c = np.zeros((6, 6))
-        c[1:3, 1:3] = [
-            [self._slope("cyy", speed), self._slope("cyz", speed)],
-            [self._slope("czy", speed), self._slope("czz", speed)],
-        ]
-        return c
+        return self._slope_matrix("c", speed)
 
     def stiffness(self, speed: float = 0.0) -> NDArray:
         """2x2 stiffness on (uy, uz) [N/m] at shaft speed ``speed`` [rad/s]."""
