@@ -42,6 +42,18 @@ METRIC_NAMES = (
     "contact_loss_fraction",
     "back_contact",
 )
+#: SI unit of each metric (None: a flag): the typed description of what a sweep writes per
+#: point; the tables convert and name them by :mod:`nlgrd.units`.
+METRIC_UNITS = {
+    "dte_mean": "m",
+    "dte_rms": "m",
+    "dte_p2p": "m",
+    "force_max": "N",
+    "force_min": "N",
+    "dslr": "-",
+    "contact_loss_fraction": "-",
+    "back_contact": None,
+}
 
 
 @dataclass(frozen=True)
