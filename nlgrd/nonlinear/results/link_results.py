@@ -150,7 +150,8 @@ class LinkSweepResult:
     def plot(self, quantity: str | None = None, ax=None):
         """One link's (or linear bearing's) output against the base frequency, drawn as the
         command line draws it (:func:`nlgrd.plotting.sweep_figures.plot_link_sweep`: stable
-        filled, unstable open, points without a response marked).
+        filled, unstable open, points without a response marked, the jumps of
+        :meth:`jumps` as dotted arrows).
 
         Parameters
         ----------
@@ -164,10 +165,12 @@ class LinkSweepResult:
         -------
         matplotlib.axes.Axes
         """
+        from nlgrd.plotting.nonlinear import jump_table
         from nlgrd.plotting.sweep_figures import plot_link_sweep
 
         column = link_column(self.links, quantity, self.bearings)
-        return plot_link_sweep(self.to_frame(), "base_frequency [Hz]", column, None, ax=ax)
+        jumps = jump_table(self.jumps())  # the jumps the command line lists
+        return plot_link_sweep(self.to_frame(), "base_frequency [Hz]", column, None, ax=ax, jumps=jumps)
 
 
 def metric_names(link) -> list[str]:
