@@ -12,6 +12,7 @@ written are unchanged to the last bit. A column is named by :func:`column`:
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -130,6 +131,80 @@ def column(quantity: str, unit: str | None, link: str | None = None) -> str:
         )
     name = quantity if link is None else f"{link}.{quantity}"
     return name if unit is None else f"{name} [{unit}]"
+
+
+#: Factors between the units of one quantity that tables write (value in ``to`` = value in
+#: ``from`` x factor), keyed (from, to).
+FACTORS = {("m", "um"): 1e6, ("um", "m"): 1e-6}
+
+
+def factor(from_unit: str, to_unit: str) -> float:
+    """The factor from one written unit to another of the same quantity (1 for the same).
+
+    Parameters
+    ----------
+    from_unit, to_unit : str
+        Units as written in column names ("m", "um", "N", "-").
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ModelError
+        (``unit``) Units of different quantities.
+    """
+    if from_unit == to_unit:
+        return 1.0
+    if (from_unit, to_unit) not in FACTORS:
+        raise ModelError("unit", f"no conversion from [{from_unit}] to [{to_unit}]")
+    return FACTORS[(from_unit, to_unit)]
+
+
+@dataclass(frozen=True)
+class OutputColumn:
+    """One output column of a result's table, typed: what it holds, in which unit, whose.
+
+    Attributes
+    ----------
+    quantity : str
+        What it holds (``dte_rms``, ``force_max``, ``dslr``, ...).
+    unit : str or None
+        The written unit (None: a flag).
+    owner : str or None
+        The link or bearing whose output it is (None: the one mesh of a one-mesh table).
+    kind : str
+        What the owner is: "gear mesh", "bearing clearance", "bearing", or another link's kind.
+    name : str
+        The column as the table writes it, where that is not :func:`column`'s name
+        (a one-mesh table's bearings: ``<bearing> <quantity> [unit]``); "" otherwise.
+    """
+
+    quantity: str
+    unit: str | None
+    owner: str | None = None
+    kind: str = ""
+    name: str = ""
+
+    @property
+    def column(self) -> str:
+        """The column's name in the table."""
+        return self.name or column(self.quantity, self.unit, self.owner)
+
+    def factor_to(self, unit: str) -> float:
+        """The factor from this column's unit to ``unit`` (:func:`factor`).
+
+        Parameters
+        ----------
+        unit : str
+            The unit wanted.
+
+        Returns
+        -------
+        float
+        """
+        return factor(self.unit or "-", unit)
 
 
 def written(values, unit: str):

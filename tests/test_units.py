@@ -46,3 +46,17 @@ def test_column_names_and_their_parts():
     for bad in ("", "dte rms", "a.b", "x[um]"):
         with pytest.raises(ModelError, match="quantity"):
             column(bad, "um")
+
+
+def test_typed_output_columns():
+    """An output's column follows the schema unless the table writes it otherwise (a
+    one-mesh bearing's ``<bearing> <quantity> [unit]``); its factor to another unit of the
+    same quantity is 1e6 from m to µm, and none between quantities."""
+    from nlgrd.units import OutputColumn, factor
+
+    c = OutputColumn("dte_rms", "m", "mesh0", "gear mesh")
+    assert c.column == "mesh0.dte_rms [m]" and c.factor_to("um") == 1e6
+    assert OutputColumn("force_max", "N", "B", "bearing", name="B force_max [N]").column == "B force_max [N]"
+    assert factor("um", "m") == 1e-6 and factor("N", "N") == 1.0
+    with pytest.raises(ModelError, match="unit"):
+        factor("N", "um")

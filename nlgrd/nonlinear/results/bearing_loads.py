@@ -12,8 +12,9 @@ from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.fourier.harmonics import complex_to_real, real_to_complex
+from nlgrd.nonlinear.results.metrics import METRIC_UNITS
 from nlgrd.nonlinear.results.sweep_results import SweepResult
-from nlgrd.units import column, written
+from nlgrd.units import WRITTEN, OutputColumn, column, written
 
 RECOVERY_RTOL = 1e-12
 
@@ -123,6 +124,41 @@ class BearingResponse:
         if quantity not in BEARING_QUANTITIES:
             raise ModelError("quantity", f"one of {', '.join(BEARING_QUANTITIES)}, got {quantity!r}")
         return plot_bearing_loads(self.to_frame(names), quantity, ax=ax)
+
+
+#: The bearing columns a one-mesh sweep's table writes per bearing (no mean displacement).
+ONE_MESH_BEARING_COLUMNS = (
+    "displacement_max",
+    "displacement_rms",
+    "force_mean",
+    "force_rms",
+    "force_max",
+    "force_amplitude",
+)
+
+
+def one_mesh_columns(bearings: Sequence[str]) -> list[OutputColumn]:
+    """The typed description of a one-mesh sweep's output columns: the mesh's metrics
+    (``dte_rms [um]``, ..., owner None, kind "gear mesh") and per bearing
+    :data:`ONE_MESH_BEARING_COLUMNS` (``<bearing> <quantity> [unit]``, kind "bearing").
+
+    Parameters
+    ----------
+    bearings : sequence of str
+        The bearings' names (:func:`bearing_names`).
+
+    Returns
+    -------
+    list of nlgrd.units.OutputColumn
+    """
+    out = [
+        OutputColumn(q, WRITTEN[si][0] if si else None, None, "gear mesh") for q, si in METRIC_UNITS.items()
+    ]
+    for b in bearings:
+        for q in ONE_MESH_BEARING_COLUMNS:
+            unit = WRITTEN[BEARING_QUANTITIES[q]][0]
+            out.append(OutputColumn(q, unit, b, "bearing", name=f"{b} {column(q, unit)}"))
+    return out
 
 
 def _period_samples(H: int) -> tuple[NDArray, NDArray]:

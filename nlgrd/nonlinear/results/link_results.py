@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.results.bearing_loads import BEARING_OUTPUTS, bearing_names, link_bearing_outputs
 from nlgrd.nonlinear.results.sweep_results import ContinuationResult, SweepResult
+from nlgrd.units import OutputColumn, parse_column
 
 __all__ = [
     "LinkContinuationResult",
@@ -23,6 +24,7 @@ __all__ = [
     "link_column",
     "link_rows",
     "metric_names",
+    "output_columns",
     "output_names",
     "point_outputs",
     "with_links",
@@ -202,6 +204,31 @@ def output_names(model) -> list[str]:
     list of str
     """
     return [f"{lk.name}.{k}" for lk in model.links for k in metric_names(lk)] + list(bearing_columns(model))
+
+
+def output_columns(model) -> list[OutputColumn]:
+    """The typed description of :func:`output_names`: per column its quantity, unit, owner
+    and the owner's kind (the link's ``kind``, "bearing" for a linear bearing).
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model.
+
+    Returns
+    -------
+    list of nlgrd.units.OutputColumn
+        In the order of :func:`output_names`.
+    """
+    out = []
+    for lk in model.links:
+        for name in metric_names(lk):
+            _, quantity, unit = parse_column(name)
+            out.append(OutputColumn(quantity, unit, lk.name, getattr(lk, "kind", "link")))
+    for name in bearing_columns(model):
+        owner, quantity, unit = parse_column(name)
+        out.append(OutputColumn(quantity, unit, owner, "bearing"))
+    return out
 
 
 def bearing_columns(model) -> tuple[str, ...]:
