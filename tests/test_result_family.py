@@ -379,3 +379,23 @@ def test_orbit_search_table_and_figure():
     unstable = next(ln for ln in ax.get_lines() if ln.get_label() == "period 3, unstable")
     assert unstable.get_markerfacecolor() == "none"
     plt.close(ax.figure)
+
+
+def test_link_continuation_table_never_calls_an_unstable_orbit_periodic():
+    """The link path's continuation table (``LinkContinuationResult.to_frame``: the curve's
+    table with the link columns) on the single-DOF pair's folded curve (tests/test_continuation.py:
+    its middle branch unstable): every unstable row's ``response`` says "unstable periodic",
+    every stable one "periodic"."""
+    from nlgrd.nonlinear.results.link_results import LinkContinuationResult
+    from nlgrd.nonlinear.tracing.continuation import continuation
+
+    sd = _sdof()
+    c = continuation(sd.reduced_model(), 1.2 * sd.natural_frequency, 0.6 * sd.natural_frequency, 5)
+    assert c.turning_omegas.size == 2
+    links = pd.DataFrame({"mesh.dte_rms [m]": c.curve.dte_rms})
+    frame = LinkContinuationResult(c, links).to_frame()
+    assert "mesh.dte_rms [m]" in frame and "base_frequency [Hz]" in frame
+    unstable = frame["stable"].eq(False).to_numpy(bool)
+    assert unstable.sum() >= 5
+    assert set(frame.loc[unstable, "response"]) == {"unstable periodic"}
+    assert set(frame.loc[~unstable, "response"]) == {"periodic"}

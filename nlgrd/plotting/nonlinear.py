@@ -316,7 +316,7 @@ def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
     unc = getattr(result, "uncertainty", None) or {}
     return pd.DataFrame(
         {
-            "mesh_frequency [Hz]": np.asarray(result.omega, dtype=float) / (2 * np.pi),
+            "mesh_frequency [Hz]": hz(np.asarray(result.omega, dtype=float)),
             "direction": np.asarray(result.direction).astype(str),
             "converged": np.asarray(result.converged, dtype=object),
             "stable": np.asarray(result.stable, dtype=object),

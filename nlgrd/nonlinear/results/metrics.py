@@ -27,6 +27,7 @@ from nlgrd.nonlinear.fourier.harmonics import (
     sample,
 )
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh
+from nlgrd.units import um
 
 #: What the CSV's ``response`` column says where a sweep found no stable periodic orbit.
 NO_STABLE = "no stable mesh-periodic response"
@@ -137,9 +138,9 @@ class TimeHistory:
         return pd.DataFrame(
             {
                 "time [s]": self.t,
-                "dte [um]": self.delta * 1e6,
-                "lste [um]": self.lste * 1e6,
-                "mesh_deflection [um]": self.mesh_deflection * 1e6,
+                "dte [um]": um(self.delta),
+                "lste [um]": um(self.lste),
+                "mesh_deflection [um]": um(self.mesh_deflection),
                 "mesh_force [N]": self.force,
             }
         )
