@@ -283,6 +283,20 @@ def test_every_result_has_to_frame_and_plot(name):
     plt.close(new.figure)
 
 
+def test_static_result_of_a_matrix_model_plots_its_table():
+    """A static deflection of a model of matrices (no rotor system) draws each DOF's value
+    against its index, the numbers of its table (K q = f of the 2-DOF chain)."""
+    from nlgrd.rotor.frequency_response import static_deflection
+
+    res = static_deflection(_two_dof(), np.array([0.0, 10.0]))
+    frame = res.to_frame()
+    # K q = f by hand: q = K^-1 f = [10/4e5, 10/4e5 + 10/2e5] m
+    np.testing.assert_allclose(frame["value [m or rad]"], [2.5e-5, 7.5e-5], rtol=1e-12)
+    ax = res.plot()
+    np.testing.assert_array_equal(ax.get_lines()[0].get_ydata(), frame["value [m or rad]"])
+    plt.close(ax.figure)
+
+
 def test_found_orbit_alone_has_to_frame_and_plot():
     orbit = _orbits()[0]
     assert orbit.to_frame().shape[0] == 1
