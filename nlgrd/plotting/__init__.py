@@ -4,6 +4,7 @@ Each function takes ``ax=None`` (a new figure when None) and returns the axes.
 Submodules: :mod:`.rotor` (modes, Campbell, frequency response, static deflection),
 :mod:`.gear` (transmission error, mesh stiffness, load sharing),
 :mod:`.nonlinear` (sweeps, continuation curves, time histories),
+:mod:`.result_figures` (Floquet multipliers, bearing loads, tori, orbits found by a search),
 :mod:`.sweep_figures` (the composed figures of ``nlgrd sweep``: a link sweep with its
 branches, the spectra of one point), :mod:`.studies` (study maps, curves, distributions),
 :mod:`.common` (the conventions all figures share: colours per sweep direction,

@@ -11,6 +11,9 @@ Sweeps and curves (:mod:`.nonlinear`, and the notebooks through it):
 - Points that did not converge: a cross on the bottom edge of the axes at their
   frequency, counted in the legend ("... not converged (n)"), never a value; the down
   sweep's a row above the up sweep's (:data:`NC_ROW`), so that both show at one speed.
+- Jumps of a sweep (where it leaves one branch for another between two points): a dotted
+  vertical arrow at the midpoint of the two frequencies, from the value left to the value
+  reached, counted in the legend ("... jump (n)"; :func:`mark_jumps`, gid :data:`JUMP_GID`).
 - Values beyond a given scale (``ylim``): a caret on the edge of the axes at their
   frequency, with the count and the largest value in the legend; the line breaks there
   instead of running off the axes.
@@ -57,6 +60,9 @@ LEGEND_MARKER_MIN = 4.5
 DOWN_INSET = 0.65
 #: Note of :func:`note_no_measurement`.
 NO_MEASUREMENT_TEXT = "no measured curve shipped\n(to add one: data/experimental/README.md)"
+
+#: gid of the jumps' shafts and heads (:func:`mark_jumps`).
+JUMP_GID = "jump"
 
 #: Readable axis labels of table columns (:func:`axis_label`).
 COLUMN_LABELS = {
@@ -734,3 +740,52 @@ def clip_to_scale(ax, x, y, ylim, colour: str, label: str, codes=None) -> tuple[
         artists.append(mk)
         y[off] = np.nan
     return y, artists
+
+
+def mark_jumps(ax, x, y_from, y_to, colour: str, label: str) -> list:
+    """Jumps as dotted vertical arrows at ``x`` from ``y_from`` to ``y_to``, labelled
+    ``"{label}: jump (n)"``; a jump without a finite value at either end is left out (the
+    point off the branch is marked as missing by the sweep's own marks).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    x : array_like
+        Abscissa of each jump (the midpoint of the last point on the branch left and the
+        first on the new one), in data coordinates.
+    y_from, y_to : array_like
+        The values at those two points.
+    colour : str
+        Matplotlib colour of the arrows.
+    label : str
+        Name of the series in the legend entry.
+
+    Returns
+    -------
+    list of matplotlib.lines.Line2D
+        The shafts (labelled) and the heads (gid :data:`JUMP_GID` both); empty when none
+        is drawn.
+    """
+    x, a, b = (np.asarray(v, dtype=float).reshape(-1) for v in (x, y_from, y_to))
+    ok = np.isfinite(x) & np.isfinite(a) & np.isfinite(b) & (a != b)
+    if not ok.any():
+        return []
+    x, a, b = x[ok], a[ok], b[ok]
+    nan = np.full(x.size, np.nan)
+    (shaft,) = ax.plot(
+        np.column_stack([x, x, nan]).ravel(),
+        np.column_stack([a, b, nan]).ravel(),
+        ls=":",
+        lw=1.2,
+        color=colour,
+        zorder=4,
+        gid=JUMP_GID,
+        label=f"{label}: jump ({x.size})",
+    )
+    heads = []
+    for up, marker in ((b > a, "^"), (b < a, "v")):
+        if up.any():
+            (h,) = ax.plot(x[up], b[up], ls="none", marker=marker, ms=4, color=colour, zorder=4, gid=JUMP_GID)
+            heads.append(h)
+    return [shaft, *heads]

@@ -21,10 +21,12 @@ from nlgrd.plotting.common import (
     draw_points,
     flags,
     get_ax,
+    mark_jumps,
     mark_not_converged,
     place_legend,
     stability_codes,
 )
+from nlgrd.units import hz
 
 #: Default abscissa of the sweep figures: (label, factor from the mesh frequency [Hz]).
 MESH_HZ = ("mesh frequency [Hz]", 1.0)
@@ -93,6 +95,7 @@ def plot_sweep_frame(
     lw: float = 1.0,
     alpha: float = 1.0,
     not_converged: str = "not converged",
+    jumps: pd.DataFrame | None = None,
 ):
     """Sweep table(s) with a ``direction`` column: ``y`` against ``x``, one branch per direction.
 
@@ -137,6 +140,11 @@ def plot_sweep_frame(
         Opacity of the lines and markers.
     not_converged : str
         Legend wording of the crosses of the non-converged rows.
+    jumps : pandas.DataFrame, optional
+        The sweep's jumps, columns ``direction``, ``from`` and ``to`` (the last point on
+        the branch left and the first on the new one, in the unit of ``x``): dotted
+        vertical arrows between the values drawn there
+        (:func:`~nlgrd.plotting.common.mark_jumps`).
 
     Returns
     -------
@@ -188,11 +196,28 @@ def plot_sweep_frame(
             err = _uncertainty_column(y)
             ev = pd.to_numeric(part[err], errors="coerce").to_numpy(float) if err in part else None
             _mark_time_answers(ax, resp, xv, yt, ev, colour, name, ms, inner, _nonnegative(y))
+        if jumps is not None and len(jumps):
+            _draw_jumps(ax, jumps[jumps["direction"].astype(str) == d], xv, np.fmax(yv, yt), colour, name)
     if ylim is not None:
         ax.set_ylim(*[lim if lim is not None else cur for lim, cur in zip(ylim, ax.get_ylim(), strict=True)])
     ax.set_xlabel(axis_label(x))
     ax.set_ylabel(axis_label(y))
     return ax
+
+
+def _draw_jumps(ax, jumps: pd.DataFrame, xv, yv, colour: str, name: str) -> None:
+    """The jumps of one direction at the midpoints of their two points, between the values
+    drawn there (NaN where a point is not drawn as a value: that jump is left out)."""
+    if not len(jumps):
+        return
+
+    def at(xs):  # the value drawn at each abscissa (the same number, to rounding)
+        near = np.isclose(xv[None, :], xs[:, None], rtol=1e-12, atol=0.0)
+        return np.where(near.any(axis=1), yv[np.argmax(near, axis=1)], np.nan)
+
+    a = jumps["from"].to_numpy(float)
+    b = jumps["to"].to_numpy(float)
+    mark_jumps(ax, (a + b) / 2, at(a), at(b), colour, name)
 
 
 def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms, inner=False) -> None:
@@ -291,7 +316,7 @@ def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
     unc = getattr(result, "uncertainty", None) or {}
     return pd.DataFrame(
         {
-            "mesh_frequency [Hz]": np.asarray(result.omega, dtype=float) / (2 * np.pi),
+            "mesh_frequency [Hz]": hz(np.asarray(result.omega, dtype=float)),
             "direction": np.asarray(result.direction).astype(str),
             "converged": np.asarray(result.converged, dtype=object),
             "stable": np.asarray(result.stable, dtype=object),
@@ -361,9 +386,29 @@ def plot_sweep(
         The axes drawn on.
     """
     table = _in_unit(sweep_table(result, quantity), xaxis)
-    ax = plot_sweep_frame(table, "x", "value", ax, label, series, ylim=ylim)
+    jumps = jump_table(result.jumps(), float(xaxis[1])) if hasattr(result, "jumps") else None
+    ax = plot_sweep_frame(table, "x", "value", ax, label, series, ylim=ylim, jumps=jumps)
     _finish(ax, quantity, xaxis, title)
     return ax
+
+
+def jump_table(jumps, per_hz: float = 1.0) -> pd.DataFrame:
+    """The ``jumps`` argument of :func:`plot_sweep_frame` from a sweep's jumps.
+
+    Parameters
+    ----------
+    jumps : sequence of nlgrd.nonlinear.results.jumps.Jump
+        Each with ``direction``, ``omega_from`` and ``omega_to`` [rad/s].
+    per_hz : float
+        The abscissa's value per frequency [Hz] (1: frequency in Hz).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``direction``, ``from`` and ``to`` in the abscissa's unit.
+    """
+    rows = [(j.direction, hz(j.omega_from) * per_hz, hz(j.omega_to) * per_hz) for j in jumps]
+    return pd.DataFrame(rows, columns=["direction", "from", "to"])
 
 
 def _in_unit(table: pd.DataFrame, xaxis: tuple[str, float]) -> pd.DataFrame:

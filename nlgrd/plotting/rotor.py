@@ -267,7 +267,8 @@ def plot_static(result, ax=None):
     Parameters
     ----------
     result : nlgrd.rotor.frequency_response.StaticResult
-        The static deflection of a model with a rotor system.
+        The static deflection; of a model of matrices without a rotor system, the value
+        of each DOF against its index.
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure when None.
 
@@ -278,6 +279,11 @@ def plot_static(result, ax=None):
     """
     ax = _ax(ax)
     system = result.model.system
+    if system is None:  # a model of matrices: the value of each DOF, as its table
+        ax.plot(np.arange(len(result.q)), result.q, "o", ms=4, label="static deflection")
+        ax.set_xlabel("DOF [-]")
+        ax.set_ylabel("value [m or rad]")
+        return ax
     for s, shaft in enumerate(system.shafts):
         dofs = np.array([system.dofs.node_dofs(s, n) for n in range(shaft.n_nodes)])
         q = result.q[dofs]

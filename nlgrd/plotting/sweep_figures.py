@@ -33,7 +33,15 @@ def draw_branches(ax, branches: pd.DataFrame, x: str, quantity: str) -> None:
         plot_sweep_frame(part, x, column, ax=ax, label=name, series=2 + k % 3)
 
 
-def plot_link_sweep(frame: pd.DataFrame, x: str, column: str, title: str | None, branches=None, ax=None):
+def plot_link_sweep(
+    frame: pd.DataFrame,
+    x: str,
+    column: str,
+    title: str | None,
+    branches=None,
+    ax=None,
+    jumps: pd.DataFrame | None = None,
+):
     """A link sweep's ``column`` against ``x``, with the followed branches when given.
 
     Parameters
@@ -50,6 +58,8 @@ def plot_link_sweep(frame: pd.DataFrame, x: str, column: str, title: str | None,
         Branches followed by an orbit search (:func:`draw_branches`).
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure (laid out tight) when None.
+    jumps : pandas.DataFrame, optional
+        The sweep's jumps in the unit of ``x`` (:func:`~nlgrd.plotting.nonlinear.plot_sweep_frame`).
 
     Returns
     -------
@@ -59,7 +69,7 @@ def plot_link_sweep(frame: pd.DataFrame, x: str, column: str, title: str | None,
     new = ax is None
     if new:
         _, ax = plt.subplots(figsize=(7, 4))
-    plot_sweep_frame(frame, x, column, ax, label="sweep")
+    plot_sweep_frame(frame, x, column, ax, label="sweep", jumps=jumps)
     ax.set_xlabel(axis_label(x))
     ax.set_ylabel(axis_label(column))
     if title:

@@ -173,22 +173,44 @@ class SummaryColumns:
     mesh_force: list = field(default_factory=list)
     bearing_force: list = field(default_factory=list)
 
+    @classmethod
+    def of(cls, outputs) -> SummaryColumns:
+        """The summary columns among a table's typed outputs: each gear mesh's DSLR, RMS
+        DTE (with its factor to µm) and largest force; every bearing's and bearing
+        clearance's largest force.
+
+        Parameters
+        ----------
+        outputs : sequence of nlgrd.units.OutputColumn
+            The table's outputs (``output_columns`` of a link model, ``one_mesh_columns``).
+
+        Returns
+        -------
+        SummaryColumns
+        """
+        mesh = [c for c in outputs if c.kind == "gear mesh"]
+        return cls(
+            dslr=[c.column for c in mesh if c.quantity == "dslr"],
+            dte_rms=[(c.column, c.factor_to("um")) for c in mesh if c.quantity == "dte_rms"],
+            mesh_force=[c.column for c in mesh if c.quantity == "force_max"],
+            bearing_force=[
+                c.column
+                for c in outputs
+                if c.kind in ("bearing", "bearing clearance") and c.quantity == "force_max"
+            ],
+        )
+
 
 def _link_columns(model) -> SummaryColumns:
-    """The summary columns of a link sweep (``<link>.<quantity> [unit]``), by link type;
-    the bearing forces those of the clearances and of every linear bearing."""
-    from nlgrd.nonlinear.links.contract import BearingClearance, GearMeshLink
-    from nlgrd.nonlinear.results.bearing_loads import bearing_names
+    """The summary columns of a link sweep, from the model's typed outputs
+    (:func:`~nlgrd.nonlinear.results.link_results.output_columns`): the linear bearings'
+    first, then each link's in the model's order."""
+    from nlgrd.nonlinear.results.link_results import output_columns
 
-    out = SummaryColumns(bearing_force=[f"{name}.force_max [N]" for name in bearing_names(model.system)])
-    for link in model.links:
-        if isinstance(link, GearMeshLink):
-            out.dslr.append(f"{link.name}.dslr [-]")
-            out.dte_rms.append((f"{link.name}.dte_rms [m]", 1e6))
-            out.mesh_force.append(f"{link.name}.force_max [N]")
-        elif isinstance(link, BearingClearance):
-            out.bearing_force.append(f"{link.name}.force_max [N]")
-    return out
+    outputs = output_columns(model)
+    return SummaryColumns.of(
+        [c for c in outputs if c.kind == "bearing"] + [c for c in outputs if c.kind != "bearing"]
+    )
 
 
 def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float, SummaryColumns]:
@@ -219,6 +241,7 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
         return frame, res.jumps(), x_col, per_rad, _link_columns(model)
     from nlgrd.nonlinear.models.geared import geared_sweep
     from nlgrd.nonlinear.models.shaft_orders import shaft_order_sweep
+    from nlgrd.nonlinear.results.bearing_loads import one_mesh_columns
 
     gp = system.gear_pairs[0]
     mesh_per_pinion = gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
@@ -235,12 +258,7 @@ def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float
     if gp.error_period == 1:  # a shaft-order sweep's base is ω/N: its gaps stay gaps
         res = _time_answers(res, None, analysis, system)
     x_col = "pinion_speed [rpm]" if rpm else "mesh_frequency [Hz]"
-    columns = SummaryColumns(
-        dslr=["dslr [-]"],
-        dte_rms=[("dte_rms [um]", 1.0)],
-        mesh_force=["force_max [N]"],
-        bearing_force=[f"{name} force_max [N]" for name in res.bearing_names],
-    )
+    columns = SummaryColumns.of(one_mesh_columns(res.bearing_names))
     return res.to_frame(), res.jumps(), x_col, per_rad, columns
 
 

@@ -60,6 +60,9 @@ class NonlinearLink(Protocol):
     ----------
     name : str
         Unique in a model; the prefix of the link's output columns.
+    kind : str
+        What it is, as its outputs are described (:class:`nlgrd.units.OutputColumn`):
+        "gear mesh", "bearing clearance", ...
     n_coords : int
         d, the number of local coordinates.
     contact_outputs : tuple of str
@@ -67,6 +70,7 @@ class NonlinearLink(Protocol):
     """
 
     name: str
+    kind: str
     n_coords: int
     contact_outputs: tuple[str, ...]
 
@@ -155,6 +159,8 @@ class BearingClearance:
     n_coords = 2
     #: The names of its coordinates: the journal's (u_y, u_z) less the housing's.
     coordinates = ("y", "z")
+    #: What it is (:class:`nlgrd.units.OutputColumn`).
+    kind = "bearing clearance"
     #: The outputs the harmonic-count estimate compares.
     converged_outputs = ("force_max [N]", "displacement_max [m]")
     contact_outputs = ("contact_fraction [-]",)
@@ -353,6 +359,8 @@ class GearMeshLink:
     order: int = 1
 
     n_coords = 1
+    #: What it is (:class:`nlgrd.units.OutputColumn`).
+    kind = "gear mesh"
     #: The name of its coordinate: δ along the line of action.
     coordinates = ("delta",)
     #: The outputs the harmonic-count estimate compares (those of the single-mesh path).

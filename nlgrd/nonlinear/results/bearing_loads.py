@@ -3,13 +3,18 @@ harmonics (:func:`bearing_response`)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 from numpy.typing import NDArray
 
+from nlgrd.errors import ModelError
 from nlgrd.nonlinear.fourier.harmonics import complex_to_real, real_to_complex
+from nlgrd.nonlinear.results.metrics import METRIC_UNITS
 from nlgrd.nonlinear.results.sweep_results import SweepResult
+from nlgrd.units import WRITTEN, OutputColumn, column, written
 
 RECOVERY_RTOL = 1e-12
 
@@ -22,6 +27,18 @@ BEARING_OUTPUTS = (
     "force_rms [N]",
     "force_max [N]",
 )
+
+#: The fields of :class:`BearingResponse` and their SI units: the typed description of a
+#: one-mesh sweep's bearing outputs.
+BEARING_QUANTITIES = {
+    "displacement_mean": "m",
+    "displacement_rms": "m",
+    "displacement_max": "m",
+    "force_mean": "N",
+    "force_rms": "N",
+    "force_max": "N",
+    "force_amplitude": "N",
+}
 
 
 @dataclass(frozen=True)
@@ -51,6 +68,97 @@ class BearingResponse:
     force_rms: NDArray
     force_max: NDArray
     force_amplitude: NDArray
+
+    def to_frame(self, names: Sequence[str] | None = None) -> pd.DataFrame:
+        """One row per point, per bearing its ``<bearing> <quantity> [unit]`` columns as a
+        one-mesh sweep writes them (displacements in µm, forces in N; NaN kept).
+
+        Parameters
+        ----------
+        names : sequence of str, optional
+            The bearings' names (:func:`bearing_names`); default "bearing 0", "bearing 1", ...
+
+        Returns
+        -------
+        pandas.DataFrame
+
+        Raises
+        ------
+        ModelError
+            (``names``) Not one name per bearing.
+        """
+        n = self.force_max.shape[1]
+        names = [f"bearing {j}" for j in range(n)] if names is None else list(names)
+        if len(names) != n:
+            raise ModelError("names", f"one name per bearing ({n}), got {len(names)}")
+        data = {}
+        for j, name in enumerate(names):
+            for quantity, si in BEARING_QUANTITIES.items():
+                unit, values = written(getattr(self, quantity)[:, j], si)
+                data[f"{name} {column(quantity, unit)}"] = values
+        return pd.DataFrame(data)
+
+    def plot(self, quantity: str = "force_max", ax=None, names: Sequence[str] | None = None):
+        """One quantity of every bearing per point (:func:`nlgrd.plotting.result_figures.plot_bearing_loads`).
+
+        Parameters
+        ----------
+        quantity : str
+            A field of this class, e.g. "force_max" or "displacement_rms".
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure when None.
+        names : sequence of str, optional
+            The bearings' names, as :meth:`to_frame`.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+
+        Raises
+        ------
+        ModelError
+            (``quantity``) Not a field of this class.
+        """
+        from nlgrd.plotting.result_figures import plot_bearing_loads
+
+        if quantity not in BEARING_QUANTITIES:
+            raise ModelError("quantity", f"one of {', '.join(BEARING_QUANTITIES)}, got {quantity!r}")
+        return plot_bearing_loads(self.to_frame(names), quantity, ax=ax)
+
+
+#: The bearing columns a one-mesh sweep's table writes per bearing (no mean displacement).
+ONE_MESH_BEARING_COLUMNS = (
+    "displacement_max",
+    "displacement_rms",
+    "force_mean",
+    "force_rms",
+    "force_max",
+    "force_amplitude",
+)
+
+
+def one_mesh_columns(bearings: Sequence[str]) -> list[OutputColumn]:
+    """The typed description of a one-mesh sweep's output columns: the mesh's metrics
+    (``dte_rms [um]``, ..., owner None, kind "gear mesh") and per bearing
+    :data:`ONE_MESH_BEARING_COLUMNS` (``<bearing> <quantity> [unit]``, kind "bearing").
+
+    Parameters
+    ----------
+    bearings : sequence of str
+        The bearings' names (:func:`bearing_names`).
+
+    Returns
+    -------
+    list of nlgrd.units.OutputColumn
+    """
+    out = [
+        OutputColumn(q, WRITTEN[si][0] if si else None, None, "gear mesh") for q, si in METRIC_UNITS.items()
+    ]
+    for b in bearings:
+        for q in ONE_MESH_BEARING_COLUMNS:
+            unit = WRITTEN[BEARING_QUANTITIES[q]][0]
+            out.append(OutputColumn(q, unit, b, "bearing", name=f"{b} {column(q, unit)}"))
+    return out
 
 
 def _period_samples(H: int) -> tuple[NDArray, NDArray]:

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.results.bearing_loads import BEARING_OUTPUTS, bearing_names, link_bearing_outputs
 from nlgrd.nonlinear.results.sweep_results import ContinuationResult, SweepResult
+from nlgrd.units import OutputColumn, parse_column
 
 __all__ = [
     "LinkContinuationResult",
@@ -23,6 +24,7 @@ __all__ = [
     "link_column",
     "link_rows",
     "metric_names",
+    "output_columns",
     "output_names",
     "point_outputs",
     "with_links",
@@ -150,7 +152,8 @@ class LinkSweepResult:
     def plot(self, quantity: str | None = None, ax=None):
         """One link's (or linear bearing's) output against the base frequency, drawn as the
         command line draws it (:func:`nlgrd.plotting.sweep_figures.plot_link_sweep`: stable
-        filled, unstable open, points without a response marked).
+        filled, unstable open, points without a response marked, the jumps of
+        :meth:`jumps` as dotted arrows).
 
         Parameters
         ----------
@@ -164,10 +167,12 @@ class LinkSweepResult:
         -------
         matplotlib.axes.Axes
         """
+        from nlgrd.plotting.nonlinear import jump_table
         from nlgrd.plotting.sweep_figures import plot_link_sweep
 
         column = link_column(self.links, quantity, self.bearings)
-        return plot_link_sweep(self.to_frame(), "base_frequency [Hz]", column, None, ax=ax)
+        jumps = jump_table(self.jumps())  # the jumps the command line lists
+        return plot_link_sweep(self.to_frame(), "base_frequency [Hz]", column, None, ax=ax, jumps=jumps)
 
 
 def metric_names(link) -> list[str]:
@@ -199,6 +204,31 @@ def output_names(model) -> list[str]:
     list of str
     """
     return [f"{lk.name}.{k}" for lk in model.links for k in metric_names(lk)] + list(bearing_columns(model))
+
+
+def output_columns(model) -> list[OutputColumn]:
+    """The typed description of :func:`output_names`: per column its quantity, unit, owner
+    and the owner's kind (the link's ``kind``, "bearing" for a linear bearing).
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model.
+
+    Returns
+    -------
+    list of nlgrd.units.OutputColumn
+        In the order of :func:`output_names`.
+    """
+    out = []
+    for lk in model.links:
+        for name in metric_names(lk):
+            _, quantity, unit = parse_column(name)
+            out.append(OutputColumn(quantity, unit, lk.name, getattr(lk, "kind", "link")))
+    for name in bearing_columns(model):
+        owner, quantity, unit = parse_column(name)
+        out.append(OutputColumn(quantity, unit, owner, "bearing"))
+    return out
 
 
 def bearing_columns(model) -> tuple[str, ...]:

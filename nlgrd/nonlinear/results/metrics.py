@@ -27,6 +27,7 @@ from nlgrd.nonlinear.fourier.harmonics import (
     sample,
 )
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh
+from nlgrd.units import um
 
 #: What the CSV's ``response`` column says where a sweep found no stable periodic orbit.
 NO_STABLE = "no stable mesh-periodic response"
@@ -42,6 +43,18 @@ METRIC_NAMES = (
     "contact_loss_fraction",
     "back_contact",
 )
+#: SI unit of each metric (None: a flag): the typed description of what a sweep writes per
+#: point; the tables convert and name them by :mod:`nlgrd.units`.
+METRIC_UNITS = {
+    "dte_mean": "m",
+    "dte_rms": "m",
+    "dte_p2p": "m",
+    "force_max": "N",
+    "force_min": "N",
+    "dslr": "-",
+    "contact_loss_fraction": "-",
+    "back_contact": None,
+}
 
 
 @dataclass(frozen=True)
@@ -125,9 +138,9 @@ class TimeHistory:
         return pd.DataFrame(
             {
                 "time [s]": self.t,
-                "dte [um]": self.delta * 1e6,
-                "lste [um]": self.lste * 1e6,
-                "mesh_deflection [um]": self.mesh_deflection * 1e6,
+                "dte [um]": um(self.delta),
+                "lste [um]": um(self.lste),
+                "mesh_deflection [um]": um(self.mesh_deflection),
                 "mesh_force [N]": self.force,
             }
         )

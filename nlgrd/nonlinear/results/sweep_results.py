@@ -18,8 +18,9 @@ from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.results.jumps import Jump, find_jumps
-from nlgrd.nonlinear.results.metrics import METRIC_NAMES, MeshMetrics
+from nlgrd.nonlinear.results.metrics import METRIC_NAMES, METRIC_UNITS, MeshMetrics
 from nlgrd.nonlinear.results.response_kinds import QUASI_PERIODIC, response_kind, uncertainty_column  # noqa: F401
+from nlgrd.units import WRITTEN, column, hz, um
 
 #: A point is stable when max |μ| < 1 + STABLE_RTOL.
 STABLE_RTOL = 1e-6
@@ -30,15 +31,10 @@ RESIDUAL_COLUMNS = {
     "period difference": "period_difference [-]",  # time integration: last period to the one before
 }
 
+#: Each metric's column and the factor from SI to it (None: a flag).
 _UNITS = {
-    "dte_mean": ("dte_mean [um]", 1e6),
-    "dte_rms": ("dte_rms [um]", 1e6),
-    "dte_p2p": ("dte_p2p [um]", 1e6),
-    "force_max": ("force_max [N]", 1.0),
-    "force_min": ("force_min [N]", 1.0),
-    "dslr": ("dslr [-]", 1.0),
-    "contact_loss_fraction": ("contact_loss_fraction [-]", 1.0),
-    "back_contact": ("back_contact", None),
+    name: (column(name, WRITTEN[si][0]), WRITTEN[si][1]) if si else (column(name, None), None)
+    for name, si in METRIC_UNITS.items()
 }
 
 
@@ -393,7 +389,7 @@ class SweepResult:
         iterations = pd.array(np.asarray(self.iterations), dtype="Int64")
         iterations[~ok] = pd.NA
         data = {
-            "mesh_frequency [Hz]": self.omega / (2 * np.pi),
+            "mesh_frequency [Hz]": hz(self.omega),
             "direction": self.direction,
             "converged": ok,
             RESIDUAL_COLUMNS[self.residual_kind]: num(self.residual),
@@ -405,8 +401,8 @@ class SweepResult:
             "harmonic_error [-]": _significant(num(self.harmonic_error), 3),
             "response": pd.array(response_kind(self), dtype="string"),
             "period": pd.array(np.asarray(self.period, dtype=int), dtype="Int64"),
-            "subharmonic_amp [um]": num(self.subharmonic_amplitude) * 1e6,
-            "secondary_frequency [Hz]": _significant(num(self.secondary_frequency) / (2 * np.pi), 8),
+            "subharmonic_amp [um]": um(num(self.subharmonic_amplitude)),
+            "secondary_frequency [Hz]": _significant(hz(num(self.secondary_frequency)), 8),
             "instability": pd.array(instability_kind(self.dominant_multiplier, self.stable), dtype="string"),
             "dominant_multiplier_re [-]": floquet_output(num(self.dominant_multiplier.real), signed=True),
             "dominant_multiplier_im [-]": floquet_output(num(self.dominant_multiplier.imag), signed=True),
@@ -429,7 +425,7 @@ class SweepResult:
                 if scale is not None:
                     data[uncertainty_column(col)] = np.where(timed, np.asarray(u, float) * scale, np.nan)
         for k in range(self.amplitudes.shape[1]):
-            data[f"dte_amp_{k} [um]"] = num(self.amplitudes[:, k]) * 1e6
+            data[f"dte_amp_{k} [um]"] = um(num(self.amplitudes[:, k]))
         return pd.DataFrame(data)
 
     def plot(self, quantity: str = "dte_rms", ax=None):

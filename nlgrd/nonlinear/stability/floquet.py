@@ -464,6 +464,38 @@ class FloquetResult:
     error: float = 0.0
     converged: bool = True
 
+    def to_frame(self):
+        """One row per multiplier, largest modulus first: its real and imaginary parts and
+        modulus [-].
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        import pandas as pd
+
+        mu = np.asarray(self.multipliers, dtype=complex).reshape(-1)
+        mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+        return pd.DataFrame(
+            {"multiplier_re [-]": mu.real, "multiplier_im [-]": mu.imag, "multiplier_abs [-]": np.abs(mu)}
+        )
+
+    def plot(self, ax=None):
+        """The multipliers on the unit circle (:func:`nlgrd.plotting.result_figures.plot_multipliers`).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure when None.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        from nlgrd.plotting.result_figures import plot_multipliers
+
+        return plot_multipliers(self.multipliers, ax=ax)
+
 
 def floquet_multipliers(
     state_space: LinearStateSpace,

@@ -43,6 +43,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.errors import ModelError
@@ -50,12 +51,13 @@ from nlgrd.nonlinear.fourier.harmonics import n_harmonics
 from nlgrd.nonlinear.fourier.periods import SUBHARMONIC_RTOL, amplitudes, on_shorter_period, period_of
 from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.hb.solvers import solve
-from nlgrd.nonlinear.results.metrics import MeshMetrics
+from nlgrd.nonlinear.results.metrics import METRIC_NAMES, METRIC_UNITS, MeshMetrics
 from nlgrd.nonlinear.results.sweep_results import STABLE_RTOL, SweepResult, dominant_multiplier
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 from nlgrd.nonlinear.tracing.auto_period import period_only
 from nlgrd.nonlinear.tracing.landing import SAME_ORBIT_RTOL
 from nlgrd.nonlinear.tracing.subharmonic import follow_period
+from nlgrd.units import column, hz, um, written
 
 #: Perturbed starts per period by default.
 N_STARTS = 40
@@ -112,6 +114,95 @@ class FoundOrbit:
     def amplitude(self) -> float:
         """Largest alternating amplitude of any base harmonic of any coordinate [m]."""
         return float(np.max(amplitudes(self.harmonics)))
+
+    def to_frame(self) -> pd.DataFrame:
+        """This orbit as a one-row table (:meth:`OrbitSearchResult.to_frame`).
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        return OrbitSearchResult([self]).to_frame()
+
+    def plot(self, ax=None):
+        """This orbit's amplitude at its frequency (:meth:`OrbitSearchResult.plot`).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure when None.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        return OrbitSearchResult([self]).plot(ax=ax)
+
+
+class OrbitSearchResult(list):
+    """The orbits :func:`search_orbits` found: a list of :class:`FoundOrbit` with their
+    table and figure.
+
+    Attributes
+    ----------
+    (the list's items) : FoundOrbit
+        Each distinct orbit once, by period and then by amplitude.
+    """
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per orbit: mesh frequency [Hz], period, ``stable`` (NA where not
+        computed), max |μ| and the dominant multiplier [-], the largest alternating
+        amplitude [um], the start that reached it, and the first mesh's metrics (NaN
+        without a mesh).
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        fmax = np.array([o.floquet_max for o in self], dtype=float)
+        stable = pd.array([o.stable for o in self], dtype="boolean")
+        stable[~np.isfinite(fmax)] = pd.NA
+        mu = np.array([o.dominant_multiplier for o in self], dtype=complex)
+        data = {
+            "mesh_frequency [Hz]": hz(np.array([o.omega for o in self], dtype=float)),
+            "period": pd.array([o.period for o in self], dtype="Int64"),
+            "stable": stable,
+            "floquet_max [-]": fmax,
+            "dominant_multiplier_re [-]": mu.real,
+            "dominant_multiplier_im [-]": mu.imag,
+            "amplitude [um]": um(np.array([o.amplitude for o in self], dtype=float)),
+            "start": [o.start for o in self],
+        }
+        for i, name in enumerate(METRIC_NAMES):
+            si = METRIC_UNITS[name]
+            values = np.array(
+                [np.nan if o.metrics is None else o.metrics.as_tuple()[i] for o in self], dtype=float
+            )
+            if si is None:  # a flag: tri-state, NA without a mesh
+                flag = pd.array(values == 1.0, dtype="boolean")
+                flag[np.isnan(values)] = pd.NA
+                data[column(name, None)] = flag
+            else:
+                unit, scaled = written(values, si)
+                data[column(name, unit)] = scaled
+        return pd.DataFrame(data)
+
+    def plot(self, ax=None):
+        """Each orbit's largest alternating amplitude against mesh frequency, a marker per
+        period, stable filled and unstable open (:func:`nlgrd.plotting.result_figures.plot_found_orbits`).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure when None.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        from nlgrd.plotting.result_figures import plot_found_orbits
+
+        return plot_found_orbits(self.to_frame(), ax=ax)
 
 
 def shifted(z: ArrayLike, nu: int, s: int) -> NDArray:
@@ -175,7 +266,7 @@ def search_orbits(
     tol: float = 1e-10,
     max_iter: int = 80,
     shorter_periods: bool = True,
-) -> list[FoundOrbit]:
+) -> OrbitSearchResult:
     """Periodic orbits of the given periods at one mesh frequency, from many starts.
 
     Parameters
@@ -212,8 +303,9 @@ def search_orbits(
 
     Returns
     -------
-    list of FoundOrbit
-        Each distinct orbit once, by period and then by amplitude.
+    OrbitSearchResult
+        A list of :class:`FoundOrbit`: each distinct orbit once, by period and then by
+        amplitude.
 
     Raises
     ------
@@ -266,7 +358,7 @@ def search_orbits(
             elif shorter_periods:
                 z = on_shorter_period(z, nu, p)
                 keep(*_on_period(model_of(p), omega, p, H, z, tol, max_iter), label)
-    return sorted(found, key=lambda o: (o.period, o.amplitude))
+    return OrbitSearchResult(sorted(found, key=lambda o: (o.period, o.amplitude)))
 
 
 def _periods(periods) -> tuple[int, ...]:

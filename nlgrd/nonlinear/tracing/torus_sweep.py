@@ -27,6 +27,7 @@ from nlgrd.nonlinear.hb import torus_grid as tg
 from nlgrd.nonlinear.hb.solvers import solve
 from nlgrd.nonlinear.stability.floquet_mode import dominant_floquet_mode
 from nlgrd.nonlinear.tracing.torus_outputs import CHECKED, TORUS_OUTPUTS, GearedTorus
+from nlgrd.units import hz
 
 #: Largest relative speed step continued from the previous torus; beyond it the torus is
 #: started afresh from the periodic orbit.
@@ -121,7 +122,7 @@ class TorusResult:
         pandas.DataFrame
         """
         cols = {
-            "mesh_frequency [Hz]": self.omega / (2 * np.pi),
+            "mesh_frequency [Hz]": hz(self.omega),
             "pinion_speed [rpm]": self.rpm,
             "response": np.where(self.converged, "quasi-periodic", ""),
             "converged": self.converged,
@@ -140,6 +141,26 @@ class TorusResult:
         cols["floquet_multiplier_abs [-]"] = np.abs(self.multiplier)
         cols["seconds [s]"] = self.seconds
         return pd.DataFrame(cols)
+
+    def plot(self, quantity: str = "dte_rms", ax=None):
+        """One output of the tori against pinion speed, open squares as a sweep draws a
+        torus answer, a speed without a torus a cross on the bottom edge
+        (:func:`nlgrd.plotting.result_figures.plot_tori`).
+
+        Parameters
+        ----------
+        quantity : str
+            A column's quantity of :meth:`to_frame` (``dte_rms``, ``secondary_frequency``, ...).
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure when None.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        from nlgrd.plotting.result_figures import plot_tori
+
+        return plot_tori(self.to_frame(), quantity, ax=ax)
 
 
 def _periodic(reduced, omega: float, H: int, start: NDArray | None) -> NDArray | None:

@@ -1,0 +1,111 @@
+"""docs/conventions.md, "Column names": the rename table lists every column the package's
+result tables write today (old column), so the rename can be applied in one step; each
+of its new names follows the schema of :func:`nlgrd.units.column`."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import pandas as pd  # noqa: E402
+import pytest  # noqa: E402
+import test_result_family as family  # noqa: E402
+
+from nlgrd.units import column, parse_column  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+DOC = ROOT / "docs" / "conventions.md"
+#: What a placeholder of the table stands for.
+PLACEHOLDERS = {
+    "<mesh>": r"[^.\[]+",
+    "<bearing>": r".+",
+    "<link>": r"[^.\[]+",
+    "<k>": r"\d+",
+    "<j>": r"\d+",
+    "<metric>": r"[a-z_]+",
+    "<quantity>": r"[a-z_]+",
+    "<coordinate>": r"[a-z]+",
+    "[unit]": r"\[[^\]]+\]",
+}
+
+
+def _rows() -> list[tuple[str, list[str], list[str]]]:
+    text = DOC.read_text(encoding="utf-8").split("<!-- column-rename-table -->", 1)[1]
+    rows = []
+    for line in text.splitlines()[3:]:
+        if not line.startswith("|"):
+            break
+        cells = [c.strip() for c in re.split(r"(?<!\\)\|", line.strip().strip("|"))]
+        rows.append((cells[0], re.findall(r"`([^`]+)`", cells[1]), re.findall(r"`([^`]+)`", cells[2])))
+    return rows
+
+
+def _pattern(name: str) -> re.Pattern:
+    out = re.escape(name)
+    for key, rx in PLACEHOLDERS.items():
+        out = out.replace(re.escape(key), rx)
+    return re.compile(out + r"\Z")
+
+
+OLD = [_pattern(n) for _, olds, _ in _rows() for n in olds]
+
+
+def _unlisted(columns) -> list[str]:
+    return [c for c in columns if not any(p.match(c) for p in OLD)]
+
+
+def test_the_table_is_there():
+    rows = _rows()
+    assert len(rows) >= 30
+    assert all(olds for _, olds, _ in rows)
+
+
+def test_every_new_name_follows_the_schema():
+    """A new name (not "unchanged") is ``[<owner>.]<quantity>[ [unit]]`` with a snake_case
+    quantity (its placeholders read as words)."""
+    words = {"<k>": "1", "<j>": "1", "<metric>": "dte_rms", "<quantity>": "force_max", "<coordinate>": "y"}
+    for _, _, news in _rows():
+        for name in news:
+            concrete = name
+            for key in ("<mesh>", "<bearing>", "<link>"):
+                concrete = concrete.replace(key, "owner")
+            for key, word in words.items():
+                concrete = concrete.replace(key, word)
+            concrete = concrete.replace("[unit]", "[N]")
+            owner, quantity, unit = parse_column(concrete)
+            assert re.fullmatch(r"[a-z][a-z0-9_]*", quantity), name
+            assert column(quantity, unit, owner) == concrete, name
+
+
+@pytest.mark.parametrize("name", sorted(family.CASES))
+def test_every_result_table_column_is_listed(name):
+    """Each result family member's table (the small cases of tests/test_result_family.py)."""
+    cls = family.result_classes().get(name)
+    if cls is None:
+        pytest.fail(f"{name} is gone: remove its case from CASES")
+    assert _unlisted(family.CASES[name]().to_frame().columns) == []
+
+
+def test_the_command_line_tables_are_listed(tmp_path):
+    """``nlgrd sweep`` of a one-mesh model with named bearings, of a link model with a
+    clearance, and a continuation: every CSV column is in the table."""
+    from nlgrd.cli.command import main
+
+    runs = {
+        "one": ["data/models/two_shaft.toml", "--hz", "1000:1700:2", "--harmonics", "5", "--no-time-domain"],
+        "link": ["data/models/two_shaft_clearance.toml", "--hz", "1000:1700:2", "--harmonics", "5"],
+        "curve": ["data/models/two_shaft.toml", "--hz", "1000:1050:2", "--harmonics", "5", "--continuation"],
+    }
+    for key, args in runs.items():
+        out = tmp_path / f"{key}.csv"
+        args = [str(ROOT / args[0]), *args[1:]]
+        assert main(["sweep", *args, "--out", str(out)]) == 0
+        assert _unlisted(pd.read_csv(out).columns) == [], key
+
+
+def test_a_column_not_in_the_table_is_caught():
+    assert _unlisted(["dte_rms [um]", "mesh0.dte_rms [m]", "not_a_column [m]"]) == ["not_a_column [m]"]
