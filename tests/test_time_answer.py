@@ -1,18 +1,8 @@
 """The time-domain answer where no periodic orbit is stable (issue 35, item 3;
 nlgrd.timedomain.time_answer and sweep_answers).
 
-Estimators against series whose answer is known in closed form:
-
-- MSER-5 (White 1997) on an exponential transient (20 σ, time constant τ) plus AR(1)
-  noise: the cut lies past τ and in the first half, and what is left of the transient
-  biases the kept mean by less than its standard error (MSER minimises the sum of the two).
-- Batch means on AR(1) noise x_n = φ x_{n-1} + e_n: the standard error of the mean is
-  σ_x sqrt((1 + φ)/(1 - φ) / n) asymptotically (Priestley 1981, Spectral Analysis and
-  Time Series, §5.3); 20 batches estimate it with a relative standard deviation of
-  1/sqrt(2 x 19) = 16 %, so within 50 % (3 of those) with a fixed seed.
-- The record maximum of i.i.d. Gumbel variates: the batch maxima are Gumbel with the same
-  scale β, so their standard deviation is πβ/√6 (Gumbel 1958, ch. 6), within 35 %
-  (20 batches, the sample standard deviation of a Gumbel sample of 20 scatters ~20 %).
+The estimators against series whose answer is known in closed form are in
+tests/test_record_statistics.py.
 
 Against a 4x longer integration (the issue's acceptance): Kahraman & Blankenship's rig
 (data/case_studies/kahraman_blankenship.toml, its FE model reduced to its links) swept up
@@ -27,8 +17,6 @@ periods) are in docs/verification.md.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
@@ -36,57 +24,9 @@ import nlgrd
 from nlgrd.nonlinear.models.link_model import build_link_model
 from nlgrd.nonlinear.results.response_kinds import CHAOTIC, TIME_DOMAIN, uncertainty_column
 from nlgrd.timedomain.sweep_answers import answer_sweep, base_harmonics, with_time_answers
-from nlgrd.timedomain.time_answer import batch_mean, mser5, record_max, time_answer
+from nlgrd.timedomain.time_answer import time_answer
 
 KB = "data/case_studies/kahraman_blankenship.toml"
-
-
-def _ar1(n: int, phi: float, rng) -> np.ndarray:
-    e = rng.standard_normal(n)
-    x = np.empty(n)
-    x[0] = e[0] / math.sqrt(1 - phi * phi)  # stationary start
-    for i in range(1, n):
-        x[i] = phi * x[i - 1] + e[i]
-    return x
-
-
-def test_mser5_cuts_an_exponential_transient():
-    rng = np.random.default_rng(1)
-    n, tau, phi = 2000, 40.0, 0.5
-    sigma = 1 / math.sqrt(1 - phi * phi)
-    transient = 20 * sigma * np.exp(-np.arange(n) / tau)
-    cut, ok = mser5(transient + _ar1(n, phi, rng))
-    assert ok
-    assert tau <= cut <= n // 2, cut
-    # what MSER trades: the transient's bias of the kept mean against its standard error
-    bias = float(np.mean(transient[cut:]))
-    se = sigma * math.sqrt((1 + phi) / (1 - phi) / (n - cut))
-    assert bias <= se, (bias, se)
-
-
-def test_mser5_does_not_cut_a_settled_series():
-    cut, ok = mser5(np.full(400, 3.0))
-    assert (cut, ok) == (0, True)
-
-
-def test_batch_means_standard_error_of_ar1():
-    rng = np.random.default_rng(2)
-    n, phi = 20000, 0.8
-    x = _ar1(n, phi, rng)
-    est = batch_mean(x)
-    sigma = 1 / math.sqrt(1 - phi * phi)
-    exact = sigma * math.sqrt((1 + phi) / (1 - phi) / n)
-    assert 0.5 < est.uncertainty / exact < 1.5, est.uncertainty / exact
-    assert abs(est.value) < 3 * est.uncertainty
-
-
-def test_record_max_of_gumbel_variates():
-    rng = np.random.default_rng(3)
-    beta = 2.0
-    x = rng.gumbel(0.0, beta, 20000)
-    est = record_max(x)
-    assert est.value == x.max()
-    assert 0.65 < est.uncertainty / (math.pi * beta / math.sqrt(6)) < 1.35
 
 
 @pytest.fixture(scope="module")
@@ -230,14 +170,59 @@ def test_a_time_answer_samples_every_harmonic_of_the_forcing():
     time answer stopped with "n_samples: needs more than 2H = 300 samples, got 256" (the README
     example's grid at 9 speeds, found by benchmarks/bench_readme.py). It now takes 512 steps;
     a model whose forcing has 30 harmonics keeps 256. ~10 s."""
-    from nlgrd.timedomain.time_answer import BATCHES, answer_steps
+    from nlgrd.timedomain.time_answer import MIN_PERIODS, answer_steps
 
     two_stage = build_link_model(nlgrd.load("data/models/two_stage.toml"))
     assert [lk.excitation_harmonics for lk in two_stage.links] == [150, 60]
     assert answer_steps(two_stage) == 512
     assert answer_steps(build_link_model(nlgrd.load("data/case_studies/kubo.toml"))) == 256
     omega = 3000 * 2 * np.pi / 60 / two_stage.receptance.plan.speed_per_base  # 3000 rpm
-    ans = time_answer(two_stage, omega, periods=4 * BATCHES, max_periods=4 * BATCHES)
+    ans = time_answer(two_stage, omega, periods=MIN_PERIODS, max_periods=MIN_PERIODS)
     assert ans.kind in (TIME_DOMAIN, CHAOTIC)
     rms = [ans.links[f"{lk.name}.dte_rms [m]"].value for lk in two_stage.links]
     assert all(np.isfinite(rms)) and min(rms) > 0, rms
+
+
+class _Run:
+    """A run whose record the test's ``judge`` describes: what ``_settle`` asks of it."""
+
+    def __init__(self):
+        self.asked, self.rec, self.logs = [], None, []
+
+    def extend(self, target, progress=None):
+        self.asked.append(target)
+
+
+@pytest.mark.parametrize(
+    "cut, lam, asked, kind",
+    [
+        # clear: chaotic far above 3σ, the cut early: the first record settles
+        (lambda n: 10, (0.1, 0.01), [80], CHAOTIC),
+        # the exponent on the threshold (3σ): up to the cap, then once more, no further
+        (lambda n: 10, (0.03, 0.01), [80, 160, 320, 640], TIME_DOMAIN),
+        # the exponent 1.5σ above the threshold: within the band, extended the same way
+        (lambda n: 10, (0.045, 0.01), [80, 160, 320, 640], CHAOTIC),
+        # the cut at 45 % of every record: near MSER's bound, extended once beyond the cap
+        (lambda n: int(0.45 * n), (-0.01, 0.001), [80, 160, 320, 640], TIME_DOMAIN),
+        # the exponent below the floor: no band, whatever σ
+        (lambda n: 10, (5e-4, 2e-4), [80], TIME_DOMAIN),
+    ],
+)
+def test_a_decision_on_a_threshold_extends_the_record_once(monkeypatch, cut, lam, asked, kind):
+    """A threshold decision (the exponent against 3σ, the transient cut against half the
+    record) that another record (another BLAS kernel's rounding) could take the other
+    way extends the record once beyond ``max_periods`` (cost bounded by 2x), never more;
+    a clear one stops as soon as the targets are met."""
+    import nlgrd.timedomain.time_answer as ta
+    from nlgrd.timedomain.record_statistics import Estimate
+
+    run = _Run()
+
+    def judge(rec, logs):
+        n = run.asked[-1]
+        return cut(n), cut(n) < n // 2, {}, {}, {}, False, Estimate(*lam)
+
+    monkeypatch.setattr(ta, "_judge", judge)
+    v = ta._settle(run, 80, 320, 0.01)
+    assert run.asked == asked
+    assert v.kind == kind

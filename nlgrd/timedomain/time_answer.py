@@ -6,10 +6,9 @@ The reduced model's equations are integrated (:class:`nlgrd.timedomain.links.Lin
 HHT-α on the precomputed period map) from a start near the unstable orbit, period by
 period. From the per-period values of every output:
 
-- **Transient cut** by MSER-5 (White 1997, Simulation 69:323; White, Cobb & Spratt 2000,
-  Proc. Winter Simulation Conf. 755): on the means of 5 periods b_j, j < m, the cut d
-  minimises (1/(m - d)²) Σ_{j>=d} (b_j - b̄_d)², d <= m/2; the largest cut over the
-  outputs is taken. A minimum on the bound m/2 says the record is too short.
+- **Transient cut** by MSER-5 (:func:`nlgrd.timedomain.record_statistics.mser5`); the
+  largest cut over the outputs is taken. A minimum on the bound (half the record) says
+  the record is too short.
 - **Statistics** over the kept periods: the mean DTE, the RMS of its alternating part,
   the contact fractions (means of per-sample values) and the extremes (largest mesh
   force, DTE peak-to-peak, largest clearance force and displacement) over the record;
@@ -17,34 +16,41 @@ period. From the per-period values of every output:
   displacement and force, -(K_b q + C_b q'), recorded step by step:
   :mod:`nlgrd.timedomain.bearing_record`): the largest, the RMS of the alternating
   part, the magnitude of the mean, and the base harmonic of the synchronous average.
-- **Sampling uncertainty** (standard uncertainty, k = 1): a mean's by non-overlapping
-  batch means, B = 20 batches (Schmeiser 1982, Oper. Res. 30:556: 10-30 batches), the
-  standard error sd(b)/√B inflated by sqrt((1 + r)/(1 - r)) where the lag-1 correlation
-  r of the batch means is beyond 2/√B (Bartlett's band: the batches are too short; the
-  AR(1) variance factor); the RMS by the delta method (ms - m² linearised about the
-  record's mean). An extreme's from the B batch extremes as Gumbel variates (Gumbel
-  1958, Statistics of Extremes, ch. 6): the record's extreme is Gumbel with the
-  batches' scale β = √6 s/π, so its standard deviation is s, the standard deviation of
-  the batch extremes. An extreme only grows with the record: a 4x longer one is on
-  average β ln 4 ≈ 1.1 s higher (for a bounded attractor less).
+- **Sampling uncertainty** (standard uncertainty, k = 1): a mean's by overlapping batch
+  means as long as the series' correlation window (Sokal's automatic windowing), raised
+  by the t factor of their degrees of freedom
+  (:func:`nlgrd.timedomain.record_statistics.sample_mean`); the RMS by the delta method
+  (ms - m² linearised about the record's mean). An extreme's from 20 batch extremes as
+  Gumbel variates (:func:`~nlgrd.timedomain.record_statistics.record_max`). An extreme
+  only grows with the record: a 4x longer one is on average β ln 4 ≈ 1.1 s higher (for
+  a bounded attractor less).
 - **Classification**: "chaotic" when the largest Lyapunov exponent, from a twin
   trajectory started d₀ away and renormalised every period (Benettin et al. 1980,
   Meccanica 15:9; the separation measured on (q, q'/ω) without its rigid-body part, a
-  free mode's drift being neutral), is positive beyond 3 of its batch-means standard
-  errors and above 1e-3 per period (e-folding in under 1000 periods); else "time
-  domain" (a torus, whose exponent is 0, or a periodic attractor no harmonic balance
-  was run for). A clear two-frequency spectrum is thus "time domain".
+  free mode's drift being neutral), is positive beyond 3 of its standard uncertainties
+  and above 1e-3 per period (e-folding in under 1000 periods); else "time domain" (a
+  torus, whose exponent is 0, or a periodic attractor no harmonic balance was run for).
+  A clear two-frequency spectrum is thus "time domain".
 
-The record grows by doubling from ``periods`` while the transient cut sits on its bound,
-a statistic drifts between the record's halves (beyond 3 uncertainties: its uncertainty
-is then that drift, or Aitken's tail of its thirds), a relative uncertainty of an RMS
-exceeds ``rtol`` (absolute for fractions) or the exponent is above the floor but within 3
-standard errors of 0, up to ``max_periods`` (``settled`` says whether the targets were
-met, ``transient_over`` whether the cut lies in the first half). The cost is 2 x the
-periods integrated (the twin): 2-4 ms a period on Kubo's 84-DOF and K&B's 60-DOF
-models at 256 steps (docs/verification.md, "Time-domain answers"), and the bearing
-record on the first trajectory (about 1 ms a period for K&B's four bearings). A
-bearing's statistics do not lengthen the record; their drift raises their uncertainty.
+The record grows by doubling from ``periods`` while the transient cut lies beyond
+:data:`NEAR_BOUND` (40 %) of the record, a statistic drifts between the record's halves
+(beyond 3 uncertainties: its uncertainty is then that drift, or Aitken's tail of its
+thirds), a relative uncertainty of an RMS exceeds ``rtol`` (absolute for fractions) or
+the exponent is above the floor and within :data:`LYAPUNOV_BAND` (2) standard
+uncertainties of the chaotic threshold, up to ``max_periods``; where at the cap the cut
+is still near its bound or the exponent in that band, once more to 2 ``max_periods``.
+Such a decision hinges on the record's noise: another BLAS kernel rounds the reduced
+model in its last bits, a chaotic record then follows another trajectory of the same
+attractor, and its statistics differ by their sampling error (the exponent's by about
+√2 σ); the longer record moves the exponent away from the threshold (its σ falls as
+1/√n) and a transient that ended inside the cap's record into the longer record's first
+half (benchmarks/bench_time_answer_kernels.py, benchmarks/README.md). ``settled`` says
+whether the targets were met, ``transient_over`` whether the cut lies in the first half.
+The cost is 2 x the periods integrated (the twin): 2-4 ms a period on Kubo's 84-DOF and
+K&B's 60-DOF models at 256 steps (docs/verification.md, "Time-domain answers"), and the
+bearing record on the first trajectory (about 1 ms a period for K&B's four bearings);
+at most 2 ``max_periods`` periods. A bearing's statistics do not lengthen the record;
+their drift raises their uncertainty.
 """
 
 from __future__ import annotations
@@ -65,29 +71,19 @@ from nlgrd.rotor.rigid_body import rigid_body_modes
 from nlgrd.threads import single_blas_thread
 from nlgrd.timedomain.bearing_record import BearingRecord
 from nlgrd.timedomain.links import LinkIntegrator, start_from_harmonics
+from nlgrd.timedomain.record_statistics import BATCHES, Estimate, mser5, record_max, sample_mean
 
-#: Batches of the batch-means uncertainty (Schmeiser 1982: 10 to 30).
-BATCHES = 20
-#: Periods a batch of MSER-5 averages (White 1997).
-MSER_BATCH = 5
-#: Chaotic: the Lyapunov exponent per base period above this and above 3 standard errors.
+#: Chaotic: the Lyapunov exponent per base period above this and above
+#: :data:`LYAPUNOV_SIGMAS` standard uncertainties.
 LYAPUNOV_FLOOR = 1e-3
-
-
-@dataclass(frozen=True)
-class Estimate:
-    """A statistic and its standard uncertainty.
-
-    Attributes
-    ----------
-    value : float
-        The statistic (SI).
-    uncertainty : float
-        Its standard uncertainty (k = 1), same unit.
-    """
-
-    value: float
-    uncertainty: float
+LYAPUNOV_SIGMAS = 3.0
+#: Undecided: the exponent within this many standard uncertainties of the threshold
+#: (another record's exponent differs by about √2 of them) [-].
+LYAPUNOV_BAND = 2.0
+#: A transient cut beyond this fraction of the record is near MSER's bound (one half) [-].
+NEAR_BOUND = 0.4
+#: Fewest periods of a record [-].
+MIN_PERIODS = 4 * BATCHES
 
 
 @dataclass(frozen=True)
@@ -114,7 +110,7 @@ class TimeAnswer:
     periods : int
         Periods integrated (each twice: the twin trajectory) [-].
     settled : bool
-        The transient cut and the uncertainty targets were met within ``max_periods``.
+        The transient cut and the uncertainty targets were met within the record.
     harmonics : ndarray (d, 2H+1)
         Harmonics of the synchronous average of the link coordinates over the kept
         periods (the part of the motion locked to the base frequency) [m].
@@ -149,100 +145,12 @@ class TimeAnswer:
     bearings: dict = field(default_factory=dict)
 
 
-def mser5(x: NDArray, batch: int = MSER_BATCH) -> tuple[int, bool]:
-    """MSER-5 truncation of a series (White 1997; White, Cobb & Spratt 2000).
-
-    Parameters
-    ----------
-    x : ndarray
-        One value per period [any unit].
-    batch : int
-        Values averaged per batch [-].
-
-    Returns
-    -------
-    cut : int
-        Values to discard from the start [-].
-    ok : bool
-        The minimum is inside the admissible half (False: the record is too short).
-    """
-    x = np.asarray(x, dtype=float)
-    m = x.size // batch
-    if m < 4:
-        return 0, False
-    b = x[x.size - m * batch :].reshape(m, batch).mean(axis=1)  # align on the end
-    offset = x.size - m * batch
-    tail = b[::-1]
-    n = np.arange(1, m + 1)
-    s1 = np.cumsum(tail)[::-1]  # sums of b[d:]
-    s2 = np.cumsum(tail * tail)[::-1]
-    k = n[::-1]  # m - d
-    sse = np.maximum(s2 - s1 * s1 / k, 0.0)
-    dmax = m // 2
-    crit = sse[: dmax + 1] / k[: dmax + 1] ** 2
-    scale = float(np.max(np.abs(b))) or 1.0
-    crit = np.where(crit <= (1e-14 * scale) ** 2, 0.0, crit)  # a settled series: no cut beyond rounding
-    d = int(np.argmin(crit))
-    return offset + batch * d, d < dmax
-
-
-def _batches(n: int) -> tuple[int, int]:
-    """(start, batch length) of BATCHES equal batches ending at n."""
-    size = max(n // BATCHES, 1)
-    return n - size * min(BATCHES, n), size
-
-
-def batch_mean(x: NDArray) -> Estimate:
-    """The mean of a per-period series and its batch-means standard uncertainty.
-
-    Parameters
-    ----------
-    x : ndarray
-        One value per kept period [any unit].
-
-    Returns
-    -------
-    Estimate
-    """
-    x = np.asarray(x, dtype=float)
-    start, size = _batches(x.size)
-    b = x[start:].reshape(-1, size).mean(axis=1)
-    if b.size < 3:
-        return Estimate(float(np.mean(x)), math.inf)
-    dev = b - b.mean()
-    var = float(np.sum(dev * dev)) / (b.size - 1)
-    den = float(np.sum(dev * dev))
-    r = float(np.sum(dev[1:] * dev[:-1]) / den) if den > 0 else 0.0
-    r = min(r, 0.9) if r > 2 / math.sqrt(b.size) else 0.0  # beyond Bartlett's 2/√B band only
-    return Estimate(float(np.mean(x)), math.sqrt(var / b.size * (1 + r) / (1 - r)))
-
-
-def record_max(x: NDArray) -> Estimate:
-    """The largest of per-period maxima and its Gumbel standard uncertainty.
-
-    Parameters
-    ----------
-    x : ndarray
-        Per-period maxima over the kept periods [any unit].
-
-    Returns
-    -------
-    Estimate
-        The record maximum; uncertainty the standard deviation of the batch maxima.
-    """
-    x = np.asarray(x, dtype=float)
-    start, size = _batches(x.size)
-    b = x[start:].reshape(-1, size).max(axis=1)
-    u = float(np.std(b, ddof=1)) if b.size >= 3 else math.inf
-    return Estimate(float(np.max(x)), u)
-
-
 def _rms(mean: NDArray, msq: NDArray) -> Estimate:
     """RMS of the alternating part from per-period means and mean squares (delta method)."""
-    m = batch_mean(mean).value
+    m = sample_mean(mean).value
     ms = float(np.mean(msq))
     rms = math.sqrt(max(ms - m * m, 0.0))
-    u = batch_mean(np.asarray(msq) - 2 * m * np.asarray(mean)).uncertainty
+    u = sample_mean(np.asarray(msq) - 2 * m * np.asarray(mean)).uncertainty
     return Estimate(rms, u / (2 * rms) if rms > 0 else 0.0)
 
 
@@ -417,19 +325,19 @@ def _tail(gap: float, thirds: list[float]) -> float:
 def _vector_mean(x: NDArray, y: NDArray) -> Estimate:
     """|(mean x, mean y)| of per-period means, its uncertainty that of the per-period
     values projected on the mean's direction (the magnitude linearised there)."""
-    mx, my = batch_mean(x).value, batch_mean(y).value
+    mx, my = sample_mean(x).value, sample_mean(y).value
     r = math.hypot(mx, my)
     if r == 0:
-        return Estimate(0.0, math.hypot(batch_mean(x).uncertainty, batch_mean(y).uncertainty))
-    return Estimate(r, batch_mean((mx * x + my * y) / r).uncertainty)
+        return Estimate(0.0, math.hypot(sample_mean(x).uncertainty, sample_mean(y).uncertainty))
+    return Estimate(r, sample_mean((mx * x + my * y) / r).uncertainty)
 
 
 def _vector_rms(x: NDArray, y: NDArray, msq: NDArray) -> Estimate:
     """RMS of the alternating part of a plane vector from its per-period means and mean
     squares of the magnitude (the delta method of :func:`_rms` on both components)."""
-    mx, my = batch_mean(x).value, batch_mean(y).value
+    mx, my = sample_mean(x).value, sample_mean(y).value
     rms = math.sqrt(max(float(np.mean(msq)) - mx * mx - my * my, 0.0))
-    u = batch_mean(np.asarray(msq) - 2 * mx * np.asarray(x) - 2 * my * np.asarray(y)).uncertainty
+    u = sample_mean(np.asarray(msq) - 2 * mx * np.asarray(x) - 2 * my * np.asarray(y)).uncertainty
     return Estimate(rms, u / (2 * rms) if rms > 0 else 0.0)
 
 
@@ -472,15 +380,15 @@ def _statistics_of(rec: _Recorder, cut: int, stop: int | None) -> tuple[dict, di
         if hasattr(link, "mesh"):
             hi, lo = record_max(s("dmax")), record_max(-s("dmin"))
             fmax, fmin = record_max(s("fmax")), record_max(-s("fmin"))
-            W0 = float(link.mesh.static_load) if link.mesh.static_load else batch_mean(s("fmean")).value
+            W0 = float(link.mesh.static_load) if link.mesh.static_load else sample_mean(s("fmean")).value
             m = {
-                "dte_mean": batch_mean(s("mean")),
+                "dte_mean": sample_mean(s("mean")),
                 "dte_rms": _rms(s("mean"), s("msq")),
                 "dte_p2p": Estimate(hi.value + lo.value, math.hypot(hi.uncertainty, lo.uncertainty)),
                 "force_max": fmax,
                 "force_min": Estimate(-fmin.value, fmin.uncertainty),
                 "dslr": Estimate(fmax.value / W0, fmax.uncertainty / abs(W0)),
-                "contact_loss_fraction": batch_mean(s("loss")),
+                "contact_loss_fraction": sample_mean(s("loss")),
                 "back_contact": Estimate(float(np.any(s("back") > 0)), 0.0),
             }
             if not mesh:
@@ -494,7 +402,7 @@ def _statistics_of(rec: _Recorder, cut: int, stop: int | None) -> tuple[dict, di
             ):
                 links[f"{n}.{k}{unit}"] = m[k]
         else:
-            links[f"{n}.contact_fraction [-]"] = batch_mean(s("contact"))
+            links[f"{n}.contact_fraction [-]"] = sample_mean(s("contact"))
             links[f"{n}.force_max [N]"] = record_max(s("fmax"))
             links[f"{n}.displacement_max [m]"] = record_max(s("rmax"))
     return links, mesh, _bearing_statistics(rec, cut, stop)
@@ -508,6 +416,99 @@ def _targets_met(links: dict, rtol: float) -> bool:
         if "fraction" in key and e.uncertainty > rtol:
             return False
     return True
+
+
+class _Run:
+    """An integration and its Lyapunov twin (started d₀ = 1e-7 of the state away in a
+    seeded random direction without rigid-body part), recorded period by period."""
+
+    def __init__(self, model: LinkModel, omega: float, state0, steps: int, alpha: float):
+        self.integ = integ = LinkIntegrator(model, omega, steps_per_period=steps, alpha=alpha)
+        self.N, self.omega = N, omega = integ.N, float(omega)
+        self.s = s = integ.start(state0)
+        rec_ = model.receptance
+        self.R = rigid_body_modes(rec_.model.K + rec_.K_link, rec_.model.M)
+        self.MR = rec_.model.M @ self.R
+        self.d0 = 1e-7 * max(_wnorm(s, N, omega), 1e-12)
+        rng = np.random.default_rng(0)
+        direction = np.zeros_like(s)
+        direction[: 2 * N] = rng.standard_normal(2 * N) * np.repeat([1.0, omega], N)
+        self.direction = direction = _free_part(direction, self.R, self.MR, N)
+        self.s2 = s + self.d0 * direction / _wnorm(direction, N, omega)
+        self.rec, self.logs = _Recorder(integ), []
+
+    def extend(self, target: int, progress: Callable[[int, int], None] | None = None) -> None:
+        """Integrate (both trajectories) until ``target`` periods are recorded."""
+        N, omega, d0 = self.N, self.omega, self.d0
+        while len(self.rec.rows) < target:
+            s_new = self.rec.period(self.s)
+            _, s2_new = self.integ.period(self.s2)
+            ds = _free_part(s2_new - s_new, self.R, self.MR, N)
+            gap = _wnorm(ds, N, omega)
+            self.logs.append(math.log(max(gap, 1e-300) / d0))
+            self.s2 = s_new + ds * (d0 / gap) if gap > 0 else s_new + d0 * self.direction
+            self.s = s_new
+            if progress is not None:
+                progress(len(self.rec.rows), target)
+
+
+def _judge(rec: _Recorder, logs: list):
+    """The record's transient cut, whether every cut lies in its first half, its
+    statistics (:func:`_statistics`), whether a link's drifts, and the Lyapunov exponent
+    per period."""
+    cuts = [mser5(x) for x in rec.cut_series()]
+    cut = max(c for c, _ in cuts)
+    links, mesh, bearings, drift = _statistics(rec, cut)
+    lam = sample_mean(np.array(logs[max(cut, 10) :]))
+    return cut, all(ok for _, ok in cuts), links, mesh, bearings, drift, lam
+
+
+@dataclass(frozen=True)
+class _Verdict:
+    """What a record says (:func:`_settle`)."""
+
+    cut: int
+    cuts_ok: bool
+    links: dict
+    mesh: dict
+    bearings: dict
+    lam: Estimate
+    settled: bool
+    kind: str
+
+
+def _settle(run, periods: int, max_periods: int, rtol: float, progress=None) -> _Verdict:
+    """Extend ``run`` (a :class:`_Run`: ``rec``, ``logs``, ``extend``) from ``periods`` by
+    doubling up to ``max_periods`` until its targets are met, and once more, to
+    2 ``max_periods``, where a decision would hinge on the record's noise (the transient
+    cut beyond :data:`NEAR_BOUND` of it, the exponent in the band of :func:`_undecided`);
+    its verdict."""
+    target, cap = periods, max_periods
+    while True:
+        run.extend(target, progress)
+        cut, cuts_ok, links, mesh, bearings, drift, lam = _judge(run.rec, run.logs)
+        near = cut > NEAR_BOUND * target or not cuts_ok
+        undecided = _undecided(lam)
+        settled = not near and _targets_met(links, rtol) and not (undecided or drift)
+        if settled:
+            break
+        if target >= cap:
+            if cap > max_periods or not (near or undecided):
+                break
+            cap = 2 * max_periods  # once: a threshold decision on rounding-level noise
+        target = min(2 * target, cap)
+    chaotic = lam.value > max(LYAPUNOV_SIGMAS * lam.uncertainty, LYAPUNOV_FLOOR)
+    kind = CHAOTIC if chaotic else TIME_DOMAIN
+    return _Verdict(cut, cuts_ok, links, mesh, bearings, lam, bool(settled), kind)
+
+
+def _undecided(lam: Estimate) -> bool:
+    """The exponent above the floor and within :data:`LYAPUNOV_BAND` standard
+    uncertainties of the chaotic threshold: another realisation of the record (another
+    BLAS kernel's rounding) may fall either side."""
+    if lam.value <= LYAPUNOV_FLOOR:
+        return False
+    return abs(lam.value - LYAPUNOV_SIGMAS * lam.uncertainty) <= LYAPUNOV_BAND * lam.uncertainty
 
 
 #: HHT-α steps per base period of a time answer when the forcing needs no more [-].
@@ -566,7 +567,8 @@ def time_answer(
     periods : int
         Periods of the first record [-].
     max_periods : int
-        Cap on the periods integrated (the record doubles up to it) [-].
+        Cap on the doubling of the record; a decision near its threshold at the cap
+        doubles it once more (module docstring) [-].
     steps_per_period : int, optional
         HHT-α steps per base period [-]; None: :func:`answer_steps` (256, or more where a
         link's excitation has more base harmonics than 256 steps sample).
@@ -590,63 +592,31 @@ def time_answer(
     ModelError
         ``periods`` or ``max_periods`` too small for the statistics.
     """
-    if periods < 4 * BATCHES or max_periods < periods:
-        raise ModelError("periods", f"needs {4 * BATCHES} <= periods <= max_periods, got {periods}")
+    if periods < MIN_PERIODS or max_periods < periods:
+        raise ModelError("periods", f"needs {MIN_PERIODS} <= periods <= max_periods, got {periods}")
     t0 = time.perf_counter()
     steps = answer_steps(model) if steps_per_period is None else int(steps_per_period)
-    integ = LinkIntegrator(model, omega, steps_per_period=steps, alpha=alpha)
-    N = integ.N
     if state0 is None and harmonics is not None:
         z = np.asarray(harmonics, dtype=float)
         q0, v0 = start_from_harmonics(model, omega, (z.shape[-1] - 1) // 2, z)
         state0 = (q0, (1 + perturbation) * v0)
-    s = integ.start(state0)
-    rec_ = model.receptance
-    R = rigid_body_modes(rec_.model.K + rec_.K_link, rec_.model.M)
-    MR = rec_.model.M @ R
-    d0 = 1e-7 * max(_wnorm(s, N, omega), 1e-12)
-    rng = np.random.default_rng(0)
-    direction = np.zeros_like(s)
-    direction[: 2 * N] = rng.standard_normal(2 * N) * np.repeat([1.0, omega], N)
-    direction = _free_part(direction, R, MR, N)
-    s2 = s + d0 * direction / _wnorm(direction, N, omega)
-    rec, logs = _Recorder(integ), []
-    target = int(periods)
-    while True:
-        while len(rec.rows) < target:
-            s_new = rec.period(s)
-            _, s2_new = integ.period(s2)
-            ds = _free_part(s2_new - s_new, R, MR, N)
-            gap = _wnorm(ds, N, omega)
-            logs.append(math.log(max(gap, 1e-300) / d0))
-            s2 = s_new + ds * (d0 / gap) if gap > 0 else s_new + d0 * direction
-            s = s_new
-            if progress is not None:
-                progress(len(rec.rows), target)
-        cuts = [mser5(x) for x in rec.cut_series()]
-        cut = max(c for c, _ in cuts)
-        links, mesh, bearings, drift = _statistics(rec, cut)
-        lam = batch_mean(np.array(logs[max(cut, 10) :]))
-        undecided = LYAPUNOV_FLOOR < lam.value <= 3 * lam.uncertainty
-        settled = all(ok for _, ok in cuts) and _targets_met(links, rtol) and not (undecided or drift)
-        if settled or target >= max_periods:
-            break
-        target = min(2 * target, int(max_periods))
+    run = _Run(model, omega, state0, steps, alpha)
+    v = _settle(run, int(periods), int(max_periods), rtol, progress)
+    rec, s, N, cut, lam = run.rec, run.s, run.N, v.cut, v.lam
     T = 2 * np.pi / omega
-    chaotic = lam.value > max(3 * lam.uncertainty, LYAPUNOV_FLOOR)
     avg = np.mean(np.array(rec.y_sums[cut:]), axis=0)
     return TimeAnswer(
         float(omega),
-        CHAOTIC if chaotic else TIME_DOMAIN,
-        links,
-        mesh,
+        v.kind,
+        v.links,
+        v.mesh,
         Estimate(lam.value / T, lam.uncertainty / T),
         int(cut),
         len(rec.rows),
-        bool(settled),
+        v.settled,
         analyse(avg, H),
         time.perf_counter() - t0,
         (s[:N].copy(), s[N : 2 * N].copy(), s[2 * N : 3 * N].copy()),
-        all(ok for _, ok in cuts),
-        bearings,
+        v.cuts_ok,
+        v.bearings,
     )
