@@ -495,3 +495,71 @@ def test_searches_only_beside_jumps_that_leave_a_settled_row():
     assert search_frequencies(res) == [1.1, 1.2, 1.4, 1.5]
     assert search_frequencies(res, max_jumps=1) == [1.1, 1.2]
     assert search_frequencies(res, max_jumps=0) == []
+
+
+#: A start on an unstable period-1 orbit at 1.43 rad/s, one of those the orbit search beside
+#: the default sweep's jump at 1.43 finds (the exact orbit shot from it, 5 digits: a start
+#: for Newton, not a result): max |μ| 6.81, a real multiplier.
+HOP_START = (1.43, np.array([-8.61415, 1.06525, 13.39147, 0.12734]))
+
+
+def _march(s, omega, omega_end, h=2e-4):
+    """The reference's exact orbit followed in ω by pr.shoot, each step from the secant
+    predictor and kept only within 1e-2 of the state's size of it (halved otherwise):
+    [(ω, state)] from ``omega`` to ``omega_end``."""
+    stop = pr.Stop(0.0, PRELOAD)
+    s, _, ok = pr.shoot(s, omega, stop=stop)
+    assert ok
+    pts = [(omega, s)]
+    sign = np.sign(omega_end - omega)
+    while sign * (omega_end - pts[-1][0]) > 1e-12 and h > 1e-7:
+        w, s = pts[-1]
+        wn = w + sign * min(h, abs(omega_end - w))
+        pred = s if len(pts) < 2 else s + (s - pts[-2][1]) * (wn - w) / (w - pts[-2][0])
+        sn, _, ok = pr.shoot(pred, wn, stop=stop)
+        if ok and np.linalg.norm(sn - pred) <= 1e-2 * np.linalg.norm(s):
+            pts.append((wn, sn))
+        else:
+            h /= 2
+    return pts
+
+
+def test_a_followed_branch_stops_at_its_first_hop():
+    """The branch followed by natural continuation (follow_period, H = 13) from the orbit
+    :data:`HOP_START` up over 1.430, 1.434, 1.438, 1.442 rad/s runs smoothly at H = 13
+    onto another exact branch: its rows above 1.430 are, shot on the reference's exact
+    flow, stable orbits (|μ| 0.957) while the reference's branch through the start is
+    unstable there (max |μ| 3.5-6.8). cut_at_first_hop keeps only the rows whose exact
+    orbit is the reference's branch through the start (a march in ω on the exact flow,
+    steps of at most 2e-4 rad/s), to 1e-6 of the state (both converged to 1e-11..1e-12):
+    the start, and nothing past the hop. ~10 s."""
+    from nlgrd.nonlinear.hb.solvers import solve
+    from nlgrd.nonlinear.stability.shooting import initial_state
+    from nlgrd.nonlinear.tracing.coexisting import cut_at_first_hop
+    from nlgrd.nonlinear.tracing.subharmonic import follow_period
+
+    model = preloaded_chain()
+    w0, start = HOP_START
+    z0 = solve(model.at(w0, 13), reference_harmonics(w0, start=start), tol=1e-10).harmonics
+    res = follow_period(model, [1.430, 1.434, 1.438, 1.442], 13, 1, w0, z0, "up", stability=False)
+    march = _march(start, w0, 1.442)
+    assert march[-1][0] == pytest.approx(1.442)  # the reference's branch reaches 1.442
+
+    def off(i):
+        """The row's exact orbit's distance from the reference's branch, relative (inf: none)."""
+        w = float(res.omega[i])
+        s = initial_state(
+            model.linear_state_space(w), model.nonlinearities, res.harmonics[i], w, model.static_force
+        )
+        s, _, ok = pr.shoot(s, w, stop=pr.Stop(0.0, PRELOAD))
+        ref = min(march, key=lambda p: abs(p[0] - w))
+        assert abs(ref[0] - w) < 1e-9
+        return np.linalg.norm(s - ref[1]) / np.linalg.norm(ref[1]) if ok else np.inf
+
+    before = {float(res.omega[i]): off(i) for i in np.nonzero(res.converged)[0]}
+    print("rows followed, off the reference's branch:", before)
+    assert max(before.values()) > 1e-2  # the case: natural continuation hops
+    cut = cut_at_first_hop(model, res)
+    kept = {float(cut.omega[i]): off(i) for i in np.nonzero(cut.converged)[0]}
+    print("rows kept:", kept)
+    assert w0 in kept and max(kept.values()) < 1e-6
