@@ -32,19 +32,41 @@ its folds and its changes of stability.
 Only the :class:`~nlgrd.nonlinear.hb.harmonic_balance.ReducedModel` contract is used: any
 model, any law.
 
-Limits. A branch is followed by natural continuation in ω
-(:func:`~nlgrd.nonlinear.tracing.subharmonic.follow_period`): past a fold Newton may land on
-another branch and keep following it (on the preloaded chain the lifted-off branch followed
-up from 1.382 rad/s goes on over 1.43-1.45 rad/s on other orbits), so a branch's rows are
-not always one branch; locate_bifurcations bisects from each stable row on the exact flow
-and reports nothing where that row's own branch stays stable. Cost (the preloaded chain,
-the default sweep both ways, load 3 on two cores): the three jumps with a settled row, five
-searches at H = 13 and eight branches, 60 s of CPU; locate_bifurcations on the eight
-branches 160 s more. There, besides the lifted-off branch's fold, Neimark-Sacker point and
-period doubling (within 3.2e-7 rad/s of the exact flow's) and the upper branch's fold, it
-reports folds at 1.39524, 1.41767, 1.42588, 1.44537, 1.44803, 1.45063 and period doublings
-at 1.43107, 1.43229, 1.43496 rad/s that no exact-flow reference has checked (2026-12-07):
-the function is not called by any default flow until they are.
+Hops. A branch is followed by natural continuation in ω
+(:func:`~nlgrd.nonlinear.tracing.subharmonic.follow_period`): past a fold Newton may land
+on another orbit, and at H = 13 the truncated branches themselves run smoothly from one
+exact branch onto another (the preloaded chain from the orbit at 1.430 rad/s with max |μ|
+6.8: the rows above it are, shot on the exact flow, the stable orbit of the branch beside
+it). Where the exact flow is known each branch is cut at its first hop on the exact flow
+(:func:`cut_at_first_hop`), so every bifurcation
+:func:`~nlgrd.nonlinear.stability.verdicts.locate_bifurcations` reports on it lies on one
+continuous exact branch. On the preloaded chain (the default sweep both ways, all three
+jumps with a settled row; nine branches) it reports, besides the lifted-off branch's
+fold, Neimark-Sacker point and period doubling and the upper branch's fold 1.4297823:
+the lifted-off branch's second period doubling 1.4310718 and fold 1.4506266 (above
+1.43 rad/s it regains stability), folds at 1.4176731, 1.4258797, 1.4453670 and 1.4480325,
+period doublings at 1.4322925 and 1.4349624, each within 1e-3 of a march on the
+reference's exact flow (tests/piecewise_reference.py; folds to 1e-7, period doublings
+inside its 5e-4 rad/s step) from the branch's last row before it, and the end of the
+branch through the orbit at 1.394 rad/s at 1.3952356, where the reference's orbits end
+between 1.3952 and 1.3953 (a grazing touch; its event search does not return closer).
+Not checked: the fold 1.4453670 as the end of the branch through the orbit at 1.430 rad/s
+with max |μ| 6.8 (the reference's march hangs at a grazing on the way; the same fold is
+confirmed on the stable branch that meets it there). tests/test_folds.py holds those of
+the first jump's branches. Not cut: a branch through a grazing (the orbit's slope jumps, the
+harmonic-balance rows there have no exact orbit near them) when the exact flow continues
+it, as at 1.421 rad/s on the branch that folds at 1.4176731.
+
+Period 2. :func:`period_two_branches` starts the period-2 branches born at the located
+period doublings of these branches from the exact flow (the exact orbit at the period
+doubling kicked along its flip eigenvector), follows and settles them: on the preloaded
+chain the subcritical branch born at 1.3648667 rad/s and its fold 1.3517440 (the
+reference's 1.3517439).
+
+Cost (the preloaded chain, the default sweep both ways, load 6 on two cores,
+2026-12-07): all three jumps, five searches at H = 13 and nine branches with their hop
+cuts, 181 s of CPU (49 s without the cuts at load 3); locate_bifurcations on the nine
+branches 161 s more; the first jump alone 123 s.
 """
 
 from __future__ import annotations
@@ -265,7 +287,13 @@ def _p2_orbits(model, model_two, z, omega_pd: float, H: int, tol: float) -> list
             met = model_two.metrics.of(sol.harmonics, w / 2)
             found.append(
                 FoundOrbit(
-                    w, 2, sol.harmonics, float(fmax), complex(dom), f"period doubling {omega_pd:.6g}", met
+                    w,
+                    2,
+                    sol.harmonics,
+                    float(fmax),
+                    complex(dom),
+                    f"beside the period doubling at {omega_pd:.6g} rad/s",
+                    met,
                 )
             )
             break
