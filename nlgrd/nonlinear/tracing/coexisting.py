@@ -65,7 +65,9 @@ reference's 1.3517439).
 
 Cost (the preloaded chain, the default sweep both ways, load 6 on two cores,
 2026-12-07): all three jumps, five searches at H = 13 and nine branches with their hop
-cuts, 181 s of CPU (49 s without the cuts at load 3); locate_bifurcations on the nine
+cuts, 181 s of CPU (49 s without the cuts at load 3; the cuts alone, on the eight
+branches found without them, 137 s at load 2-3: 52 s on the lifted-off branch, each
+grid step marched in steps of about 5e-4 rad/s); locate_bifurcations on the nine
 branches 161 s more; the first jump alone 123 s.
 """
 
@@ -111,13 +113,15 @@ MAX_JUMPS = 4
 N_STARTS = 40
 #: A row stays on its branch when its exact orbit lies within this fraction of the
 #: state's size of the previous exact row's orbit continued to it on the exact flow
-#: (:func:`cut_at_first_hop`) [-]: both converge to 1e-11, the shot orbits of one branch
-#: agree to 1e-12 on the preloaded chain, those of the branches beside it differ by 1e-2 - 1.
+#: (:func:`cut_at_first_hop`) [-]: both converge to 1e-11; on the preloaded chain the
+#: rows of the lifted-off branch (29 steps) agree to 1e-14 - 1.4e-11, the rows on the
+#: branch beside the one followed differ by 0.046-0.12 (tests/test_folds.py,
+#: test_a_followed_branch_stops_at_its_first_hop).
 HOP_RTOL = 1e-6
 #: Each step of that continuation is kept when the shot orbit lies within this fraction of
-#: the state's size of its secant predictor (halved otherwise) [-]: a step of a branch
-#: moves the state by about 2e-2 of its size per 1e-3 rad/s there, the branch beside it is
-#: 3e-2 - 1 away.
+#: the state's size of its secant predictor (halved otherwise) [-]: on the preloaded chain
+#: a step of 4e-4 rad/s moves the state by about 2e-2 of its size, the secant predictor's
+#: error is far below that, and the branch beside it is 0.046-0.12 away.
 MARCH_RTOL = 1e-2
 #: Halvings of a step of that continuation before the branch counts as ended [-].
 MARCH_HALVINGS = 12
