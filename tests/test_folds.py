@@ -443,8 +443,9 @@ def test_a_flow_passes_a_grazing_touch():
 #: from (ω [rad/s], the reference's): each from a march in ω on the exact flow (pr.shoot,
 #: steps of at most 5e-4 rad/s from the secant predictor, kept within 1e-2 of the state),
 #: from the exact orbit shot from the branch's last row before it, to where a test
-#: function changes sign (bisected to 1e-7) or, for a fold, where the march ends with a real
-#: multiplier at 1 to 1e-3 (2026-12-07). The lifted-off branch followed up (the reference's
+#: function changes sign (within one step: the period doubling 1.4310718 in (1.43102,
+#: 1.43152)) or, for a fold, where the march ends (1.4506266) with a real multiplier at 1 to
+#: 1e-3 (0.9997; 2026-12-07). The lifted-off branch followed up (the reference's
 #: continuation from LIFTED_STARTS passes the library's rows at 1.402-1.434 rad/s to
 #: 1e-2 of the state) regains stability by a period doubling and folds; BRANCH_END: the
 #: branch through the unstable orbit at 1.394 rad/s (max |μ| 12.7) exists on the
