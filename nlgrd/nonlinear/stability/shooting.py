@@ -378,17 +378,18 @@ def initial_state(
 def shoot_orbit(
     state_space: LinearStateSpace,
     nonlinearities: Sequence,
-    harmonics: ArrayLike,
+    harmonics: ArrayLike | None,
     omega: float,
     static_force: ArrayLike | None = None,
     *,
     tol: float = 1e-11,
     max_iter: int = 30,
     n_samples: int = 256,
+    state: ArrayLike | None = None,
 ) -> ShootingOrbit:
     """The exact periodic orbit near a harmonic-balance orbit, and its Floquet multipliers.
 
-    Newton on s(T) - s(0) from :func:`initial_state`, Jacobian Φ - I, on the exact flow
+    Newton on s(T) - s(0) from :func:`initial_state` (or from ``state``), Jacobian Φ - I, on the exact flow
     (module docstring). The period is 2π/ω of the model's base: a period-ν model (base
     ω/ν, excitation spread to harmonic ν) is shot over its whole period.
 
@@ -410,6 +411,9 @@ def shoot_orbit(
         Newton iterations at most.
     n_samples : int
         Gap samples per period of the event search [-].
+    state : array_like (2N,), optional
+        Start (q, q') at θ = 0 [m, m/s] instead of the harmonic-balance orbit's (which may
+        then be None).
 
     Returns
     -------
@@ -426,7 +430,10 @@ def shoot_orbit(
     N = ss.M.shape[0]
     F0 = np.zeros(N) if static_force is None else np.asarray(static_force, dtype=float).reshape(N)
     flow = _Flow(ss, _laws(nonlinearities), F0, omega, n_samples)
-    s = initial_state(ss, nonlinearities, harmonics, omega, F0)
+    if state is None:
+        s = initial_state(ss, nonlinearities, harmonics, omega, F0)
+    else:
+        s = np.array(state, dtype=float).reshape(2 * N)
     scale = np.concatenate([np.ones(N), np.full(N, 1 / omega)])
 
     def error(r, s):
