@@ -59,20 +59,26 @@ from nlgrd.nonlinear.reduction.direct_receptance import DirectSolution, DirectSo
 from nlgrd.nonlinear.reduction.link_mean import MeanProblem
 from nlgrd.nonlinear.reduction.link_poles import LinkPoleForm
 from nlgrd.nonlinear.reduction.modal_basis import (
+    STABILITY_MODE_CAP,
     ModeCapWarning,
     attachment_basis,
+    lowest_modes,
     m_orthonormal,
     modes_then_attachments,
     rigid_decoupled,
 )
 from nlgrd.nonlinear.reduction.pole_residue import POLE_CHECK_RTOL, PoleResidue
-from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
+from nlgrd.nonlinear.reduction.state_space import FloquetCache, LinearStateSpace
 from nlgrd.rotor.assembly import LinearModel, assemble
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
 from nlgrd.rotor.system import RotorSystem
 
 #: Largest model whose stability basis is the full (dense) state space.
 DENSE_STABILITY_LIMIT = 600
+#: Stability basis of a model whose links are all gear meshes, at points whose tangent is
+#: constant over the period: modes below this times the highest mesh frequency, with the
+#: static attachment vectors (the single-mesh path's basis).
+STABILITY_CUTOFF = 3.0
 #: Up to this many DOFs Z_k is factorised as a dense matrix (faster than sparse LU there).
 DENSE_LIMIT = 300
 #: Up to this many DOFs coupled to a link or a forced DOF, ``method="auto"`` takes the
@@ -124,6 +130,9 @@ class LinkReceptance:
         needed by "modal" with ``harmonic_force``.
     cutoff_factor : float
         Modal basis: modes up to ``cutoff_factor * max_frequency`` [-].
+    top_order : int
+        The highest base harmonic a mesh sits at (its excitation's fundamental): the
+        stability basis serves ``top_order`` x the base frequency at least [-].
 
     Attributes
     ----------
@@ -147,15 +156,19 @@ class LinkReceptance:
         max_frequency: float | None = None,
         force_dofs: Sequence[int] | None = None,
         cutoff_factor: float = 3.0,
+        top_order: int = 1,
     ):
         self.system, self.links, self.plan = system, tuple(links), plan
+        self.top_order, self.stability_top = int(top_order), None
         self.model: LinearModel = assemble(system, mesh_stiffness=False, mesh_damping=False)
         n = self.model.n_dofs
         self.P = (
             np.hstack([link.projection(system) for link in self.links]) if self.links else np.zeros((n, 0))
         )
-        self.k_link = sla.block_diag(*[link.linear_stiffness() for link in self.links])
-        self.c_link = sla.block_diag(*[link.linear_damping() for link in self.links])
+        # block_diag of nothing is (1, 0): a model without links has empty ones
+        d = self.P.shape[1]
+        self.k_link = sla.block_diag(*[link.linear_stiffness() for link in self.links]).reshape(d, d)
+        self.c_link = sla.block_diag(*[link.linear_damping() for link in self.links]).reshape(d, d)
         self.C_link = sp.csc_matrix(self.P @ self.c_link @ self.P.T)
         self.K_link = sp.csc_matrix(self.P @ self.k_link @ self.P.T)
         self.static_force = np.zeros(n) if static_force is None else np.asarray(static_force, dtype=float)
@@ -199,6 +212,9 @@ class LinkReceptance:
         self._auto_modal = method == "auto" and not self._dense and self._plain
         self._auto_modal &= harmonic_force is None or force_dofs is not None
         self._poles = BoundedCache(256)
+        # the state spaces per base frequency, the truncated bases per cut-off, and one
+        # store of Floquet work for the spaces on those bases (as the single-mesh path's)
+        self._spaces, self._bases, self._floquet = BoundedCache(4), BoundedCache(8), FloquetCache(4096)
         self._banded = BoundedCache(8)  # the banded solvers, per tuple of output DOFs
         # their solves of all harmonics per (ω, H, output DOFs), and the DOFs recovered last
         # (the next frequencies' solves return them: the recovery needs no solve of its own)
@@ -407,10 +423,14 @@ class LinkReceptance:
 
     def _band_solve(self, omega: float, H: int, dofs: tuple, f: NDArray | None = None) -> DirectSolution:
         """Harmonics 1..H of the ``"banded"`` solver for output ``dofs`` at ``omega``, with
-        the forces f_k (default :meth:`forces`), kept per (ω, H, dofs)."""
+        the forces f_k (default :meth:`forces`) when there are external harmonic forces
+        (without, f_k = P φ_k and its solve is the links' Z_k⁻¹ P φ_k: no right-hand side of
+        its own), kept per (ω, H, dofs)."""
 
         def make():
-            rhs = self.forces(omega, H)[1:] if f is None else f
+            rhs = None
+            if self.harmonic_force is not None:
+                rhs = self.forces(omega, H)[1:] if f is None else f
             return self._band_solver(dofs).solve_forced(np.arange(1, H + 1), omega, False, rhs)
 
         return self._band_sols.get((float(omega), int(H), dofs), make)
@@ -476,7 +496,8 @@ class LinkReceptance:
             if self.method == "banded" and H:
                 sol = self._band_solve(omega, H, self._band_out, ext[1:] + phi[1:] @ self.P.T)
                 kap[1:] = np.linalg.inv(sol.h)
-                frc[1:] = (kap[1:] @ sol.g[:, :, None])[:, :, 0]
+                # no external forces: F_k = κ_k Pᵀ Z_k⁻¹ P φ_k = φ_k
+                frc[1:] = phi[1:] if sol.g is None else (kap[1:] @ sol.g[:, :, None])[:, :, 0]
                 return kap, frc
             for k in range(1, H + 1):
                 pf = self._pole_form(k)
@@ -509,8 +530,10 @@ class LinkReceptance:
         the pole-residue form, or (``"banded"``) solves again with the Woodbury identity's
         derivative (:mod:`nlgrd.nonlinear.reduction.direct_receptance`, tabulated bearings and
         loss factor included); f_k' by a central difference of the forces (exact for their
-        degree <= 2 in ω). κ_0 and F_0 do not depend on ω unless the stiffness does on the
-        speed (then by central differences).
+        degree <= 2 in ω), but for ``"banded"`` without external harmonic forces, where
+        F_k = φ_k, the links' own forcing, linear in ω: dF_k/dω = φ_k / ω. κ_0 and F_0 do
+        not depend on ω unless the stiffness does on the speed (then by central
+        differences).
 
         Parameters
         ----------
@@ -538,7 +561,8 @@ class LinkReceptance:
             if poles:
                 Lf_all = self._pole_forces(omega, H)
                 dLf_all = (self._pole_forces(omega + hf, H) - self._pole_forces(omega - hf, H)) / (2 * hf)
-            if not poles or any(self._pole_form(k) is None for k in range(1, H + 1)):
+            own = self.method == "banded" and self.harmonic_force is None  # F_k = φ_k ∝ ω
+            if not (poles or own) or (poles and any(self._pole_form(k) is None for k in range(1, H + 1))):
                 df = self._proj((self.forces(omega + hf, H) - self.forces(omega - hf, H)) / (2 * hf))
                 f = self._proj(self.forces(omega, H))
             dkap = np.zeros((H + 1, d, d), dtype=complex)
@@ -554,10 +578,14 @@ class LinkReceptance:
                 C = (m.C + m.Ci + self.C_link).tocsc()
             if self.method == "banded" and H:
                 solver = self._band_solver(self._band_out)
-                sol = solver.solve_forced(np.arange(1, H + 1), omega, True, f[1:], df[1:])
+                rhs = (None, None) if own else (f[1:], df[1:])
+                sol = solver.solve_forced(np.arange(1, H + 1), omega, True, *rhs)
                 kh = kap[1:]
                 dkap[1:] = -kh @ sol.dh @ kh
-                dfrc[1:] = (dkap[1:] @ sol.g[:, :, None] + kh @ sol.dg[:, :, None])[:, :, 0]
+                if own:  # the links' own forcing is linear in ω (i k ω c_m E_k for a mesh)
+                    dfrc[1:] = self._force_parts(omega, H)[1][1:] / omega
+                else:
+                    dfrc[1:] = (dkap[1:] @ sol.g[:, :, None] + kh @ sol.dg[:, :, None])[:, :, 0]
                 return dkap, dfrc
             A = B = None
             for k in range(1, H + 1):
@@ -611,7 +639,11 @@ class LinkReceptance:
         if self.method == "banded" and H:
             self._band_out = key = tuple(int(i) for i in dofs)
             sol = self._band_solve(omega, H, key)  # Z⁻¹ (f - P G) = Z⁻¹ f - (Z⁻¹ P) G
-            out[1:] = sol.Ug - np.einsum("kij,kj->ki", sol.U, G[1:])
+            if sol.Ug is None:  # f = P φ: Z⁻¹ P (φ - G)
+                phi = self._force_parts(omega, H)[1]
+                out[1:] = np.einsum("kij,kj->ki", sol.U, phi[1:] - G[1:])
+            else:
+                out[1:] = sol.Ug - np.einsum("kij,kj->ki", sol.U, G[1:])
         for k in range(1, H + 1 if self.method != "banded" else 1):
             pf = self._pole_form(k)
             rhs = f[k] - self.P @ G[k]
@@ -637,8 +669,60 @@ class LinkReceptance:
         m = self.model
         return replace(m, K=(m.K + self.K_link).tocsc(), C=(m.C + self.C_link).tocsc(), meshes=())
 
+    def prepare_stability(self, top: float) -> None:
+        """Size the stability basis for base frequencies up to ``top`` [rad/s] (a sweep's
+        highest): modes below :data:`STABILITY_CUTOFF` x ``top_order`` x ``top``. A basis
+        already that large is kept.
+
+        Parameters
+        ----------
+        top : float
+            Highest base frequency [rad/s].
+        """
+        top = float(top)
+        if np.isfinite(top) and top > 0 and (self.stability_top is None or top > self.stability_top):
+            self.stability_top = top
+
+    @property
+    def truncates_stability(self) -> bool:
+        """Whether Floquet stability runs on the truncated basis of :meth:`state_space`: every
+        link a gear mesh (a clearance's contact excites modes far above the cut-off
+        parametrically: benchmarks/README.md), at most :data:`DENSE_STABILITY_LIMIT` DOFs
+        and no modal basis (whose own modes serve then)."""
+        from nlgrd.nonlinear.links.contract import GearMeshLink
+
+        small = self.model.n_dofs <= DENSE_STABILITY_LIMIT and self.basis is None
+        return small and bool(self.links) and all(isinstance(lk, GearMeshLink) for lk in self.links)
+
+    def _truncated_basis(self, cutoff: float) -> tuple[NDArray, tuple]:
+        """Modes of (K + K_L, M) below ``cutoff`` [rad/s] and the static attachment vectors
+        (K + K_L + M)⁻¹ P, M-orthonormal, modes first (as ``MeshReceptance.state_space``),
+        and the matrices' parts linear in the speed projected on it (M, C, G, K, K_c, P)."""
+
+        def make():
+            m = self.model
+            Kr = (m.stiffness(0.0) + self.K_link).tocsc()
+            if m.n_dofs <= DENSE_LIMIT:  # every mode by a dense solve: faster than ARPACK here
+                lam, vec = sla.eigh(Kr.toarray(), m.M.toarray(), subset_by_value=(-np.inf, cutoff**2))
+            else:
+                cap = STABILITY_MODE_CAP
+                lam, vec = lowest_modes(Kr, m.M, cutoff, start=30, cap=cap, what="stability basis")
+            att = spla.splu((Kr + m.M).tocsc()).solve(self.P)
+            S = modes_then_attachments(vec[:, lam <= cutoff**2], att, m.M)
+            parts = (m.M, m.C + m.Ci + self.C_link, m.G, m.K, m.Kc)
+            return S, tuple(S.T @ (A @ S) for A in parts) + (S.T @ self.P,)
+
+        return self._bases.get(float(cutoff), make)
+
     def state_space(self, omega: float) -> LinearStateSpace | None:
-        """The linear part for Floquet stability at base frequency ``omega``: on the modes
+        """The linear part for Floquet stability at base frequency ``omega``.
+
+        Where every link is a gear mesh (:attr:`truncates_stability`), on the modes below
+        :data:`STABILITY_CUTOFF` times the highest mesh frequency (``top_order`` x the
+        highest base frequency of :meth:`prepare_stability`, or of ``omega`` when higher)
+        and the static attachment vectors of the link coordinates, with the full state
+        space as its ``full``: Floquet analysis takes the full one where the orbit's
+        tangent varies over the period (docs/conventions.md, "Stability"). Else on the modes
         and static attachment vectors of the modal basis when there is one, else dense up
         to :data:`DENSE_STABILITY_LIMIT` DOFs (None above it).
 
@@ -659,8 +743,30 @@ class LinkReceptance:
         if self.basis is not None:  # on the stability basis
             a, Ps = self._stability
             return LinearStateSpace(a["M"], a["C"] + speed * a["G"], a["K"] + speed * a["Kc"], Ps)
+        if not self.truncates_stability:
+            return self._full_state(speed)
+        self.prepare_stability(omega)
+        cutoff = STABILITY_CUTOFF * self.top_order * self.stability_top
+
+        def make():
+            full = BoundedCache(1)  # built where a tangent varies
+            return self._on_basis(
+                self._truncated_basis(cutoff), speed, lambda: full.get(0, lambda: self._full_state(speed))
+            )
+
+        return self._spaces.get((float(omega), cutoff), make)
+
+    def _full_state(self, speed: float) -> LinearStateSpace:
         mats = (self.model.M, self.model.damping(speed) + self.C_link, self.model.stiffness(speed))
         return LinearStateSpace(*(A.toarray() for A in mats), self.P)
+
+    def _on_basis(self, basis: tuple, speed: float, full: Callable | None = None) -> LinearStateSpace:
+        S, (M, C, G, K, Kc, Ps) = basis
+        D, K = C + speed * G, K + speed * Kc
+        if self.model.tabulated_bearings:
+            Kb, Cb = self.model._bearing_matrices(speed)
+            D, K = D + S.T @ (Cb @ S), K + S.T @ (Kb @ S)
+        return LinearStateSpace(M, D, K, Ps, cache=self._floquet, full=full)
 
     def check(self, omega: float) -> None:
         """Raise ModelError when Z_1 is singular at ``omega`` (a link-free rigid-body mode).

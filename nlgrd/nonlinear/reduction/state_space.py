@@ -8,6 +8,7 @@ coordinates, its rigid-body modes and the deflated system without them
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -62,6 +63,10 @@ class LinearStateSpace:
         [-] on translations, base radii [m] on rotations).
     cache : FloquetCache, optional
         Shared store of Floquet work (see above).
+    full : callable () -> LinearStateSpace, optional
+        For a state space on a truncated modal basis: the whole model's, which Floquet
+        analysis takes where the orbit's tangent varies over the period
+        (:func:`nlgrd.nonlinear.stability.floquet.floquet_analysis`).
 
     Raises
     ------
@@ -74,6 +79,7 @@ class LinearStateSpace:
     K: NDArray
     W: NDArray
     cache: FloquetCache | None = field(default=None, compare=False, repr=False)
+    full: Callable[[], LinearStateSpace] | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         for name in ("M", "D", "K", "W"):
