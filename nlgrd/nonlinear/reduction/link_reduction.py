@@ -68,7 +68,7 @@ from nlgrd.nonlinear.reduction.modal_basis import (
     rigid_decoupled,
 )
 from nlgrd.nonlinear.reduction.pole_residue import POLE_CHECK_RTOL, PoleResidue
-from nlgrd.nonlinear.reduction.state_space import FloquetCache, LinearStateSpace
+from nlgrd.nonlinear.reduction.state_space import HYSTERETIC_REFUSAL, FloquetCache, LinearStateSpace
 from nlgrd.rotor.assembly import LinearModel, assemble
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
 from nlgrd.rotor.system import RotorSystem
@@ -734,11 +734,17 @@ class LinkReceptance:
         Returns
         -------
         LinearStateSpace or None
+
+        Raises
+        ------
+        ModelError
+            (``loss_factor``) With hysteretic damping, which has no time-domain form
+            (:data:`~nlgrd.nonlinear.reduction.state_space.HYSTERETIC_REFUSAL`).
         """
         if self.model.n_dofs > DENSE_STABILITY_LIMIT and self.basis is None:
             return None
         if self.model.hysteretic_parts:
-            raise ModelError("loss_factor", "hysteretic damping has no time-domain form for stability")
+            raise ModelError("loss_factor", HYSTERETIC_REFUSAL)
         speed = self.plan.speed(omega)
         if self.basis is not None:  # on the stability basis
             a, Ps = self._stability

@@ -21,6 +21,13 @@ from nlgrd.nonlinear.reduction.linear_algebra import free_modes as _free_modes
 from nlgrd.nonlinear.reduction.linear_algebra import stiffness_null_space
 from nlgrd.rotor.rigid_body import complement, rigid_body_modes
 
+#: Why a model with hysteretic damping (a loss factor) has no Floquet stability, on every
+#: path (docs/conventions.md, "Hysteretic damping"): said in one line, under ``loss_factor``.
+HYSTERETIC_REFUSAL = (
+    "hysteretic damping has no time-domain form, so no Floquet stability (nor time integration): "
+    "give viscous damping instead, or sweep without stability"
+)
+
 
 class FloquetCache(BoundedCache):
     """A bounded store (first in, first out) of Floquet work: one per state space, or one
