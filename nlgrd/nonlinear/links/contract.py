@@ -564,6 +564,7 @@ class GearMeshLink:
             One per point, as :meth:`metrics`.
         """
         Z = np.asarray(harmonics, dtype=float).reshape(len(omegas), -1)
+        ms = metrics_of_points(Z, np.asarray(omegas, dtype=float), self.mesh)
         return [
             {
                 "dte_rms [m]": m.dte_rms,
@@ -572,5 +573,30 @@ class GearMeshLink:
                 "contact_loss_fraction [-]": m.contact_loss_fraction,
                 "back_contact": float(m.back_contact),
             }
-            for m in metrics_of_points(Z, np.asarray(omegas, dtype=float), self.mesh)
+            for m in ms
         ]
+
+    @staticmethod
+    def metric_row(metrics: dict, i: int) -> dict[str, float]:
+        """:meth:`metrics` of point ``i`` from a sweep's own metrics of this mesh
+        (``SweepResult.metrics``: per name an array over the points).
+
+        Parameters
+        ----------
+        metrics : dict of str -> ndarray
+            ``SweepResult.metrics``.
+        i : int
+            The point.
+
+        Returns
+        -------
+        dict
+            As :meth:`metrics`.
+        """
+        return {
+            "dte_rms [m]": float(metrics["dte_rms"][i]),
+            "force_max [N]": float(metrics["force_max"][i]),
+            "dslr [-]": float(metrics["dslr"][i]),
+            "contact_loss_fraction [-]": float(metrics["contact_loss_fraction"][i]),
+            "back_contact": float(metrics["back_contact"][i]),
+        }

@@ -437,12 +437,18 @@ def link_sweep(
     ok = [i for i in range(len(res)) if res.converged[i] and not res.no_stable[i]]
     on_two = [i for i in ok if two is not None and int(res.period[i]) == 2]
     on_one = [i for i in ok if i not in set(on_two)]
-    for m, pts, zs, ws in (
-        (model, on_one, [p1.harmonics[i] for i in on_one], [res.omega[i] for i in on_one]),
-        (two, on_two, [res.harmonics[i] for i in on_two], [res.omega[i] / 2 for i in on_two]),
+    # the first mesh's metrics of the period-1 points: the sweep's own (the same function
+    # of the same harmonics, its contact intervals found while solving)
+    first = next((lk for lk in model.links if isinstance(lk, GearMeshLink)), None)
+    known = None
+    if first is not None and "n_samples" not in options:
+        known = {first.name: [GearMeshLink.metric_row(p1.metrics, i) for i in on_one]}
+    for m, pts, zs, ws, kn in (
+        (model, on_one, [p1.harmonics[i] for i in on_one], [res.omega[i] for i in on_one], known),
+        (two, on_two, [res.harmonics[i] for i in on_two], [res.omega[i] / 2 for i in on_two], None),
     ):
         if pts:
-            for i, row in zip(pts, points_outputs(m, zs, ws), strict=True):
+            for i, row in zip(pts, points_outputs(m, zs, ws, kn), strict=True):
                 rows[i] = row
     return LinkSweepResult(res, pd.DataFrame(rows, columns=list(blank)), bearing_columns(model))
 

@@ -75,9 +75,9 @@ from nlgrd.rotor.system import RotorSystem
 
 #: Largest model whose stability basis is the full (dense) state space.
 DENSE_STABILITY_LIMIT = 600
-#: Stability basis of a model whose links are all gear meshes, at points whose tangent is
-#: constant over the period: modes below this times the highest mesh frequency, with the
-#: static attachment vectors (the single-mesh path's basis).
+#: Stability basis of a model whose links are all gear meshes: modes below this times the
+#: highest mesh frequency, with the static attachment vectors (the single-mesh path's
+#: basis), checked where the tangent varies (``floquet.TRUNCATION_ATOL``).
 STABILITY_CUTOFF = 3.0
 #: Up to this many DOFs Z_k is factorised as a dense matrix (faster than sparse LU there).
 DENSE_LIMIT = 300
@@ -720,9 +720,11 @@ class LinkReceptance:
         Where every link is a gear mesh (:attr:`truncates_stability`), on the modes below
         :data:`STABILITY_CUTOFF` times the highest mesh frequency (``top_order`` x the
         highest base frequency of :meth:`prepare_stability`, or of ``omega`` when higher)
-        and the static attachment vectors of the link coordinates, with the full state
-        space as its ``full``: Floquet analysis takes the full one where the orbit's
-        tangent varies over the period (docs/conventions.md, "Stability"). Else on the modes
+        and the static attachment vectors of the link coordinates, with the basis of twice
+        the cut-off and the full state as its ``larger`` and ``full``: where the orbit's
+        tangent varies over the period Floquet analysis takes the larger basis when max |μ|
+        moves by at most 1e-7 from this one, else the full state (docs/conventions.md,
+        "Stability state space"). Else on the modes
         and static attachment vectors of the modal basis when there is one, else dense up
         to :data:`DENSE_STABILITY_LIMIT` DOFs (None above it).
 
@@ -755,10 +757,15 @@ class LinkReceptance:
         cutoff = STABILITY_CUTOFF * self.top_order * self.stability_top
 
         def make():
-            full = BoundedCache(1)  # built where a tangent varies
-            return self._on_basis(
-                self._truncated_basis(cutoff), speed, lambda: full.get(0, lambda: self._full_state(speed))
-            )
+            kept = BoundedCache(2)  # built where a tangent varies
+
+            def larger():
+                return kept.get("larger", lambda: self._on_basis(self._truncated_basis(2 * cutoff), speed))
+
+            def full():
+                return kept.get("full", lambda: self._full_state(speed))
+
+            return self._on_basis(self._truncated_basis(cutoff), speed, larger, full)
 
         return self._spaces.get((float(omega), cutoff), make)
 
@@ -766,13 +773,15 @@ class LinkReceptance:
         mats = (self.model.M, self.model.damping(speed) + self.C_link, self.model.stiffness(speed))
         return LinearStateSpace(*(A.toarray() for A in mats), self.P)
 
-    def _on_basis(self, basis: tuple, speed: float, full: Callable | None = None) -> LinearStateSpace:
+    def _on_basis(
+        self, basis: tuple, speed: float, larger: Callable | None = None, full: Callable | None = None
+    ) -> LinearStateSpace:
         S, (M, C, G, K, Kc, Ps) = basis
         D, K = C + speed * G, K + speed * Kc
         if self.model.tabulated_bearings:
             Kb, Cb = self.model._bearing_matrices(speed)
             D, K = D + S.T @ (Cb @ S), K + S.T @ (Kb @ S)
-        return LinearStateSpace(M, D, K, Ps, cache=self._floquet, full=full)
+        return LinearStateSpace(M, D, K, Ps, cache=self._floquet, larger=larger, full=full)
 
     def check(self, omega: float) -> None:
         """Raise ModelError when Z_1 is singular at ``omega`` (a link-free rigid-body mode).

@@ -70,9 +70,10 @@ class LinearStateSpace:
         [-] on translations, base radii [m] on rotations).
     cache : FloquetCache, optional
         Shared store of Floquet work (see above).
-    full : callable () -> LinearStateSpace, optional
-        For a state space on a truncated modal basis: the whole model's, which Floquet
-        analysis takes where the orbit's tangent varies over the period
+    larger, full : callable () -> LinearStateSpace, optional
+        For a state space on a truncated modal basis: the one on the basis with twice its
+        cut-off and the whole model's, with which Floquet analysis checks the truncation
+        where the orbit's tangent varies over the period
         (:func:`nlgrd.nonlinear.stability.floquet.floquet_analysis`).
 
     Raises
@@ -86,6 +87,7 @@ class LinearStateSpace:
     K: NDArray
     W: NDArray
     cache: FloquetCache | None = field(default=None, compare=False, repr=False)
+    larger: Callable[[], LinearStateSpace] | None = field(default=None, compare=False, repr=False)
     full: Callable[[], LinearStateSpace] | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):

@@ -243,7 +243,7 @@ def point_outputs(model, harmonics: NDArray, omega: float) -> dict[str, float]:
     return points_outputs(model, [harmonics], [omega])[0]
 
 
-def points_outputs(model, harmonics, omegas) -> list[dict[str, float]]:
+def points_outputs(model, harmonics, omegas, known: dict | None = None) -> list[dict[str, float]]:
     """:func:`point_outputs` of many points: a link with ``metrics_of_points`` (a gear mesh)
     takes all points of one H at once, the bearings' statistics too
     (:func:`~nlgrd.nonlinear.results.bearing_loads.link_bearing_outputs_of_points`).
@@ -256,16 +256,24 @@ def points_outputs(model, harmonics, omegas) -> list[dict[str, float]]:
         Real harmonics of the link coordinates of each point on the model's base [m].
     omegas : sequence of float
         The frequencies the model's receptances take [rad/s].
+    known : dict, optional
+        Outputs already computed, per link name a list of dicts (one per point): that
+        link's metrics are not computed again (a sweep's own metrics of its first mesh).
 
     Returns
     -------
     list of dict
         One per point, in the order of :func:`output_names`.
     """
+    known = known or {}
     zs = [np.asarray(z, dtype=float) for z in harmonics]
     ws = np.asarray(omegas, dtype=float)
     rows: list[dict[str, float]] = [{} for _ in zs]
     for link, sl in zip(model.links, model.receptance.slices, strict=True):
+        if link.name in known:
+            for row, m in zip(rows, known[link.name], strict=True):
+                row.update({f"{link.name}.{k}": v for k, v in m.items()})
+            continue
         batch = getattr(link, "metrics_of_points", None)
         for width in sorted({z.shape[1] for z in zs}):
             idx = [i for i, z in enumerate(zs) if z.shape[1] == width]
