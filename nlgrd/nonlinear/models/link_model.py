@@ -450,7 +450,9 @@ def link_sweep(
         if pts:
             for i, row in zip(pts, points_outputs(m, zs, ws, kn), strict=True):
                 rows[i] = row
-    return LinkSweepResult(res, pd.DataFrame(rows, columns=list(blank)), bearing_columns(model))
+    columns = {c: np.array([row[c] for row in rows], dtype=float) for c in blank}  # faster than rows
+    table = pd.DataFrame(columns, columns=list(blank))
+    return LinkSweepResult(res, table, bearing_columns(model))
 
 
 def link_continuation(
