@@ -567,7 +567,7 @@ def _against_full_state(lk, res) -> tuple[float, int, int]:
         w, z = float(res.omega[i]), np.atleast_2d(res.harmonics[i])
         ss = lk.reduced.linear_state_space(w)
         assert ss.full is not None and ss.M.shape[0] < rec.model.n_dofs  # on the basis
-        mu = floquet_multipliers(rec._full_state(rec.plan.speed(w)), laws, z, w)
+        mu = floquet_multipliers(rec.stability.full_state(rec.plan.speed(w)), laws, z, w)
         top = float(np.max(np.abs(mu)))
         worst = max(worst, abs(top - float(res.floquet_max[i])))
         assert (top < 1 + STABLE_RTOL) == bool(res.stable[i])

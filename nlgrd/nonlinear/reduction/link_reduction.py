@@ -58,27 +58,22 @@ from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.reduction.direct_receptance import DirectSolution, DirectSolver, coupled_dofs
 from nlgrd.nonlinear.reduction.link_mean import MeanProblem
 from nlgrd.nonlinear.reduction.link_poles import LinkPoleForm
+from nlgrd.nonlinear.reduction.link_stability import TruncatedStability
 from nlgrd.nonlinear.reduction.modal_basis import (
-    STABILITY_MODE_CAP,
     ModeCapWarning,
     attachment_basis,
-    lowest_modes,
     m_orthonormal,
     modes_then_attachments,
     rigid_decoupled,
 )
 from nlgrd.nonlinear.reduction.pole_residue import POLE_CHECK_RTOL, PoleResidue
-from nlgrd.nonlinear.reduction.state_space import HYSTERETIC_REFUSAL, FloquetCache, LinearStateSpace
+from nlgrd.nonlinear.reduction.state_space import HYSTERETIC_REFUSAL, LinearStateSpace
 from nlgrd.rotor.assembly import LinearModel, assemble
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
 from nlgrd.rotor.system import RotorSystem
 
 #: Largest model whose stability basis is the full (dense) state space.
 DENSE_STABILITY_LIMIT = 600
-#: Stability basis of a model whose links are all gear meshes: modes below this times the
-#: highest mesh frequency, with the static attachment vectors (the single-mesh path's
-#: basis), checked where the tangent varies (``floquet.TRUNCATION_ATOL``).
-STABILITY_CUTOFF = 3.0
 #: Up to this many DOFs Z_k is factorised as a dense matrix (faster than sparse LU there).
 DENSE_LIMIT = 300
 #: Up to this many DOFs coupled to a link or a forced DOF, ``method="auto"`` takes the
@@ -159,7 +154,6 @@ class LinkReceptance:
         top_order: int = 1,
     ):
         self.system, self.links, self.plan = system, tuple(links), plan
-        self.top_order, self.stability_top = int(top_order), None
         self.model: LinearModel = assemble(system, mesh_stiffness=False, mesh_damping=False)
         n = self.model.n_dofs
         self.P = (
@@ -212,9 +206,7 @@ class LinkReceptance:
         self._auto_modal = method == "auto" and not self._dense and self._plain
         self._auto_modal &= harmonic_force is None or force_dofs is not None
         self._poles = BoundedCache(256)
-        # the state spaces per base frequency, the truncated bases per cut-off, and one
-        # store of Floquet work for the spaces on those bases (as the single-mesh path's)
-        self._spaces, self._bases, self._floquet = BoundedCache(4), BoundedCache(8), FloquetCache(4096)
+        self.stability = TruncatedStability(self.model, self.P, self.K_link, self.C_link, top_order)
         self._banded = BoundedCache(8)  # the banded solvers, per tuple of output DOFs
         # their solves of all harmonics per (ω, H, output DOFs), and the DOFs recovered last
         # (the next frequencies' solves return them: the recovery needs no solve of its own)
@@ -464,6 +456,25 @@ class LinkReceptance:
             return None
         return self._poles.get(("poles", k), make)
 
+    def _pole_stack(self, H: int) -> tuple[NDArray, NDArray, NDArray] | None:
+        """The pole-residue forms of harmonics 1..H stacked (poles (H, 2n), Pᵀ X_top
+        (H, d, 2n), L P (H, 2n, d)) for all harmonics at once, or None when one of them is
+        solved directly."""
+
+        def make():
+            forms = [self._pole_form(k) for k in range(1, H + 1)]
+            if any(pf is None for pf in forms):
+                return None
+            return (
+                np.stack([pf.pr.poles for pf in forms]),
+                np.stack([pf.CP for pf in forms]),
+                np.stack([pf.LP for pf in forms]),
+            )
+
+        if self.method not in ("poles", "modal") or not H:
+            return None
+        return self._poles.get(("stack", int(H)), make)
+
     def terms(self, omega: float, H: int) -> tuple[NDArray, NDArray]:
         """κ_k (H+1, d, d) [N/m] and F_k (H+1, d) [N], k = 0..H.
 
@@ -491,8 +502,18 @@ class LinkReceptance:
                 ph = ph + self.P.T @ self.mean.solve(speed, (ext[0].real - self.static_force)[:, None])[:, 0]
             kap[0] = hr_inv - self.k_link
             frc[0] = hr_inv @ ph
-            Lf = self._pole_forces(omega, H) if self.method in ("poles", "modal") else None
+            # no external harmonic forces: f_k = P φ_k, so F_k = κ_k Pᵀ Z_k⁻¹ P φ_k = φ_k
+            own = self.harmonic_force is None
+            poles = self.method in ("poles", "modal")
+            Lf = self._pole_forces(omega, H) if poles and not own else None
             Ps, f = self._Ps, None
+            stack = self._pole_stack(H) if own else None
+            if stack is not None:  # every harmonic in pole-residue form: all at once
+                lam, CP, LP = stack
+                w = 1.0 / (omega - lam)
+                kap[1:] = np.linalg.inv(CP @ (w[:, :, None] * LP)) - self.k_link
+                frc[1:] = phi[1:]
+                return kap, frc
             if self.method == "banded" and H:
                 sol = self._band_solve(omega, H, self._band_out, ext[1:] + phi[1:] @ self.P.T)
                 kap[1:] = np.linalg.inv(sol.h)
@@ -502,12 +523,14 @@ class LinkReceptance:
             for k in range(1, H + 1):
                 pf = self._pole_form(k)
                 if pf is not None:
-                    kap[k], frc[k] = pf.terms(omega, Lf[k])
+                    kap[k], frc[k] = pf.terms(omega, np.zeros(pf.LP.shape[0]) if own else Lf[k])
                     continue
                 f = ext + phi @ self.P.T if f is None else f
                 u = self._factor(k, omega).solve(np.column_stack([Ps.astype(complex), self._proj(f[k])]))
                 kap[k] = np.linalg.inv(Ps.T @ u[:, :d])
                 frc[k] = kap[k] @ (Ps.T @ u[:, d])
+            if own:
+                frc[1:] = phi[1:]
             return kap, frc
 
         return self._terms.get((float(omega), int(H)), make)
@@ -530,8 +553,8 @@ class LinkReceptance:
         the pole-residue form, or (``"banded"``) solves again with the Woodbury identity's
         derivative (:mod:`nlgrd.nonlinear.reduction.direct_receptance`, tabulated bearings and
         loss factor included); f_k' by a central difference of the forces (exact for their
-        degree <= 2 in ω), but for ``"banded"`` without external harmonic forces, where
-        F_k = φ_k, the links' own forcing, linear in ω: dF_k/dω = φ_k / ω. κ_0 and F_0 do
+        degree <= 2 in ω), but without external harmonic forces, where F_k = φ_k (the
+        links' own forcing, linear in ω), analytically: dF_k/dω = φ_k / ω. κ_0 and F_0 do
         not depend on ω unless the stiffness does on the speed (then by central
         differences).
 
@@ -558,11 +581,16 @@ class LinkReceptance:
             hf = 1e-3 * max(abs(omega), 1.0)
             poles = self.method in ("poles", "modal")
             Ps = self._Ps
-            if poles:
+            own = self.harmonic_force is None  # F_k = φ_k, the links' own forcing, ∝ ω
+            if poles and not own:
                 Lf_all = self._pole_forces(omega, H)
                 dLf_all = (self._pole_forces(omega + hf, H) - self._pole_forces(omega - hf, H)) / (2 * hf)
-            own = self.method == "banded" and self.harmonic_force is None  # F_k = φ_k ∝ ω
-            if not (poles or own) or (poles and any(self._pole_form(k) is None for k in range(1, H + 1))):
+            if own:  # κ alone is needed: no forces
+                zero = np.zeros((H + 1, Ps.shape[0]), dtype=complex)
+                f = df = zero
+                if poles:
+                    Lf_all = dLf_all = np.zeros((H + 1, 2 * Ps.shape[0]), dtype=complex)
+            elif not poles or any(self._pole_form(k) is None for k in range(1, H + 1)):
                 df = self._proj((self.forces(omega + hf, H) - self.forces(omega - hf, H)) / (2 * hf))
                 f = self._proj(self.forces(omega, H))
             dkap = np.zeros((H + 1, d, d), dtype=complex)
@@ -576,6 +604,14 @@ class LinkReceptance:
             else:
                 Kc, M, G = m.Kc, m.M, m.G
                 C = (m.C + m.Ci + self.C_link).tocsc()
+            stack = self._pole_stack(H) if own else None
+            if stack is not None:  # all harmonics at once: d/dω of 1/(ω - λ) is -1/(ω - λ)²
+                lam, CP, LP = stack
+                w = 1.0 / (omega - lam)
+                kp = np.linalg.inv(CP @ (w[:, :, None] * LP))
+                dkap[1:] = kp @ (CP @ ((w * w)[:, :, None] * LP)) @ kp
+                dfrc[1:] = self._force_parts(omega, H)[1][1:] / omega
+                return dkap, dfrc
             if self.method == "banded" and H:
                 solver = self._band_solver(self._band_out)
                 rhs = (None, None) if own else (f[1:], df[1:])
@@ -602,6 +638,8 @@ class LinkReceptance:
                 v = lu.solve(np.column_stack([dZ @ up, df[k] - dZ @ uf]))
                 dkap[k] = kap[k] @ (Ps.T @ v[:, :d]) @ kap[k]
                 dfrc[k] = dkap[k] @ (Ps.T @ uf) + kap[k] @ (Ps.T @ v[:, d])
+            if own:
+                dfrc[1:] = self._force_parts(omega, H)[1][1:] / omega
             return dkap, dfrc
 
         return self._terms.get(("d", float(omega), int(H)), make)
@@ -671,17 +709,14 @@ class LinkReceptance:
 
     def prepare_stability(self, top: float) -> None:
         """Size the stability basis for base frequencies up to ``top`` [rad/s] (a sweep's
-        highest): modes below :data:`STABILITY_CUTOFF` x ``top_order`` x ``top``. A basis
-        already that large is kept.
+        highest: :meth:`~nlgrd.nonlinear.reduction.link_stability.TruncatedStability.prepare`).
 
         Parameters
         ----------
         top : float
             Highest base frequency [rad/s].
         """
-        top = float(top)
-        if np.isfinite(top) and top > 0 and (self.stability_top is None or top > self.stability_top):
-            self.stability_top = top
+        self.stability.prepare(top)
 
     @property
     def truncates_stability(self) -> bool:
@@ -694,39 +729,15 @@ class LinkReceptance:
         small = self.model.n_dofs <= DENSE_STABILITY_LIMIT and self.basis is None
         return small and bool(self.links) and all(isinstance(lk, GearMeshLink) for lk in self.links)
 
-    def _truncated_basis(self, cutoff: float) -> tuple[NDArray, tuple]:
-        """Modes of (K + K_L, M) below ``cutoff`` [rad/s] and the static attachment vectors
-        (K + K_L + M)⁻¹ P, M-orthonormal, modes first (as ``MeshReceptance.state_space``),
-        and the matrices' parts linear in the speed projected on it (M, C, G, K, K_c, P)."""
-
-        def make():
-            m = self.model
-            Kr = (m.stiffness(0.0) + self.K_link).tocsc()
-            if m.n_dofs <= DENSE_LIMIT:  # every mode by a dense solve: faster than ARPACK here
-                lam, vec = sla.eigh(Kr.toarray(), m.M.toarray(), subset_by_value=(-np.inf, cutoff**2))
-            else:
-                cap = STABILITY_MODE_CAP
-                lam, vec = lowest_modes(Kr, m.M, cutoff, start=30, cap=cap, what="stability basis")
-            att = spla.splu((Kr + m.M).tocsc()).solve(self.P)
-            S = modes_then_attachments(vec[:, lam <= cutoff**2], att, m.M)
-            parts = (m.M, m.C + m.Ci + self.C_link, m.G, m.K, m.Kc)
-            return S, tuple(S.T @ (A @ S) for A in parts) + (S.T @ self.P,)
-
-        return self._bases.get(float(cutoff), make)
-
     def state_space(self, omega: float) -> LinearStateSpace | None:
         """The linear part for Floquet stability at base frequency ``omega``.
 
         Where every link is a gear mesh (:attr:`truncates_stability`), on the modes below
-        :data:`STABILITY_CUTOFF` times the highest mesh frequency (``top_order`` x the
-        highest base frequency of :meth:`prepare_stability`, or of ``omega`` when higher)
-        and the static attachment vectors of the link coordinates, with the basis of twice
-        the cut-off and the full state as its ``larger`` and ``full``: where the orbit's
-        tangent varies over the period Floquet analysis takes the larger basis when max |μ|
-        moves by at most 1e-7 from this one, else the full state (docs/conventions.md,
-        "Stability state space"). Else on the modes
-        and static attachment vectors of the modal basis when there is one, else dense up
-        to :data:`DENSE_STABILITY_LIMIT` DOFs (None above it).
+        3x the highest mesh frequency and the static attachment vectors of the link
+        coordinates, checked by Floquet analysis where the orbit's tangent varies over the
+        period (:mod:`nlgrd.nonlinear.reduction.link_stability`). Else on the modes and
+        static attachment vectors of the modal basis when there is one, else dense up to
+        :data:`DENSE_STABILITY_LIMIT` DOFs (None above it).
 
         Parameters
         ----------
@@ -752,36 +763,8 @@ class LinkReceptance:
             a, Ps = self._stability
             return LinearStateSpace(a["M"], a["C"] + speed * a["G"], a["K"] + speed * a["Kc"], Ps)
         if not self.truncates_stability:
-            return self._full_state(speed)
-        self.prepare_stability(omega)
-        cutoff = STABILITY_CUTOFF * self.top_order * self.stability_top
-
-        def make():
-            kept = BoundedCache(2)  # built where a tangent varies
-
-            def larger():
-                return kept.get("larger", lambda: self._on_basis(self._truncated_basis(2 * cutoff), speed))
-
-            def full():
-                return kept.get("full", lambda: self._full_state(speed))
-
-            return self._on_basis(self._truncated_basis(cutoff), speed, larger, full)
-
-        return self._spaces.get((float(omega), cutoff), make)
-
-    def _full_state(self, speed: float) -> LinearStateSpace:
-        mats = (self.model.M, self.model.damping(speed) + self.C_link, self.model.stiffness(speed))
-        return LinearStateSpace(*(A.toarray() for A in mats), self.P)
-
-    def _on_basis(
-        self, basis: tuple, speed: float, larger: Callable | None = None, full: Callable | None = None
-    ) -> LinearStateSpace:
-        S, (M, C, G, K, Kc, Ps) = basis
-        D, K = C + speed * G, K + speed * Kc
-        if self.model.tabulated_bearings:
-            Kb, Cb = self.model._bearing_matrices(speed)
-            D, K = D + S.T @ (Cb @ S), K + S.T @ (Kb @ S)
-        return LinearStateSpace(M, D, K, Ps, cache=self._floquet, larger=larger, full=full)
+            return self.stability.full_state(speed)
+        return self.stability.state_space(omega, speed)
 
     def check(self, omega: float) -> None:
         """Raise ModelError when Z_1 is singular at ``omega`` (a link-free rigid-body mode).
