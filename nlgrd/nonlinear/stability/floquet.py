@@ -69,8 +69,7 @@ from nlgrd.rotor.rigid_body import CONSTRAINT_RTOL
 if TYPE_CHECKING:  # pragma: no cover
     from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
 
-#: A truncated stability basis is accepted where max |μ| moves by at most this from it to
-#: the basis with twice its cut-off (a tenth of the verdict's band STABLE_RTOL = 1e-6).
+#: A truncated basis is kept where max |μ| moves by at most this to twice its cut-off.
 TRUNCATION_ATOL = 1e-7
 #: Up to this state dimension 2N, ``method="auto"`` returns every multiplier (dense).
 DENSE_STATE_LIMIT = 48
@@ -543,17 +542,10 @@ def floquet_analysis(
     ``MAGNUS_MAX_STEPS``; ``converged`` says if it got there).
     Piecewise-constant tangents keep the exact product, one exponential per interval.
 
-    A state space on a truncated modal basis with its ``larger`` and ``full`` state spaces
-    is checked where the orbit's tangent varies over the period (a contact change, a smooth
-    stiffness variation): the multipliers on the basis with twice the cut-off are returned
-    when max |μ| moved by at most :data:`TRUNCATION_ATOL` from the basis's, else those of
-    the full state (there the truncation moved max |μ| by up to 5.5e-3: two_shaft, modes
-    to 3x the mesh frequency; 1.5e-4 with 6x). A time-invariant tangent (one contact
-    state all period) keeps the basis: its multipliers are exp(λ T) of the linear model's
-    own eigenvalues, and a mode above the cut-off (three times the mesh frequency, far
-    above the running speed) is neither parametrically excited nor destabilised by internal
-    damping or bearing cross-coupling, which act below the running speed
-    (docs/conventions.md, "Stability").
+    A state space on a truncated basis with its ``larger`` and ``full`` ones: where the
+    orbit's tangent varies over the period, the multipliers on ``larger`` when max |μ| moved
+    by at most :data:`TRUNCATION_ATOL`, else on ``full`` (docs/conventions.md, "Stability
+    state space"; a time-invariant tangent keeps the basis).
 
     Parameters
     ----------
@@ -588,8 +580,7 @@ def floquet_analysis(
 
 
 def _time_invariant(nonlinearities: Sequence, Y: NDArray, n: int) -> bool:
-    """Whether the orbit's tangent stiffness is one constant over the period (no contact
-    change, no smooth variation): a time-invariant variational equation."""
+    """Whether the orbit's tangent is one constant over the period (no contact change)."""
     if _smooth_pieces(nonlinearities, Y, n) is not None:
         return False
     return len(_state_sequence(*_tangent_pieces(nonlinearities, Y, n))[0]) == 1
