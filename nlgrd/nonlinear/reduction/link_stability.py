@@ -58,6 +58,7 @@ class TruncatedStability:
         self.top_order, self.top = int(top_order), None
         # the state spaces per frequency, the bases per cut-off, one store of Floquet work
         self._spaces, self._bases, self._floquet = BoundedCache(4), BoundedCache(8), FloquetCache(4096)
+        self._kept_modes: tuple = (0.0, None)  # (up to [rad/s], eigenpairs) of the dense case
 
     def prepare(self, top: float) -> None:
         """Size the basis for base frequencies up to ``top`` [rad/s] (a sweep's highest):
@@ -92,17 +93,26 @@ class TruncatedStability:
         def make():
             m = self.model
             Kr = (m.stiffness(0.0) + self.K_link).tocsc()
-            if m.n_dofs <= DENSE_MODES_LIMIT:
-                lam, vec = sla.eigh(Kr.toarray(), m.M.toarray(), subset_by_value=(-np.inf, cutoff**2))
-            else:
-                cap = STABILITY_MODE_CAP
-                lam, vec = lowest_modes(Kr, m.M, cutoff, start=30, cap=cap, what="stability basis")
+            lam, vec = self._modes(Kr, cutoff)
             att = spla.splu((Kr + m.M).tocsc()).solve(self.P)
             S = modes_then_attachments(vec[:, lam <= cutoff**2], att, m.M)
             parts = (m.M, m.C + m.Ci + self.C_link, m.G, m.K, m.Kc)
             return S, tuple(S.T @ (A @ S) for A in parts) + (S.T @ self.P,)
 
         return self._bases.get(float(cutoff), make)
+
+    def _modes(self, Kr, cutoff: float) -> tuple[NDArray, NDArray]:
+        """Eigenpairs of (K_r, M) up to ``cutoff`` at least [rad/s]: dense ones up to twice
+        it, kept (the check's basis takes them too), or ARPACK's."""
+        m = self.model
+        if m.n_dofs > DENSE_MODES_LIMIT:
+            return lowest_modes(Kr, m.M, cutoff, start=30, cap=STABILITY_MODE_CAP, what="stability basis")
+        top, pairs = self._kept_modes
+        if top < cutoff:
+            top = 2 * cutoff
+            pairs = sla.eigh(Kr.toarray(), m.M.toarray(), subset_by_value=(-np.inf, top**2))
+            self._kept_modes = (top, pairs)
+        return pairs
 
     def state_space(self, omega: float, speed: float) -> LinearStateSpace:
         """The state space at base frequency ``omega`` on the basis of the top frequency
