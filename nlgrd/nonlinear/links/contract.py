@@ -46,7 +46,7 @@ from nlgrd.nonlinear.fourier.periods import spread
 from nlgrd.nonlinear.laws.clearance import RadialClearanceLaw
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh, ParametricMesh
 from nlgrd.nonlinear.laws.mesh_law import gear_mesh_force
-from nlgrd.nonlinear.results.metrics import metrics_from_harmonics
+from nlgrd.nonlinear.results.metrics import metrics_of_points
 from nlgrd.rotor.system import RotorSystem
 
 _UY, _UZ = 1, 2  # translational DOFs of a node in the y-z plane
@@ -553,11 +553,58 @@ class GearMeshLink:
             ``dte_rms [m]``, ``force_max [N]``, ``dslr [-]``, ``contact_loss_fraction [-]``,
             ``back_contact``.
         """
-        m = metrics_from_harmonics(np.asarray(harmonics).reshape(-1), omega, self.mesh)
+        return self.metrics_of_points(np.asarray(harmonics).reshape(1, -1), [omega])[0]
+
+    def metrics_of_points(self, harmonics: NDArray, omegas) -> list[dict[str, float]]:
+        """:meth:`metrics` of many points with the same H at once (one FFT of all of them:
+        :func:`~nlgrd.nonlinear.results.metrics.metrics_of_points`).
+
+        Parameters
+        ----------
+        harmonics : ndarray (P, 2H+1)
+            Real harmonics of δ per point [m].
+        omegas : array_like (P,)
+            Base frequency of each point [rad/s].
+
+        Returns
+        -------
+        list of dict
+            One per point, as :meth:`metrics`.
+        """
+        Z = np.asarray(harmonics, dtype=float).reshape(len(omegas), -1)
+        ms = metrics_of_points(Z, np.asarray(omegas, dtype=float), self.mesh)
+        return [
+            {
+                "dte_rms [m]": m.dte_rms,
+                "force_max [N]": m.force_max,
+                "dslr [-]": m.dslr,
+                "contact_loss_fraction [-]": m.contact_loss_fraction,
+                "back_contact": float(m.back_contact),
+            }
+            for m in ms
+        ]
+
+    @staticmethod
+    def metric_row(metrics: dict, i: int) -> dict[str, float]:
+        """:meth:`metrics` of point ``i`` from a sweep's own metrics of this mesh
+        (``SweepResult.metrics``: per name an array over the points).
+
+        Parameters
+        ----------
+        metrics : dict of str -> ndarray
+            ``SweepResult.metrics``.
+        i : int
+            The point.
+
+        Returns
+        -------
+        dict
+            As :meth:`metrics`.
+        """
         return {
-            "dte_rms [m]": m.dte_rms,
-            "force_max [N]": m.force_max,
-            "dslr [-]": m.dslr,
-            "contact_loss_fraction [-]": m.contact_loss_fraction,
-            "back_contact": float(m.back_contact),
+            "dte_rms [m]": float(metrics["dte_rms"][i]),
+            "force_max [N]": float(metrics["force_max"][i]),
+            "dslr [-]": float(metrics["dslr"][i]),
+            "contact_loss_fraction [-]": float(metrics["contact_loss_fraction"][i]),
+            "back_contact": float(metrics["back_contact"][i]),
         }

@@ -32,7 +32,7 @@ from nlgrd.nonlinear.results.link_results import (  # re-exported: the tables li
     link_rows,
     metric_names,
     output_names,
-    point_outputs,
+    points_outputs,
 )
 from nlgrd.nonlinear.results.metrics import PointMetrics
 from nlgrd.nonlinear.tracing.auto_period import beyond_period_one, check_period
@@ -186,6 +186,12 @@ def build_link_model(
     Returns
     -------
     LinkModel
+
+    Raises
+    ------
+    ModelError
+        A model without any link (no gear pair, no clearance): a linear rotor, nothing
+        nonlinear to solve (``nlgrd modes``, ``campbell`` give its response).
     """
     unbalance = system.unbalance if unbalance is None else tuple(unbalance)
     unb_orders = [abs(system.shafts[u.shaft].speed_ratio) for u in unbalance]
@@ -193,6 +199,8 @@ def build_link_model(
     links = list(links) + list(system.bearing_clearances)
     given = {lk.index for lk in links if isinstance(lk, GearMeshLink) and lk.index is not None}
     links += [lk for lk in gear_links(system, plan) if lk.index not in given]
+    if not links:  # a linear rotor: its response is modal analysis and frequency response
+        raise ModelError("gear_pairs", "the model has no gear pair and no clearance: no link to reduce onto")
     loads = dict(unbalance=unbalance, gravity=gravity, method=method, max_frequency=max_frequency)
     return _reduce(system, tuple(links), plan, loads)
 
@@ -263,6 +271,7 @@ def _reduce(system: RotorSystem, links: tuple, plan: FrequencyPlan, loads: dict,
                 f[m, iz] += -1j * np.sign(ratio * speed) * amp
         return f
 
+    orders = [lk.order for lk in links if isinstance(lk, GearMeshLink)] + [u[-1] for u in unb]
     static = np.zeros(n) if gravity is None else _gravity_force(system, assemble(system).M, gravity)
     for g in system.gear_pairs:
         static = static + g.static_torques(system)
@@ -275,6 +284,7 @@ def _reduce(system: RotorSystem, links: tuple, plan: FrequencyPlan, loads: dict,
         method=loads["method"],
         max_frequency=loads["max_frequency"],
         force_dofs=[i for iy, iz, *_ in unb for i in (iy, iz)],
+        top_order=max(orders, default=1),
     )
     laws = tuple(lk.law(tuple(range(sl.start, sl.stop))) for lk, sl in zip(links, rec.slices, strict=True))
     picks = [getattr(lk, "converged_outputs", None) or metric_names(lk) for lk in links]
@@ -321,7 +331,6 @@ def _reduce(system: RotorSystem, links: tuple, plan: FrequencyPlan, loads: dict,
             ]
         ),
     )
-    orders = [lk.order for lk in links if isinstance(lk, GearMeshLink)] + [u[-1] for u in unb]
     return LinkModel(system, links, rec, reduced, max(orders, default=1), period, dict(loads))
 
 
@@ -386,6 +395,7 @@ def link_sweep(
     omegas = np.asarray(omegas, dtype=float)
     top = float(np.max(np.abs(omegas))) if omegas.size else 0.0
     ladder = [h * model.top_order for h in LADDER]
+    model.receptance.prepare_stability(top)  # the stability basis serves the whole sweep
     if H is None:
 
         def on_rung(h):  # a modal basis (large models) serves the check's H' too
@@ -405,6 +415,7 @@ def link_sweep(
             two = period_model(model, 2)
             if top > 0:
                 two.receptance.prepare(H_check * top / 2)
+                two.receptance.prepare_stability(top / 2)
             return two.reduced
 
         res, p2 = beyond_period_one(
@@ -420,18 +431,28 @@ def link_sweep(
         )
     two = period_model(model, 2) if p2 is not None else None
     blank = dict.fromkeys(output_names(model), np.nan)
-    rows = []
-    for i in range(len(res)):
-        if not res.converged[i] or res.no_stable[i]:
-            rows.append(blank)
-            continue
-        # a period-2 point over 2T on the base ω/2, a period-1 one on its own harmonics
-        on_two = two is not None and int(res.period[i]) == 2
-        m, z, w = (
-            (two, res.harmonics[i], res.omega[i] / 2) if on_two else (model, p1.harmonics[i], res.omega[i])
-        )
-        rows.append(point_outputs(m, z, float(w)))
-    return LinkSweepResult(res, pd.DataFrame(rows, columns=list(blank)), bearing_columns(model))
+    rows = [blank] * len(res)
+    # a period-2 point over 2T on the base ω/2, a period-1 one on its own harmonics; the
+    # points of each model at once
+    ok = [i for i in range(len(res)) if res.converged[i] and not res.no_stable[i]]
+    on_two = [i for i in ok if two is not None and int(res.period[i]) == 2]
+    on_one = [i for i in ok if i not in set(on_two)]
+    # the first mesh's metrics of the period-1 points: the sweep's own (the same function
+    # of the same harmonics, its contact intervals found while solving)
+    first = next((lk for lk in model.links if isinstance(lk, GearMeshLink)), None)
+    known = None
+    if first is not None and "n_samples" not in options:
+        known = {first.name: [GearMeshLink.metric_row(p1.metrics, i) for i in on_one]}
+    for m, pts, zs, ws, kn in (
+        (model, on_one, [p1.harmonics[i] for i in on_one], [res.omega[i] for i in on_one], known),
+        (two, on_two, [res.harmonics[i] for i in on_two], [res.omega[i] / 2 for i in on_two], None),
+    ):
+        if pts:
+            for i, row in zip(pts, points_outputs(m, zs, ws, kn), strict=True):
+                rows[i] = row
+    columns = {c: np.array([row[c] for row in rows], dtype=float) for c in blank}  # faster than rows
+    table = pd.DataFrame(columns, columns=list(blank))
+    return LinkSweepResult(res, table, bearing_columns(model))
 
 
 def link_continuation(
@@ -466,6 +487,7 @@ def link_continuation(
     LinkContinuationResult
     """
     top = max(abs(float(omega_start)), abs(float(omega_end)))
+    model.receptance.prepare_stability(top)
     if H is None:
         ladder = [h * model.top_order for h in LADDER]
         model.receptance.prepare(ladder[-1] * top)

@@ -58,6 +58,7 @@ from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.reduction.direct_receptance import DirectSolution, DirectSolver, coupled_dofs
 from nlgrd.nonlinear.reduction.link_mean import MeanProblem
 from nlgrd.nonlinear.reduction.link_poles import LinkPoleForm
+from nlgrd.nonlinear.reduction.link_stability import TruncatedStability
 from nlgrd.nonlinear.reduction.modal_basis import (
     ModeCapWarning,
     attachment_basis,
@@ -66,7 +67,7 @@ from nlgrd.nonlinear.reduction.modal_basis import (
     rigid_decoupled,
 )
 from nlgrd.nonlinear.reduction.pole_residue import POLE_CHECK_RTOL, PoleResidue
-from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
+from nlgrd.nonlinear.reduction.state_space import HYSTERETIC_REFUSAL, LinearStateSpace
 from nlgrd.rotor.assembly import LinearModel, assemble
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
 from nlgrd.rotor.system import RotorSystem
@@ -124,6 +125,9 @@ class LinkReceptance:
         needed by "modal" with ``harmonic_force``.
     cutoff_factor : float
         Modal basis: modes up to ``cutoff_factor * max_frequency`` [-].
+    top_order : int
+        The highest base harmonic a mesh sits at (its excitation's fundamental): the
+        stability basis serves ``top_order`` x the base frequency at least [-].
 
     Attributes
     ----------
@@ -147,6 +151,7 @@ class LinkReceptance:
         max_frequency: float | None = None,
         force_dofs: Sequence[int] | None = None,
         cutoff_factor: float = 3.0,
+        top_order: int = 1,
     ):
         self.system, self.links, self.plan = system, tuple(links), plan
         self.model: LinearModel = assemble(system, mesh_stiffness=False, mesh_damping=False)
@@ -154,8 +159,10 @@ class LinkReceptance:
         self.P = (
             np.hstack([link.projection(system) for link in self.links]) if self.links else np.zeros((n, 0))
         )
-        self.k_link = sla.block_diag(*[link.linear_stiffness() for link in self.links])
-        self.c_link = sla.block_diag(*[link.linear_damping() for link in self.links])
+        # block_diag of nothing is (1, 0): a model without links has empty ones
+        d = self.P.shape[1]
+        self.k_link = sla.block_diag(*[link.linear_stiffness() for link in self.links]).reshape(d, d)
+        self.c_link = sla.block_diag(*[link.linear_damping() for link in self.links]).reshape(d, d)
         self.C_link = sp.csc_matrix(self.P @ self.c_link @ self.P.T)
         self.K_link = sp.csc_matrix(self.P @ self.k_link @ self.P.T)
         self.static_force = np.zeros(n) if static_force is None else np.asarray(static_force, dtype=float)
@@ -199,6 +206,7 @@ class LinkReceptance:
         self._auto_modal = method == "auto" and not self._dense and self._plain
         self._auto_modal &= harmonic_force is None or force_dofs is not None
         self._poles = BoundedCache(256)
+        self.stability = TruncatedStability(self.model, self.P, self.K_link, self.C_link, top_order)
         self._banded = BoundedCache(8)  # the banded solvers, per tuple of output DOFs
         # their solves of all harmonics per (ω, H, output DOFs), and the DOFs recovered last
         # (the next frequencies' solves return them: the recovery needs no solve of its own)
@@ -407,10 +415,14 @@ class LinkReceptance:
 
     def _band_solve(self, omega: float, H: int, dofs: tuple, f: NDArray | None = None) -> DirectSolution:
         """Harmonics 1..H of the ``"banded"`` solver for output ``dofs`` at ``omega``, with
-        the forces f_k (default :meth:`forces`), kept per (ω, H, dofs)."""
+        the forces f_k (default :meth:`forces`) when there are external harmonic forces
+        (without, f_k = P φ_k and its solve is the links' Z_k⁻¹ P φ_k: no right-hand side of
+        its own), kept per (ω, H, dofs)."""
 
         def make():
-            rhs = self.forces(omega, H)[1:] if f is None else f
+            rhs = None
+            if self.harmonic_force is not None:
+                rhs = self.forces(omega, H)[1:] if f is None else f
             return self._band_solver(dofs).solve_forced(np.arange(1, H + 1), omega, False, rhs)
 
         return self._band_sols.get((float(omega), int(H), dofs), make)
@@ -444,6 +456,25 @@ class LinkReceptance:
             return None
         return self._poles.get(("poles", k), make)
 
+    def _pole_stack(self, H: int) -> tuple[NDArray, NDArray, NDArray] | None:
+        """The pole-residue forms of harmonics 1..H stacked (poles (H, 2n), Pᵀ X_top
+        (H, d, 2n), L P (H, 2n, d)) for all harmonics at once, or None when one of them is
+        solved directly."""
+
+        def make():
+            forms = [self._pole_form(k) for k in range(1, H + 1)]
+            if any(pf is None for pf in forms):
+                return None
+            return (
+                np.stack([pf.pr.poles for pf in forms]),
+                np.stack([pf.CP for pf in forms]),
+                np.stack([pf.LP for pf in forms]),
+            )
+
+        if self.method not in ("poles", "modal") or not H:
+            return None
+        return self._poles.get(("stack", int(H)), make)
+
     def terms(self, omega: float, H: int) -> tuple[NDArray, NDArray]:
         """κ_k (H+1, d, d) [N/m] and F_k (H+1, d) [N], k = 0..H.
 
@@ -471,22 +502,35 @@ class LinkReceptance:
                 ph = ph + self.P.T @ self.mean.solve(speed, (ext[0].real - self.static_force)[:, None])[:, 0]
             kap[0] = hr_inv - self.k_link
             frc[0] = hr_inv @ ph
-            Lf = self._pole_forces(omega, H) if self.method in ("poles", "modal") else None
+            # no external harmonic forces: f_k = P φ_k, so F_k = κ_k Pᵀ Z_k⁻¹ P φ_k = φ_k
+            own = self.harmonic_force is None
+            poles = self.method in ("poles", "modal")
+            Lf = self._pole_forces(omega, H) if poles and not own else None
             Ps, f = self._Ps, None
+            stack = self._pole_stack(H) if own else None
+            if stack is not None:  # every harmonic in pole-residue form: all at once
+                lam, CP, LP = stack
+                w = 1.0 / (omega - lam)
+                kap[1:] = np.linalg.inv(CP @ (w[:, :, None] * LP)) - self.k_link
+                frc[1:] = phi[1:]
+                return kap, frc
             if self.method == "banded" and H:
                 sol = self._band_solve(omega, H, self._band_out, ext[1:] + phi[1:] @ self.P.T)
                 kap[1:] = np.linalg.inv(sol.h)
-                frc[1:] = (kap[1:] @ sol.g[:, :, None])[:, :, 0]
+                # no external forces: F_k = κ_k Pᵀ Z_k⁻¹ P φ_k = φ_k
+                frc[1:] = phi[1:] if sol.g is None else (kap[1:] @ sol.g[:, :, None])[:, :, 0]
                 return kap, frc
             for k in range(1, H + 1):
                 pf = self._pole_form(k)
                 if pf is not None:
-                    kap[k], frc[k] = pf.terms(omega, Lf[k])
+                    kap[k], frc[k] = pf.terms(omega, np.zeros(pf.LP.shape[0]) if own else Lf[k])
                     continue
                 f = ext + phi @ self.P.T if f is None else f
                 u = self._factor(k, omega).solve(np.column_stack([Ps.astype(complex), self._proj(f[k])]))
                 kap[k] = np.linalg.inv(Ps.T @ u[:, :d])
                 frc[k] = kap[k] @ (Ps.T @ u[:, d])
+            if own:
+                frc[1:] = phi[1:]
             return kap, frc
 
         return self._terms.get((float(omega), int(H)), make)
@@ -509,8 +553,10 @@ class LinkReceptance:
         the pole-residue form, or (``"banded"``) solves again with the Woodbury identity's
         derivative (:mod:`nlgrd.nonlinear.reduction.direct_receptance`, tabulated bearings and
         loss factor included); f_k' by a central difference of the forces (exact for their
-        degree <= 2 in ω). κ_0 and F_0 do not depend on ω unless the stiffness does on the
-        speed (then by central differences).
+        degree <= 2 in ω), but without external harmonic forces, where F_k = φ_k (the
+        links' own forcing, linear in ω), analytically: dF_k/dω = φ_k / ω. κ_0 and F_0 do
+        not depend on ω unless the stiffness does on the speed (then by central
+        differences).
 
         Parameters
         ----------
@@ -535,10 +581,16 @@ class LinkReceptance:
             hf = 1e-3 * max(abs(omega), 1.0)
             poles = self.method in ("poles", "modal")
             Ps = self._Ps
-            if poles:
+            own = self.harmonic_force is None  # F_k = φ_k, the links' own forcing, ∝ ω
+            if poles and not own:
                 Lf_all = self._pole_forces(omega, H)
                 dLf_all = (self._pole_forces(omega + hf, H) - self._pole_forces(omega - hf, H)) / (2 * hf)
-            if not poles or any(self._pole_form(k) is None for k in range(1, H + 1)):
+            if own:  # κ alone is needed: no forces
+                zero = np.zeros((H + 1, Ps.shape[0]), dtype=complex)
+                f = df = zero
+                if poles:
+                    Lf_all = dLf_all = np.zeros((H + 1, 2 * Ps.shape[0]), dtype=complex)
+            elif not poles or any(self._pole_form(k) is None for k in range(1, H + 1)):
                 df = self._proj((self.forces(omega + hf, H) - self.forces(omega - hf, H)) / (2 * hf))
                 f = self._proj(self.forces(omega, H))
             dkap = np.zeros((H + 1, d, d), dtype=complex)
@@ -552,12 +604,24 @@ class LinkReceptance:
             else:
                 Kc, M, G = m.Kc, m.M, m.G
                 C = (m.C + m.Ci + self.C_link).tocsc()
+            stack = self._pole_stack(H) if own else None
+            if stack is not None:  # all harmonics at once: d/dω of 1/(ω - λ) is -1/(ω - λ)²
+                lam, CP, LP = stack
+                w = 1.0 / (omega - lam)
+                kp = np.linalg.inv(CP @ (w[:, :, None] * LP))
+                dkap[1:] = kp @ (CP @ ((w * w)[:, :, None] * LP)) @ kp
+                dfrc[1:] = self._force_parts(omega, H)[1][1:] / omega
+                return dkap, dfrc
             if self.method == "banded" and H:
                 solver = self._band_solver(self._band_out)
-                sol = solver.solve_forced(np.arange(1, H + 1), omega, True, f[1:], df[1:])
+                rhs = (None, None) if own else (f[1:], df[1:])
+                sol = solver.solve_forced(np.arange(1, H + 1), omega, True, *rhs)
                 kh = kap[1:]
                 dkap[1:] = -kh @ sol.dh @ kh
-                dfrc[1:] = (dkap[1:] @ sol.g[:, :, None] + kh @ sol.dg[:, :, None])[:, :, 0]
+                if own:  # the links' own forcing is linear in ω (i k ω c_m E_k for a mesh)
+                    dfrc[1:] = self._force_parts(omega, H)[1][1:] / omega
+                else:
+                    dfrc[1:] = (dkap[1:] @ sol.g[:, :, None] + kh @ sol.dg[:, :, None])[:, :, 0]
                 return dkap, dfrc
             A = B = None
             for k in range(1, H + 1):
@@ -574,6 +638,8 @@ class LinkReceptance:
                 v = lu.solve(np.column_stack([dZ @ up, df[k] - dZ @ uf]))
                 dkap[k] = kap[k] @ (Ps.T @ v[:, :d]) @ kap[k]
                 dfrc[k] = dkap[k] @ (Ps.T @ uf) + kap[k] @ (Ps.T @ v[:, d])
+            if own:
+                dfrc[1:] = self._force_parts(omega, H)[1][1:] / omega
             return dkap, dfrc
 
         return self._terms.get(("d", float(omega), int(H)), make)
@@ -611,7 +677,11 @@ class LinkReceptance:
         if self.method == "banded" and H:
             self._band_out = key = tuple(int(i) for i in dofs)
             sol = self._band_solve(omega, H, key)  # Z⁻¹ (f - P G) = Z⁻¹ f - (Z⁻¹ P) G
-            out[1:] = sol.Ug - np.einsum("kij,kj->ki", sol.U, G[1:])
+            if sol.Ug is None:  # f = P φ: Z⁻¹ P (φ - G)
+                phi = self._force_parts(omega, H)[1]
+                out[1:] = np.einsum("kij,kj->ki", sol.U, phi[1:] - G[1:])
+            else:
+                out[1:] = sol.Ug - np.einsum("kij,kj->ki", sol.U, G[1:])
         for k in range(1, H + 1 if self.method != "banded" else 1):
             pf = self._pole_form(k)
             rhs = f[k] - self.P @ G[k]
@@ -637,10 +707,37 @@ class LinkReceptance:
         m = self.model
         return replace(m, K=(m.K + self.K_link).tocsc(), C=(m.C + self.C_link).tocsc(), meshes=())
 
+    def prepare_stability(self, top: float) -> None:
+        """Size the stability basis for base frequencies up to ``top`` [rad/s] (a sweep's
+        highest: :meth:`~nlgrd.nonlinear.reduction.link_stability.TruncatedStability.prepare`).
+
+        Parameters
+        ----------
+        top : float
+            Highest base frequency [rad/s].
+        """
+        self.stability.prepare(top)
+
+    @property
+    def truncates_stability(self) -> bool:
+        """Whether Floquet stability runs on the truncated basis of :meth:`state_space`: every
+        link a gear mesh (a clearance's contact excites modes far above the cut-off
+        parametrically: benchmarks/README.md), at most :data:`DENSE_STABILITY_LIMIT` DOFs
+        and no modal basis (whose own modes serve then)."""
+        from nlgrd.nonlinear.links.contract import GearMeshLink
+
+        small = self.model.n_dofs <= DENSE_STABILITY_LIMIT and self.basis is None
+        return small and bool(self.links) and all(isinstance(lk, GearMeshLink) for lk in self.links)
+
     def state_space(self, omega: float) -> LinearStateSpace | None:
-        """The linear part for Floquet stability at base frequency ``omega``: on the modes
-        and static attachment vectors of the modal basis when there is one, else dense up
-        to :data:`DENSE_STABILITY_LIMIT` DOFs (None above it).
+        """The linear part for Floquet stability at base frequency ``omega``.
+
+        Where every link is a gear mesh (:attr:`truncates_stability`), on the modes below
+        3x the highest mesh frequency and the static attachment vectors of the link
+        coordinates, checked by Floquet analysis where the orbit's tangent varies over the
+        period (:mod:`nlgrd.nonlinear.reduction.link_stability`). Else on the modes and
+        static attachment vectors of the modal basis when there is one, else dense up to
+        :data:`DENSE_STABILITY_LIMIT` DOFs (None above it).
 
         Parameters
         ----------
@@ -650,17 +747,24 @@ class LinkReceptance:
         Returns
         -------
         LinearStateSpace or None
+
+        Raises
+        ------
+        ModelError
+            (``loss_factor``) With hysteretic damping, which has no time-domain form
+            (:data:`~nlgrd.nonlinear.reduction.state_space.HYSTERETIC_REFUSAL`).
         """
         if self.model.n_dofs > DENSE_STABILITY_LIMIT and self.basis is None:
             return None
         if self.model.hysteretic_parts:
-            raise ModelError("loss_factor", "hysteretic damping has no time-domain form for stability")
+            raise ModelError("loss_factor", HYSTERETIC_REFUSAL)
         speed = self.plan.speed(omega)
         if self.basis is not None:  # on the stability basis
             a, Ps = self._stability
             return LinearStateSpace(a["M"], a["C"] + speed * a["G"], a["K"] + speed * a["Kc"], Ps)
-        mats = (self.model.M, self.model.damping(speed) + self.C_link, self.model.stiffness(speed))
-        return LinearStateSpace(*(A.toarray() for A in mats), self.P)
+        if not self.truncates_stability:
+            return self.stability.full_state(speed)
+        return self.stability.state_space(omega, speed)
 
     def check(self, omega: float) -> None:
         """Raise ModelError when Z_1 is singular at ``omega`` (a link-free rigid-body mode).

@@ -67,6 +67,7 @@ from nlgrd.nonlinear.reduction.modal_basis import (
     rigid_decoupled,
 )
 from nlgrd.nonlinear.reduction.pole_residue import POLE_CHECK_RTOL, PoleResidue
+from nlgrd.nonlinear.reduction.state_space import HYSTERETIC_REFUSAL
 from nlgrd.rotor.assembly import LinearModel, assemble, mesh_matrix
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
 from nlgrd.rotor.system import RotorSystem
@@ -553,9 +554,12 @@ class MeshReceptance:
         Basis: the rigid-body and lowest modes of the linear system (meshes at k_h) up to
         3 x ``max_frequency`` [rad/s] plus the static attachment vectors K_r⁻¹ W; D holds
         C, internal damping, Ω G, bearing damping and c_m w wᵀ at the speed of mesh
-        frequency ``omega``; K leaves out k_h. Hysteretic damping has no time-domain form
-        and is left out.
+        frequency ``omega``; K leaves out k_h. Hysteretic damping has no time-domain form:
+        ModelError (``loss_factor``, :data:`~nlgrd.nonlinear.reduction.state_space.HYSTERETIC_REFUSAL`;
+        it was left out, the multipliers those of the model without it).
         """
+        if self.model.hysteretic_parts:
+            raise ModelError("loss_factor", HYSTERETIC_REFUSAL)
         key = float(max_frequency)
         entry = self._stability_basis.get(key)
         if entry is None:

@@ -8,6 +8,7 @@ coordinates, its rigid-body modes and the deflated system without them
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -19,6 +20,13 @@ from nlgrd.errors import ModelError
 from nlgrd.nonlinear.reduction.linear_algebra import free_modes as _free_modes
 from nlgrd.nonlinear.reduction.linear_algebra import stiffness_null_space
 from nlgrd.rotor.rigid_body import complement, rigid_body_modes
+
+#: Why a model with hysteretic damping (a loss factor) has no Floquet stability, on every
+#: path (docs/conventions.md, "Hysteretic damping"): said in one line, under ``loss_factor``.
+HYSTERETIC_REFUSAL = (
+    "hysteretic damping has no time-domain form, so no Floquet stability (nor time integration): "
+    "give viscous damping instead, or sweep without stability"
+)
 
 
 class FloquetCache(BoundedCache):
@@ -62,6 +70,11 @@ class LinearStateSpace:
         [-] on translations, base radii [m] on rotations).
     cache : FloquetCache, optional
         Shared store of Floquet work (see above).
+    larger, full : callable () -> LinearStateSpace, optional
+        For a state space on a truncated modal basis: the one on the basis with twice its
+        cut-off and the whole model's, with which Floquet analysis checks the truncation
+        where the orbit's tangent varies over the period
+        (:func:`nlgrd.nonlinear.stability.floquet.floquet_analysis`).
 
     Raises
     ------
@@ -74,6 +87,8 @@ class LinearStateSpace:
     K: NDArray
     W: NDArray
     cache: FloquetCache | None = field(default=None, compare=False, repr=False)
+    larger: Callable[[], LinearStateSpace] | None = field(default=None, compare=False, repr=False)
+    full: Callable[[], LinearStateSpace] | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         for name in ("M", "D", "K", "W"):

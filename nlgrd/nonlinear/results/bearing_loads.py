@@ -322,36 +322,65 @@ def link_bearing_outputs(model, harmonics: NDArray, omega: float) -> dict[str, f
         ``.force_rms [N]``, ``.force_max [N]`` per bearing (radial magnitudes, as
         :class:`BearingResponse`).
     """
+    return link_bearing_outputs_of_points(model, [harmonics], [omega])[0]
+
+
+def link_bearing_outputs_of_points(model, harmonics, omegas) -> list[dict[str, float]]:
+    """:func:`link_bearing_outputs` of many points: the recovery point by point, the
+    statistics and maxima of all points with the same H at once (as
+    :func:`bearing_response`).
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model solved (a period-ν model for period-ν points).
+    harmonics : sequence of ndarray (n_coords, 2H+1)
+        Real harmonics of the link coordinates of each point on the model's base [m].
+    omegas : sequence of float
+        The frequencies the model's receptances take [rad/s].
+
+    Returns
+    -------
+    list of dict
+        One per point, as :func:`link_bearing_outputs`.
+    """
     system, rec = model.system, model.receptance
     if not system.bearings:
-        return {}
-    z = np.asarray(harmonics, dtype=float).reshape(rec.n_coords, -1)
-    H = (z.shape[1] - 1) // 2
-    w = float(omega)
-    Y = real_to_complex(z).T  # (H+1, d)
-    F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
-    kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, Y.shape[1], Y.shape[1])
-    G = F - np.einsum("kij,kj->ki", kap, Y)
-    q = rec.recover(w, H, z, complex_to_real(G.T), bearing_node_dofs(system))
-    Q = real_to_complex(q).T  # (H+1, 2 n_b)
-    Fb = bearing_forces(system, Q, w, rec.plan.speed(w))
-    samples = model.output_cache.get(H, lambda: _period_samples(H))
-    stats = dict(
-        zip(
-            BEARING_OUTPUTS,
-            (
-                _radial_maxima(Q[None], samples)[0],
-                _radial_rms(Q),
-                np.hypot(Fb[0, 0::2].real, Fb[0, 1::2].real),
-                _radial_rms(Fb),
-                _radial_maxima(Fb[None], samples)[0],
-            ),
-            strict=True,
+        return [{} for _ in harmonics]
+    names = bearing_names(system)
+    dofs = bearing_node_dofs(system)
+    zs = [np.asarray(z, dtype=float).reshape(rec.n_coords, -1) for z in harmonics]
+    out: list[dict[str, float]] = [{} for _ in zs]
+    for width in sorted({z.shape[1] for z in zs}):
+        rows = [i for i, z in enumerate(zs) if z.shape[1] == width]
+        H = (width - 1) // 2
+        Q = np.empty((len(rows), H + 1, dofs.size), dtype=complex)
+        Fb = np.empty_like(Q)
+        for j, i in enumerate(rows):
+            w, z = float(omegas[i]), zs[i]
+            Y = real_to_complex(z).T  # (H+1, d)
+            F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
+            kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, Y.shape[1], Y.shape[1])
+            G = F - np.einsum("kij,kj->ki", kap, Y)
+            Q[j] = real_to_complex(rec.recover(w, H, z, complex_to_real(G.T), dofs)).T  # (H+1, 2 n_b)
+            Fb[j] = bearing_forces(system, Q[j], w, rec.plan.speed(w))
+        samples = model.output_cache.get(H, lambda H=H: _period_samples(H))
+        stats = dict(
+            zip(
+                BEARING_OUTPUTS,
+                (
+                    _radial_maxima(Q, samples),
+                    _radial_rms(Q),
+                    np.hypot(Fb[:, 0, 0::2].real, Fb[:, 0, 1::2].real),
+                    _radial_rms(Fb),
+                    _radial_maxima(Fb, samples),
+                ),
+                strict=True,
+            )
         )
-    )
-    return {
-        f"{name}.{q}": float(v[j]) for j, name in enumerate(bearing_names(system)) for q, v in stats.items()
-    }
+        for j, i in enumerate(rows):
+            out[i] = {f"{n}.{q}": float(v[j, b]) for b, n in enumerate(names) for q, v in stats.items()}
+    return out
 
 
 def bearing_response(model, result: SweepResult) -> BearingResponse:

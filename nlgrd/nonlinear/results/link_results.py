@@ -13,7 +13,11 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.results.bearing_loads import BEARING_OUTPUTS, bearing_names, link_bearing_outputs
+from nlgrd.nonlinear.results.bearing_loads import (
+    BEARING_OUTPUTS,
+    bearing_names,
+    link_bearing_outputs_of_points,
+)
 from nlgrd.nonlinear.results.sweep_results import ContinuationResult, SweepResult
 from nlgrd.units import OutputColumn, parse_column
 
@@ -27,6 +31,7 @@ __all__ = [
     "output_columns",
     "output_names",
     "point_outputs",
+    "points_outputs",
     "with_links",
 ]
 
@@ -265,12 +270,52 @@ def point_outputs(model, harmonics: NDArray, omega: float) -> dict[str, float]:
     dict
         In the order of :func:`output_names`.
     """
-    z = np.asarray(harmonics, dtype=float)
-    row = {}
+    return points_outputs(model, [harmonics], [omega])[0]
+
+
+def points_outputs(model, harmonics, omegas, known: dict | None = None) -> list[dict[str, float]]:
+    """:func:`point_outputs` of many points: a link with ``metrics_of_points`` (a gear mesh)
+    takes all points of one H at once, the bearings' statistics too
+    (:func:`~nlgrd.nonlinear.results.bearing_loads.link_bearing_outputs_of_points`).
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model solved (the period-ν model of period-ν points).
+    harmonics : sequence of ndarray (n_coords, 2H+1)
+        Real harmonics of the link coordinates of each point on the model's base [m].
+    omegas : sequence of float
+        The frequencies the model's receptances take [rad/s].
+    known : dict, optional
+        Outputs already computed, per link name a list of dicts (one per point): that
+        link's metrics are not computed again (a sweep's own metrics of its first mesh).
+
+    Returns
+    -------
+    list of dict
+        One per point, in the order of :func:`output_names`.
+    """
+    known = known or {}
+    zs = [np.asarray(z, dtype=float) for z in harmonics]
+    ws = np.asarray(omegas, dtype=float)
+    rows: list[dict[str, float]] = [{} for _ in zs]
     for link, sl in zip(model.links, model.receptance.slices, strict=True):
-        row.update({f"{link.name}.{k}": v for k, v in link.metrics(z[sl], float(omega)).items()})
-    row.update(link_bearing_outputs(model, z, float(omega)))
-    return row
+        if link.name in known:
+            for row, m in zip(rows, known[link.name], strict=True):
+                row.update({f"{link.name}.{k}": v for k, v in m.items()})
+            continue
+        batch = getattr(link, "metrics_of_points", None)
+        for width in sorted({z.shape[1] for z in zs}):
+            idx = [i for i, z in enumerate(zs) if z.shape[1] == width]
+            if batch is not None:
+                ms = batch(np.stack([zs[i][sl] for i in idx]), ws[idx])
+            else:
+                ms = [link.metrics(zs[i][sl], float(ws[i])) for i in idx]
+            for i, m in zip(idx, ms, strict=True):
+                rows[i].update({f"{link.name}.{k}": v for k, v in m.items()})
+    for row, b in zip(rows, link_bearing_outputs_of_points(model, zs, ws), strict=True):
+        row.update(b)
+    return rows
 
 
 def link_rows(model, res: SweepResult, usable: NDArray) -> pd.DataFrame:
@@ -291,11 +336,9 @@ def link_rows(model, res: SweepResult, usable: NDArray) -> pd.DataFrame:
         One row per point, ``<link>.<quantity>`` columns.
     """
     blank = dict.fromkeys(output_names(model), np.nan)
-    rows = [
-        point_outputs(model, res.harmonics[i], float(res.omega[i])) if usable[i] else blank
-        for i in range(len(res))
-    ]
-    return pd.DataFrame(rows, columns=list(blank))
+    pts = [i for i in range(len(res)) if usable[i]]
+    done = dict(zip(pts, points_outputs(model, [res.harmonics[i] for i in pts], res.omega[pts]), strict=True))
+    return pd.DataFrame([done.get(i, blank) for i in range(len(res))], columns=list(blank))
 
 
 @dataclass(frozen=True)

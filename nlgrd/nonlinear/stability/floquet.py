@@ -69,6 +69,8 @@ from nlgrd.rotor.rigid_body import CONSTRAINT_RTOL
 if TYPE_CHECKING:  # pragma: no cover
     from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
 
+#: A truncated basis is kept where max |μ| moves by at most this to twice its cut-off.
+TRUNCATION_ATOL = 1e-7
 #: Up to this state dimension 2N, ``method="auto"`` returns every multiplier (dense).
 DENSE_STATE_LIMIT = 48
 #: Squarings of the monodromy matrix after which its dominant subspace is tried (Φ^8192 ...).
@@ -572,6 +574,11 @@ def floquet_analysis(
     ``MAGNUS_MAX_STEPS``; ``converged`` says if it got there).
     Piecewise-constant tangents keep the exact product, one exponential per interval.
 
+    A state space on a truncated basis with its ``larger`` and ``full`` ones: where the
+    orbit's tangent varies over the period, the multipliers on ``larger`` when max |μ| moved
+    by at most :data:`TRUNCATION_ATOL`, else on ``full`` (docs/conventions.md, "Stability
+    state space"; a time-invariant tangent keeps the basis).
+
     Parameters
     ----------
     state_space, nonlinearities, harmonics, deflate, method
@@ -592,6 +599,27 @@ def floquet_analysis(
     if method not in METHODS:
         raise ModelError("method", f"one of {', '.join(map(repr, METHODS))}, got {method!r}")
     Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
+    full, n = state_space.full, state_space.W.shape[1]
+    if full is None or method == "expm" or _time_invariant(nonlinearities, Y, n):
+        return _analysis(state_space, nonlinearities, Y, omega, deflate, method)
+    if state_space.larger is not None:  # the truncation checked by twice the cut-off
+        res = _analysis(state_space, nonlinearities, Y, omega, deflate, method)
+        big = _analysis(state_space.larger(), nonlinearities, Y, omega, deflate, method)
+        top = [float(np.max(np.abs(r.multipliers))) for r in (res, big)]
+        if abs(top[1] - top[0]) <= TRUNCATION_ATOL:
+            return big
+    return _analysis(full(), nonlinearities, Y, omega, deflate, method)
+
+
+def _time_invariant(nonlinearities: Sequence, Y: NDArray, n: int) -> bool:
+    """Whether the orbit's tangent is one constant over the period (no contact change)."""
+    if _smooth_pieces(nonlinearities, Y, n) is not None:
+        return False
+    return len(_state_sequence(*_tangent_pieces(nonlinearities, Y, n))[0]) == 1
+
+
+def _analysis(state_space, nonlinearities: Sequence, Y: NDArray, omega: float, deflate: bool, method: str):
+    """:func:`floquet_analysis` on ``state_space`` as it is (not its ``full`` one)."""
     if method != "expm":
         pieces = _smooth_pieces(nonlinearities, Y, state_space.W.shape[1])
         if pieces is not None:

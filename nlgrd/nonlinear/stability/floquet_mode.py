@@ -50,7 +50,8 @@ def monodromy_from_zero(
 ) -> NDArray[np.float64]:
     """Φ = Π exp(A_i Δt_i) over the contact intervals from θ = 0 (the first acts first), in
     the state (q, q') of ``state_space``: :func:`nlgrd.nonlinear.stability.floquet.expm_monodromy` (scipy's
-    ``expm``, no deflation, no scaling).
+    ``expm``, no deflation, no scaling). A state space on a truncated basis with its
+    ``full`` one: in the full one's state.
 
     Parameters
     ----------
@@ -70,6 +71,8 @@ def monodromy_from_zero(
         Φ: (q, q') at θ = 0 to (q, q') one period later.
     """
     Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
+    if getattr(state_space, "full", None) is not None:  # a truncated basis: the whole model's
+        state_space = state_space.full()
     breaks, Kt = _tangent_pieces(nonlinearities, Y, state_space.W.shape[1])
     return expm_monodromy(state_space, breaks, Kt, omega)
 
