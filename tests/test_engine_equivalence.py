@@ -305,6 +305,35 @@ def test_banded_link_strategy_equals_the_other_link_strategies(case):
     assert max(worst.values()) <= REDUCTION_RTOL
 
 
+@pytest.mark.parametrize("case", ["two_shaft", "two_shaft_clearance_unbalance"])
+def test_banded_link_evaluation_factorises_once(monkeypatch, case):
+    """One corrector evaluation on ``"banded"`` (dκ_k/dω and dF_k/dω, then κ_k and F_k at
+    the same frequency) factorises each Z'_k once (it did twice), as in the other order, and
+    gives what a receptance asked κ_k first (its plain solve, then the derivatives on the same
+    LUs) gives, bit for bit: with one link coordinate (two_shaft) κ_k takes the derivative
+    solve's h_k, with three (the bearing clearance, unbalance forces off the links) its own
+    plain solve."""
+    from nlgrd.nonlinear.reduction import direct_receptance as dr
+
+    s = system(case) if case in FILES else _clearance_system(True)
+    first, plain_first = (build_link_model(s, method="banded").receptance for _ in range(2))
+    assert first.method == "banded" and first.n_coords == (1 if case in FILES else 3)
+    factor, calls = dr._Band.factor, []
+    monkeypatch.setattr(dr._Band, "factor", lambda band, data: calls.append(1) or factor(band, data))
+    for w in 2 * np.pi * np.array(POINTS_HZ["two_shaft"]):
+        n = len(calls)
+        d = first.derivatives(w, H)
+        t = first.terms(w, H)
+        assert len(calls) - n == H
+        n = len(calls)
+        t_ref = plain_first.terms(w, H)
+        d_ref = plain_first.derivatives(w, H)
+        assert len(calls) - n == H
+        for a, b in zip((*d, *t), (*d_ref, *t_ref), strict=True):
+            np.testing.assert_array_equal(a, b)
+    assert first._band_solver().n_sparse == 0
+
+
 @pytest.mark.parametrize("variant", ("tabulated", "loss"))
 @pytest.mark.parametrize("name", FILES)
 def test_banded_link_derivatives_against_differences(name, variant):

@@ -19,6 +19,10 @@ and for a forcing f (``rhs``), with x' = Z'⁻¹ f and g' = Wᵀ x':
     x = Z⁻¹ f = x' - Z'⁻¹ W S D g',   g = Wᵀ x = T g',
     dg/dω = T (Z'⁻ᵀ W)ᵀ (df/dω - (dZ'/dω) x) - h (dD/dω) g.
 
+A solver keeps the band LUs and Z'⁻¹ [W f] of its last solve: the derivatives asked at the
+same harmonics, frequency and forcing (κ_k, then dκ_k/dω in a corrector) need no new
+factorisation, only the transposed solves Z'⁻ᵀ W.
+
 Z' can be nearly singular where Z is not (a shaft mode that only the mesh damps). The
 banded LU is backward stable, so the computed h' is exact for Z' + E with E of rounding
 size, and the identity then gives h exactly for Z + E: with one mesh (S a scalar) the
@@ -39,6 +43,7 @@ from numpy.typing import NDArray
 from scipy.linalg.lapack import zgbtrf, zgbtrs
 from scipy.sparse.csgraph import connected_components, reverse_cuthill_mckee
 
+from nlgrd.cache import BoundedCache
 from nlgrd.rotor.assembly import LinearModel, plain_dynamic_stiffness
 
 #: Widest half bandwidth factorised as a band (wider: sparse LU of the whole Z).
@@ -261,6 +266,8 @@ class DirectSolver:
             self._parts = {k: pat[k][sel] for k in ("K", "Kc", "M", "C", "Ci", "G")} if plain else None
         #: harmonics solved by band (Woodbury) and by sparse LU of Z
         self.n_band = self.n_sparse = 0
+        # the last frequency's band LUs and Z'⁻¹ [W f] (:meth:`_factored`)
+        self._last = BoundedCache(1)
 
     @property
     def banded(self) -> bool:
@@ -364,26 +371,42 @@ class DirectSolver:
             self._sparse(i, int(ks[i]), omega, derivative, out, f, df)
         return out
 
-    def _woodbury(self, ks, omega, derivative, out: DirectSolution, f, df) -> NDArray:
-        """Band solves of Z'_k and the identity, in place; which harmonics succeeded."""
+    def _factored(self, ks: NDArray, omega: float, f: NDArray | None) -> tuple[list, NDArray]:
+        """Band LUs of Z'_k (None where exactly singular) and Y = Z'_k⁻¹ [W f_k] in the
+        band's order, (K, n, n_nl [+1]); those of the last call are reused when ``ks``, ``omega``
+        and ``f`` are the same (κ_k and then dκ_k/dω at one frequency: one factorisation)."""
         b, Wp = self.band, self.W_perm
+        key = (ks.tobytes(), float(omega))
+        last = self._last.peek(key)
+        if last is not None and (last[0] is None) == (f is None):
+            if f is None or np.array_equal(last[0], f):
+                return last[1], last[2]
         data = self._band_data(ks, omega)
         nc = Wp.shape[1]
         forced = f is not None
         B = np.asfortranarray(np.column_stack([Wp, np.zeros(b.n)])) if forced else Wp
-        ok = np.zeros(len(ks), dtype=bool)
-        Y = np.zeros((len(ks), b.n, B.shape[1]), dtype=complex)  # Z'⁻¹ [W f] in the band's order
-        V = np.zeros((len(ks), b.n, nc), dtype=complex) if derivative else None
-        for i in range(len(ks)):
-            fac = b.factor(data[i])
+        Y = np.zeros((len(ks), b.n, B.shape[1]), dtype=complex)
+        facs = [b.factor(d) for d in data]
+        for i, fac in enumerate(facs):
             if fac is None:
                 continue
-            ok[i] = True
             if forced:
                 B[:, nc] = f[i, b.perm]
             Y[i] = b.solve(fac, B)
-            if derivative:
-                V[i] = b.solve(fac, Wp, trans=1)
+        self._last.put(key, (f, facs, Y))
+        return facs, Y
+
+    def _woodbury(self, ks, omega, derivative, out: DirectSolution, f, df) -> NDArray:
+        """Band solves of Z'_k and the identity, in place; which harmonics succeeded."""
+        b, Wp = self.band, self.W_perm
+        nc = Wp.shape[1]
+        forced = f is not None
+        facs, Y = self._factored(ks, omega, f)
+        ok = np.array([fac is not None for fac in facs], dtype=bool)
+        V = np.zeros((len(ks), b.n, nc), dtype=complex) if derivative else None
+        if derivative:
+            for i in np.flatnonzero(ok):
+                V[i] = b.solve(facs[i], Wp, trans=1)
         Yw = Y[:, :, :nc]
         hp = Wp.T.real @ Yw
         D = 1j * omega * ks[:, None, None] * self.c_w  # (K, n_nl, n_nl)

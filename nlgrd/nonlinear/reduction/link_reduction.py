@@ -413,19 +413,36 @@ class LinkReceptance:
 
         return self._banded.get(dofs, make)
 
-    def _band_solve(self, omega: float, H: int, dofs: tuple, f: NDArray | None = None) -> DirectSolution:
+    def _band_solve(
+        self,
+        omega: float,
+        H: int,
+        dofs: tuple,
+        f: NDArray | None = None,
+        df: NDArray | None = None,
+        derivative: bool = False,
+    ) -> DirectSolution:
         """Harmonics 1..H of the ``"banded"`` solver for output ``dofs`` at ``omega``, with
         the forces f_k (default :meth:`forces`) when there are external harmonic forces
         (without, f_k = P φ_k and its solve is the links' Z_k⁻¹ P φ_k: no right-hand side of
-        its own), kept per (ω, H, dofs)."""
-
-        def make():
-            rhs = None
-            if self.harmonic_force is not None:
-                rhs = self.forces(omega, H)[1:] if f is None else f
-            return self._band_solver(dofs).solve_forced(np.arange(1, H + 1), omega, False, rhs)
-
-        return self._band_sols.get((float(omega), int(H), dofs), make)
+        its own), kept per (ω, H, dofs). With ``derivative`` also dh_k/dω (and dg_k/dω,
+        from ``df`` = df_k/dω, with external forces); this solution replaces the plain one
+        only with one link coordinate, whose h_k, U_k and g_k are then the plain solve's bit
+        for bit (no condition test; with several, its stricter condition limit may move a
+        harmonic to sparse LU). Either way the solver reuses the band LUs of its last solve
+        at the frequency: κ_k and dκ_k/dω take one factorisation."""
+        key = (float(omega), int(H), dofs)
+        sol = self._band_sols.peek(key)
+        if sol is not None and (sol.dh is not None or not derivative):
+            return sol
+        rhs = drhs = None
+        if self.harmonic_force is not None:
+            rhs = self.forces(omega, H)[1:] if f is None else f
+            drhs = df
+        sol = self._band_solver(dofs).solve_forced(np.arange(1, H + 1), omega, derivative, rhs, drhs)
+        if not derivative or self.n_coords == 1:
+            self._band_sols.put(key, sol)
+        return sol
 
     def _pole_form(self, k: int) -> LinkPoleForm | None:
         """The shifted pole-residue form of harmonic k (:mod:`nlgrd.nonlinear.reduction.link_poles`),
@@ -550,13 +567,14 @@ class LinkReceptance:
         u_k = Z_k⁻¹ f_k, dF_k = dκ_k Pᵀ u_k + κ_k Pᵀ Z_k⁻¹ (f_k' - Z_k' u_k), where
         Z_k' = s K_c - 2 k² ω M + i k (C + Ω G) + i k ω s G (Ω = s ω the shaft speed).
         It reuses the factors of :meth:`terms` (no new factorisation), differentiates
-        the pole-residue form, or (``"banded"``) solves again with the Woodbury identity's
-        derivative (:mod:`nlgrd.nonlinear.reduction.direct_receptance`, tabulated bearings and
-        loss factor included); f_k' by a central difference of the forces (exact for their
-        degree <= 2 in ω), but without external harmonic forces, where F_k = φ_k (the
-        links' own forcing, linear in ω), analytically: dF_k/dω = φ_k / ω. κ_0 and F_0 do
-        not depend on ω unless the stiffness does on the speed (then by central
-        differences).
+        the pole-residue form, or (``"banded"``) takes the Woodbury identity's derivative
+        (:mod:`nlgrd.nonlinear.reduction.direct_receptance`, tabulated bearings and loss
+        factor included) on the band LUs of the frequency's solve, one factorisation for
+        κ_k and dκ_k/dω in either order (:meth:`_band_solve`); f_k' by a central
+        difference of the forces (exact for their degree <= 2 in ω), but without external
+        harmonic forces, where F_k = φ_k (the links' own forcing, linear in ω),
+        analytically: dF_k/dω = φ_k / ω. κ_0 and F_0 do not depend on ω unless the
+        stiffness does on the speed (then by central differences).
 
         Parameters
         ----------
@@ -573,7 +591,6 @@ class LinkReceptance:
         def make():
             d, s_ = self.n_coords, self.plan.speed_per_base
             speed = s_ * omega
-            kap, _ = self.terms(omega, H)
             m = self.model
             h = 1e-6 * max(abs(omega), 1.0)
             # the forces are polynomials of degree <= 2 in ω (the links' own ∝ ω, unbalance
@@ -593,6 +610,11 @@ class LinkReceptance:
             elif not poles or any(self._pole_form(k) is None for k in range(1, H + 1)):
                 df = self._proj((self.forces(omega + hf, H) - self.forces(omega - hf, H)) / (2 * hf))
                 f = self._proj(self.forces(omega, H))
+            band = None
+            if self.method == "banded" and H:  # first: κ_k takes this solve's h_k (one link)
+                rhs = (None, None) if own else (f[1:], df[1:])
+                band = self._band_solve(omega, H, self._band_out, *rhs, derivative=True)
+            kap, frc = self.terms(omega, H)  # without external forces F_k = φ_k
             dkap = np.zeros((H + 1, d, d), dtype=complex)
             dfrc = np.zeros((H + 1, d), dtype=complex)
             if self._speed_dependent:
@@ -610,16 +632,14 @@ class LinkReceptance:
                 w = 1.0 / (omega - lam)
                 kp = np.linalg.inv(CP @ (w[:, :, None] * LP))
                 dkap[1:] = kp @ (CP @ ((w * w)[:, :, None] * LP)) @ kp
-                dfrc[1:] = self._force_parts(omega, H)[1][1:] / omega
+                dfrc[1:] = frc[1:] / omega
                 return dkap, dfrc
-            if self.method == "banded" and H:
-                solver = self._band_solver(self._band_out)
-                rhs = (None, None) if own else (f[1:], df[1:])
-                sol = solver.solve_forced(np.arange(1, H + 1), omega, True, *rhs)
+            if band is not None:
+                sol = band
                 kh = kap[1:]
                 dkap[1:] = -kh @ sol.dh @ kh
                 if own:  # the links' own forcing is linear in ω (i k ω c_m E_k for a mesh)
-                    dfrc[1:] = self._force_parts(omega, H)[1][1:] / omega
+                    dfrc[1:] = frc[1:] / omega
                 else:
                     dfrc[1:] = (dkap[1:] @ sol.g[:, :, None] + kh @ sol.dg[:, :, None])[:, :, 0]
                 return dkap, dfrc
@@ -639,7 +659,7 @@ class LinkReceptance:
                 dkap[k] = kap[k] @ (Ps.T @ v[:, :d]) @ kap[k]
                 dfrc[k] = dkap[k] @ (Ps.T @ uf) + kap[k] @ (Ps.T @ v[:, d])
             if own:
-                dfrc[1:] = self._force_parts(omega, H)[1][1:] / omega
+                dfrc[1:] = frc[1:] / omega
             return dkap, dfrc
 
         return self._terms.get(("d", float(omega), int(H)), make)
