@@ -208,12 +208,13 @@ def output_names(model) -> list[str]:
     -------
     list of str
     """
-    return [f"{lk.name}.{k}" for lk in model.links for k in metric_names(lk)] + list(bearing_columns(model))
+    return [c.column for c in output_columns(model)]
 
 
 def output_columns(model) -> list[OutputColumn]:
-    """The typed description of :func:`output_names`: per column its quantity, unit, owner
-    and the owner's kind (the link's ``kind``, "bearing" for a linear bearing).
+    """The typed description of a link model's output columns: per column its quantity,
+    unit, owner and the owner's kind (the link's ``kind``, "bearing" for a linear bearing);
+    every link's columns first, then every linear bearing's.
 
     Parameters
     ----------
@@ -223,7 +224,7 @@ def output_columns(model) -> list[OutputColumn]:
     Returns
     -------
     list of nlgrd.units.OutputColumn
-        In the order of :func:`output_names`.
+        In the table's order (:func:`output_names`).
     """
     out = []
     for lk in model.links:
@@ -268,7 +269,7 @@ def point_outputs(model, harmonics: NDArray, omega: float) -> dict[str, float]:
     Returns
     -------
     dict
-        In the order of :func:`output_names`.
+        In the table's order (:func:`output_names`).
     """
     return points_outputs(model, [harmonics], [omega])[0]
 
