@@ -25,6 +25,7 @@ FIRST = (
     "test_notebooks",
     "test_design_study",
     "test_period_doubling_fe",
+    "test_folds",
     "test_reports",
     "test_two_stage_time_domain",
     "test_period_doubling",
