@@ -334,13 +334,54 @@ def _reduce(system: RotorSystem, links: tuple, plan: FrequencyPlan, loads: dict,
     return LinkModel(system, links, rec, reduced, max(orders, default=1), period, dict(loads))
 
 
+#: Newton iterations per sweep point (the default of :func:`link_sweep`): the Jacobian
+#: jumps where contact is first lost (grazing), where damped Newton can need a hundred
+#: iterations, each cheap. Kahraman & Blankenship's rig at 3600 Hz, H = 5, one point from
+#: the linear response: 89 iterations on the link reduction (52 on the mesh-coordinate
+#: one, the same equations to 1e-10); with 50 the point was lost.
+SWEEP_MAX_ITER = 150
+
+
+def check_stability_damping(system: RotorSystem, stability: bool) -> None:
+    """Refuse Floquet stability of a model with hysteretic damping, naming the material.
+
+    A loss factor has no time-domain form (its force is in quadrature with the
+    displacement at every frequency at once), so the state space of the stability analysis
+    has none (:meth:`~nlgrd.nonlinear.reduction.link_reduction.LinkReceptance.state_space`).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    stability : bool
+        Whether Floquet stability is asked for.
+
+    Raises
+    ------
+    ModelError
+        (``materials.<name>.loss_factor``) A material with a loss factor, with stability.
+    """
+    if not stability:
+        return
+    for shaft in system.shafts:
+        for el in shaft.elements:
+            mat = el.material
+            if mat.loss_factor > 0:
+                raise ModelError(
+                    f"materials.{mat.name}.loss_factor",
+                    f"{mat.loss_factor!r}: hysteretic damping has no time-domain form, so Floquet "
+                    "stability cannot be computed; sweep without stability (stability=False, "
+                    "--no-stability) or give the material a viscous damping instead",
+                )
+
+
 def link_sweep(
     model: LinkModel,
     omegas: NDArray,
     H: int | None = None,
     *,
     rtol: float = OUTPUT_RTOL,
-    period: int | str = 1,
+    period: int | str = "auto",
     **options,
 ) -> LinkSweepResult:
     """Harmonic-balance sweep of a link model with the links' outputs.
@@ -360,23 +401,19 @@ def link_sweep(
     rtol : float
         The tolerance of the estimated relative error of the outputs [-] (with H chosen,
         and of the period-2 points always).
-    period : {1, "auto", 2}
-        As :func:`nlgrd.nonlinear.models.geared.geared_sweep`, in base periods. 1 (default):
-        period-1 orbits only, every point's harmonics those of ω. "auto": the period-1
-        orbits where they are stable and, where one has lost stability by period doubling
-        (a real Floquet multiplier < -1), the stable period-2 orbit
-        (:func:`nlgrd.nonlinear.tracing.auto_period.beyond_period_one` on :func:`period_model`,
-        2 H harmonics of ω/2; ``nlgrd sweep``'s default); without ``stability`` it is 1.
-        2: the period-2 branches alone (needs ``stability``). The default is 1, not
-        geared_sweep's "auto", because with a period-2 point every point's harmonics are
-        of ω/2, which callers that start time integrations or recoveries from them on
-        the period-1 model do not expect (tests/link_comparison.py: the two-stage train
-        has a stable period-2 orbit at 358.25 Hz), and a period-2 sweep of a large model
-        costs many period-1 sweeps (the two-stage train's 34 points at H = 45: 20 s with
-        period 1, 360 s with "auto").
+    period : {"auto", 1, 2}
+        In base periods. "auto" (default, as ``nlgrd.sweep``, ``nlgrd sweep`` and the
+        studies): the period-1 orbits where they are stable and, where one has lost
+        stability by period doubling (a real Floquet multiplier < -1), the stable period-2
+        orbit (:func:`nlgrd.nonlinear.tracing.auto_period.beyond_period_one` on
+        :func:`period_model`, 2 H harmonics of ω/2); without ``stability`` it is 1. It
+        costs more than 1 only where a period doubling is found. 1: period-1 orbits only,
+        every point's harmonics those of ω (what a caller that starts time integrations
+        or recoveries on the period-1 model from the harmonics asks for). 2: the period-2
+        branches alone (needs ``stability``).
     **options
         Passed to :func:`nlgrd.nonlinear.tracing.sweep.sweep` (``directions``, ``tol``,
-        ``stability`` (default True), ``jump``, ...).
+        ``stability`` (default True), ``jump``, ``max_iter`` (default :data:`SWEEP_MAX_ITER`), ...).
 
     Returns
     -------
@@ -389,9 +426,12 @@ def link_sweep(
     ModelError
         A ``period`` other than 1, 2 or "auto", or 2 without stability.
     """
+    period_iter = options.get("max_iter", 50)  # the period-2 solves' own default
     options.setdefault("stability", True)
     options.setdefault("jump", "auto")
+    options.setdefault("max_iter", SWEEP_MAX_ITER)
     check_period(period, options["stability"])
+    check_stability_damping(model.system, options["stability"])
     omegas = np.asarray(omegas, dtype=float)
     top = float(np.max(np.abs(omegas))) if omegas.size else 0.0
     ladder = [h * model.top_order for h in LADDER]
@@ -427,7 +467,7 @@ def link_sweep(
             H_check,
             rtol,
             tol=options.get("tol", 1e-10),
-            max_iter=options.get("max_iter", 50),
+            max_iter=period_iter,
         )
     two = period_model(model, 2) if p2 is not None else None
     blank = dict.fromkeys(output_names(model), np.nan)
@@ -486,6 +526,7 @@ def link_continuation(
     -------
     LinkContinuationResult
     """
+    check_stability_damping(model.system, options.get("stability", True))
     top = max(abs(float(omega_start)), abs(float(omega_end)))
     model.receptance.prepare_stability(top)
     if H is None:
