@@ -656,9 +656,10 @@ def test_floquet_with_a_loss_factor_refused_alike(name):
     ):
         with pytest.raises(ModelError) as err:
             run()
-        assert err.value.key == "loss_factor" and "\n" not in str(err.value)
-        lines.append(err.value.message)
-    assert lines == [HYSTERETIC_REFUSAL, HYSTERETIC_REFUSAL]
+        assert err.value.key.endswith(".loss_factor") and "\n" not in str(err.value)
+        assert HYSTERETIC_REFUSAL in err.value.message
+        lines.append((err.value.key, err.value.message))
+    assert lines[0] == lines[1]
     for res in (
         geared_sweep(s, w, H=H, directions="up", model=g, period=1, stability=False).mesh,
         link_sweep(lk, w, H=H, directions="up", period=1, stability=False).result,

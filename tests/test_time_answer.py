@@ -17,6 +17,8 @@ periods) are in docs/verification.md.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 

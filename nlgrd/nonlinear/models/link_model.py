@@ -25,6 +25,7 @@ from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.links.contract import GearMeshLink
 from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.reduction.link_reduction import LinkReceptance
+from nlgrd.nonlinear.reduction.state_space import HYSTERETIC_REFUSAL
 from nlgrd.nonlinear.results.link_results import (  # re-exported: the tables live there
     LinkContinuationResult,
     LinkSweepResult,
@@ -369,9 +370,7 @@ def check_stability_damping(system: RotorSystem, stability: bool) -> None:
             if mat.loss_factor > 0:
                 raise ModelError(
                     f"materials.{mat.name}.loss_factor",
-                    f"{mat.loss_factor!r}: hysteretic damping has no time-domain form, so Floquet "
-                    "stability cannot be computed; sweep without stability (stability=False, "
-                    "--no-stability) or give the material a viscous damping instead",
+                    f"{mat.loss_factor!r}: {HYSTERETIC_REFUSAL} (stability=False, --no-stability)",
                 )
 
 
