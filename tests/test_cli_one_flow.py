@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parent.parent
 #: model -> (range option, range, the speed column of the CSV); 3 points each, H = 5,
 #: below the first strong resonance (tests/test_capability_matrix.py's ranges): about 1 s.
 CASES = {
-    "two_shaft": ("--rpm", "1800:2000:3", "pinion_speed [rpm]"),
+    "two_shaft": ("--rpm", "1800:2000:3", "shaft_speed [rpm]"),
     "two_shaft_clearance": ("--rpm", "2000:3000:3", "shaft_speed [rpm]"),
 }
 #: The summary's first line: the same fields on every model, in this order.

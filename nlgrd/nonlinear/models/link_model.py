@@ -197,13 +197,39 @@ def build_link_model(
     unbalance = system.unbalance if unbalance is None else tuple(unbalance)
     unb_orders = [abs(system.shafts[u.shaft].speed_ratio) for u in unbalance]
     plan = plan or FrequencyPlan.for_system(system, unb_orders)
-    links = list(links) + list(system.bearing_clearances)
-    given = {lk.index for lk in links if isinstance(lk, GearMeshLink) and lk.index is not None}
-    links += [lk for lk in gear_links(system, plan) if lk.index not in given]
+    links = model_links(system, links, plan)
     if not links:  # a linear rotor: its response is modal analysis and frequency response
         raise ModelError("gear_pairs", "the model has no gear pair and no clearance: no link to reduce onto")
     loads = dict(unbalance=unbalance, gravity=gravity, method=method, max_frequency=max_frequency)
-    return _reduce(system, tuple(links), plan, loads)
+    return _reduce(system, links, plan, loads)
+
+
+def model_links(system: RotorSystem, links: Sequence = (), plan: FrequencyPlan | None = None) -> tuple:
+    """The links :func:`build_link_model` reduces ``system`` onto, without reducing: ``links``,
+    the system's bearing clearances, then every gear pair not among ``links``
+    (:func:`gear_links`). What the command line checks ``--quantity`` against before any
+    computation.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    links : sequence of NonlinearLink
+        Links given.
+    plan : FrequencyPlan, optional
+        Default :meth:`FrequencyPlan.for_system` with the system's unbalance.
+
+    Returns
+    -------
+    tuple of NonlinearLink
+    """
+    if plan is None:
+        plan = FrequencyPlan.for_system(
+            system, [abs(system.shafts[u.shaft].speed_ratio) for u in system.unbalance]
+        )
+    links = list(links) + list(system.bearing_clearances)
+    given = {lk.index for lk in links if isinstance(lk, GearMeshLink) and lk.index is not None}
+    return tuple(links + [lk for lk in gear_links(system, plan) if lk.index not in given])
 
 
 def period_model(model: LinkModel, nu: int = 2) -> LinkModel:
