@@ -147,3 +147,73 @@ def test_thin_steps_equal_the_plain_product():
     assert X is not None
     got = np.linalg.matrix_power(E, m) @ X
     assert np.max(np.abs(got - plain)) < 1e-12 * np.max(np.abs(plain))
+
+
+def _midpoint_reference(M, D, K, W, tangent, omega, cells):
+    """Φ as the product of scipy's expm over ``cells`` equal cells, the tangent at each
+    cell's midpoint (second order), Richardson-extrapolated from cells and 2 cells; and
+    the distance of the extrapolated multipliers from those of 2 cells (its error bound)."""
+    from scipy.linalg import expm as scipy_expm
+
+    N = M.shape[0]
+    Minv = np.linalg.inv(M)
+
+    def product(n):
+        dt = 2 * np.pi / omega / n
+        Phi = np.eye(2 * N)
+        for j in range(n):
+            A = np.zeros((2 * N, 2 * N))
+            A[:N, N:] = np.eye(N)
+            A[N:, :N] = -Minv @ (K + W @ tangent((j + 0.5) * dt * omega) @ W.T)
+            A[N:, N:] = -Minv @ D
+            Phi = scipy_expm(A * dt) @ Phi
+        return Phi
+
+    coarse, fine = product(cells), product(2 * cells)
+    ref = np.linalg.eigvals((4 * fine - coarse) / 3)
+    return ref, _close(ref, np.linalg.eigvals(fine))
+
+
+def test_a_stiff_decaying_mode_leaves_the_interaction_picture(monkeypatch):
+    """The mesh chain of the first test plus a 1 g mass on mass 8 through a 1e6 N s/m
+    damper and a 1e6 N/m spring: a real mode at -c/m = -1e9 1/s (Kubo's full link state
+    has one at -1.07e9 1/s), where e^{-A₀ s} of a step overflowed (RuntimeWarnings, |μ|
+    inf). The piece takes plain Magnus steps (:func:`magnus_steps.plain_steps`): no
+    warning, every multiplier against scipy expm products over 4000 and 8000 midpoint cells,
+    Richardson-extrapolated, within 1e-6 (the reference's own error is printed, below it)."""
+    import warnings
+
+    import nlgrd.nonlinear.stability.magnus_steps as steps
+
+    taken = []
+    original = getattr(steps, "plain_steps", None)
+    if original is not None:  # spied on; absent before the fix (the test then fails below)
+        monkeypatch.setattr(steps, "plain_steps", lambda *a: taken.append(1) or original(*a))
+    M8, K8 = _chain(8, 1e6, 1.0)
+    M, K, D = np.zeros((9, 9)), np.zeros((9, 9)), np.zeros((9, 9))
+    M[:8, :8], K[:8, :8], D[:8, :8] = M8, K8, 2e-6 * K8 + 0.5 * M8
+    M[8, 8] = 1e-3
+    tie = np.array([[1.0, -1.0], [-1.0, 1.0]])
+    K[7:, 7:] += 1e6 * tie
+    D[7:, 7:] += 1e6 * tie
+    A = np.block([[np.zeros((9, 9)), np.eye(9)], [-np.linalg.solve(M, K), -np.linalg.solve(M, D)]])
+    assert np.max(-np.linalg.eigvals(A).real) > 9e8  # the stiff mode is there
+    W = np.zeros((9, 1))
+    W[3, 0], W[4, 0] = 1.0, -1.0
+    rho = np.array([1.0, 0.3, 0.0, 0.1, 0.05])
+    law = ParametricMesh(3e6, 0.0, stiffness_variation=rho)
+    y = np.array([[6e-6, 0.0, 0.0, 0.0, 0.0]])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = floquet_analysis(LinearStateSpace(M, D, K, W), [law], y, 150.0, method="dense", deflate=False)
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
+    tangent = lambda th: np.array([[3e6 * evaluate(rho, [th])[0]]])  # noqa: E731
+    ref, ref_error = _midpoint_reference(M, D, K, W, tangent, 150.0, 4000)
+    print(
+        f"stiff mode: |mu| max {np.max(np.abs(r.multipliers)):.9f}, against the reference "
+        f"{_close(r.multipliers, ref):.1e} (reference {ref_error:.1e})"
+    )
+    assert ref_error < 1e-7
+    assert r.converged and np.all(np.isfinite(r.multipliers))
+    assert _close(r.multipliers, ref) < 1e-6
+    assert taken  # the plain steps, not the interaction picture

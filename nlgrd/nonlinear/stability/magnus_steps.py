@@ -21,6 +21,11 @@ from nlgrd.nonlinear.reduction.linear_algebra import expm
 #: E^{-j} L and Rᵀ E^j grow by at most this factor together (rounding ~1e-16 times it).
 THIN_GROWTH = 1e4
 
+#: e^{-A₀ s} may amplify the input U₀ by at most this within a step (1/√eps): beyond it a
+#: stiff decaying mode (|Re λ| h ≫ 1) makes the interaction picture's B̃ overflow and its
+#: Magnus series diverge; :func:`plain_steps` takes the piece.
+INTERACTION_GROWTH = 1e8
+
 
 def interaction_piece(
     A0: NDArray, U0: NDArray, V0t: NDArray, Kbar: NDArray, Kt: NDArray, dt: float, memo: dict
@@ -62,6 +67,11 @@ def interaction_piece(
     n = Kt.shape[1]
     m = Kt.shape[0] // 2
     g = np.sqrt(3.0) / 6.0
+    C1, C2 = Kbar - Kt[:m], Kbar - Kt[m:]
+    if "decay" not in memo:  # A₀'s fastest decay rate [1/s]
+        memo["decay"] = max(0.0, float(np.max(-np.linalg.eigvals(A0).real)))
+    if memo["decay"] * dt * (0.5 + g) > np.log(INTERACTION_GROWTH):
+        return plain_steps(A0, U0, V0t, C1, C2, dt)
     Fs = memo.pop(m, None)
     if Fs is None:  # e^{A₀ s_g} of 2m steps, then squared
         memo[2 * m] = [expm(A0 * (0.5 * sg)) for sg in (dt * (0.5 - g), dt * (0.5 + g))]
@@ -70,7 +80,6 @@ def interaction_piece(
     L = np.hstack([np.linalg.solve(F, U0) for F in Fs])
     Rt = np.vstack([V0t @ F for F in Fs])
     G = Rt @ L
-    C1, C2 = Kbar - Kt[:m], Kbar - Kt[m:]
     c = np.sqrt(3.0) / 12.0 * dt * dt
     S = np.zeros((m, 2 * n, 2 * n))
     S[:, :n, :n], S[:, n:, n:] = 0.5 * dt * C1, 0.5 * dt * C2
@@ -128,3 +137,35 @@ def thin_steps(E: NDArray, L: NDArray, Rt: NDArray, P: NDArray) -> NDArray[np.fl
             if np.linalg.norm(Lj, 1) * np.linalg.norm(Rj, np.inf) > THIN_GROWTH * scale:
                 return None
     return X
+
+
+def plain_steps(A0: NDArray, U0: NDArray, V0t: NDArray, C1: NDArray, C2: NDArray, dt: float) -> NDArray:
+    """The propagator of m fourth-order Magnus steps of x' = (A₀ + U₀ C(t) V₀ᵀ) x without
+    the interaction picture: exp(h/2 (A₁ + A₂) + √3 h²/12 [A₂, A₁]) per step, A_g = A₀ + U₀
+    C_g V₀ᵀ, each exponential by scaling and squaring (a stiff decaying mode of A₀ needs
+    no inverse exponential here).
+
+    Parameters
+    ----------
+    A0 : ndarray (2N, 2N)
+        The constant state matrix [1/s].
+    U0 : ndarray (2N, n)
+        Input of the tangent's variation to the state [1/kg].
+    V0t : ndarray (n, 2N)
+        The nonlinear coordinates from the state [s].
+    C1, C2 : ndarray (m, n, n)
+        K̄ - K_t at the first and second Gauss point of every step [N/m].
+    dt : float
+        Step length [s].
+
+    Returns
+    -------
+    ndarray (2N, 2N)
+        The product of the m steps (the first acts first).
+    """
+    c = np.sqrt(3.0) / 12.0 * dt * dt
+    Phi = np.eye(A0.shape[0])
+    for j in range(C1.shape[0]):
+        A1, A2 = A0 + U0 @ C1[j] @ V0t, A0 + U0 @ C2[j] @ V0t
+        Phi = expm(0.5 * dt * (A1 + A2) + c * (A2 @ A1 - A1 @ A2)) @ Phi
+    return Phi
