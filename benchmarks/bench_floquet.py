@@ -74,7 +74,7 @@ def side_by_side(before_file: str, n_models: int) -> None:
         for _, (label, model, omegas, H) in zip(range(n_models), cases(0), strict=False):
             if label.startswith("idler"):  # its stable points: the others cost the landing search
                 _wrap()
-                r = link_sweep(model, omegas, H=H, directions="up").result
+                r = link_sweep(model, omegas, H=H, directions="up", period=1).result
                 omegas = omegas[r.converged & r.stable.astype(bool)]
                 label = f"{label}, its {omegas.size} stable points"
             for tag, fn in (
@@ -82,10 +82,10 @@ def side_by_side(before_file: str, n_models: int) -> None:
                 ("after", floquet.floquet_multipliers),
             ) * 2:
                 _wrap(fn)
-                link_sweep(model, omegas[:2], H=H, directions="up")
+                link_sweep(model, omegas[:2], H=H, directions="up", period=1)
                 _SPENT.update(t=0.0, n=0)
                 t0 = time.perf_counter()
-                r = link_sweep(model, omegas, H=H, directions="up").result
+                r = link_sweep(model, omegas, H=H, directions="up", period=1).result
                 total = time.perf_counter() - t0
                 per, fl = 1e3 * total / omegas.size, 1e3 * _SPENT["t"] / omegas.size
                 print(
@@ -144,10 +144,10 @@ def main() -> None:
     rows = []
     with threadpool_limits(1):
         for _, (label, model, omegas, H) in zip(range(args.models), cases(args.stage_points), strict=False):
-            link_sweep(model, omegas[:2], H=H, directions="up")  # warm-up, pole-residue set-up
+            link_sweep(model, omegas[:2], H=H, directions="up", period=1)  # warm-up, pole-residue set-up
             _SPENT.update(t=0.0, n=0)
             t0 = time.perf_counter()
-            r = link_sweep(model, omegas, H=H, directions="up").result
+            r = link_sweep(model, omegas, H=H, directions="up", period=1).result
             total = time.perf_counter() - t0
             stable = r.converged & r.stable.astype(bool)
             per, fl = 1e3 * total / omegas.size, 1e3 * _SPENT["t"] / omegas.size
@@ -161,7 +161,7 @@ def main() -> None:
             if not stable.all() and stable.any():  # the stable points alone: no landing search
                 _SPENT.update(t=0.0, n=0)
                 t0 = time.perf_counter()
-                link_sweep(model, omegas[stable], H=H, directions="up")
+                link_sweep(model, omegas[stable], H=H, directions="up", period=1)
                 t = time.perf_counter() - t0
                 print(
                     f"  the {int(stable.sum())} stable points alone: "

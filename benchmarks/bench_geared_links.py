@@ -104,11 +104,11 @@ def main() -> None:
         _timed("two_shaft, 1 mesh, mesh-receptance path", mesh_path, grid.size)
         for label, model, omegas, H in cases:
             t0 = time.perf_counter()
-            link_sweep(model, omegas[:2], H=H, directions="up")  # warm-up, pole-residue set-up
+            link_sweep(model, omegas[:2], H=H, directions="up", period=1)  # warm-up, pole-residue set-up
             print(f"{label}: warm-up on 2 points {time.perf_counter() - t0:.2f} s", flush=True)
 
             def run(model=model, omegas=omegas, H=H, label=label):
-                r = link_sweep(model, omegas, H=H, directions="up").result
+                r = link_sweep(model, omegas, H=H, directions="up", period=1).result
                 res[label] = r
                 return int(np.sum(r.converged & r.stable.astype(bool)))
 
@@ -150,12 +150,12 @@ def banded(rounds: int = 2) -> None:
             for method in ("banded", "poles", "direct"):
                 t0 = time.perf_counter()
                 model = build_link_model(system, method=method)
-                link_sweep(model, grid[:2], H=H, directions="up", stability=stability)
+                link_sweep(model, grid[:2], H=H, directions="up", period=1, stability=stability)
                 label = f"link_sweep ({model.receptance.method})"
                 print(f"{head}, {label}: set-up, 2 points {time.perf_counter() - t0:.2f} s", flush=True)
 
                 def link(model=model, stability=stability):
-                    return link_sweep(model, grid, H=H, directions="up", stability=stability).result
+                    return link_sweep(model, grid, H=H, directions="up", period=1, stability=stability).result
 
                 runs[method] = (label, link)
             best, out = {}, {}
@@ -205,10 +205,10 @@ def scaling(factors=(1, 8, 25, 83), only: str | None = None) -> None:
             for method in ("auto", "modal") if system.n_dofs <= 300 else ("auto",):
                 t0 = time.perf_counter()
                 model = build_link_model(system, method=method, max_frequency=H * grid[-1])
-                link_sweep(model, grid[:2], H=H, directions="up", stability=stability)
+                link_sweep(model, grid[:2], H=H, directions="up", period=1, stability=stability)
                 setup = time.perf_counter() - t0
                 t0 = time.perf_counter()
-                r = link_sweep(model, grid, H=H, directions="up", stability=stability).result
+                r = link_sweep(model, grid, H=H, directions="up", period=1, stability=stability).result
                 per = 1e3 * (time.perf_counter() - t0) / grid.size
                 rec = model.receptance
                 basis = (

@@ -50,7 +50,7 @@ def run(model, grid, ceiling):
         stamps.append(time.perf_counter())
         evals.append(_EVALS["n"])
 
-    r = link_sweep(model, grid, H=9, directions="up", progress=progress).result
+    r = link_sweep(model, grid, H=9, directions="up", period=1, progress=progress).result
     return r, np.diff(stamps), np.diff(evals)
 
 
@@ -59,7 +59,7 @@ def main() -> None:
     model = build_link_model(load_model(IDLER))
     grid = 2 * np.pi * np.linspace(1000.0, 1700.0, 15)
     with threadpool_limits(1):
-        link_sweep(model, grid[:2], H=9, directions="up")  # warm-up, pole-residue set-up
+        link_sweep(model, grid[:2], H=9, directions="up", period=1)  # warm-up, pole-residue set-up
         out = {}
         for label, ceiling in (("no ceiling", None), ("ceiling", arclength.LANDING_EVALUATIONS)):
             out[label] = run(model, grid, ceiling)

@@ -6,8 +6,9 @@ without bearing clearances and unbalance.
 Speeds are given once, in the unit the user has: ``rpm`` (the reference shaft, speed
 ratio 1) or ``hz`` (the base frequency of the model's frequency plan: the mesh frequency
 for one mesh, :class:`~nlgrd.nonlinear.links.frequency_plan.FrequencyPlan`). Each function
-builds the reduced model (:func:`model`) and calls the library's own analysis; the
-result is the library's result object, with ``to_frame()``.
+builds the link model (:func:`model`: every model, one mesh too, reduced onto all its
+link coordinates) and calls the link engine's analysis; the result is the library's
+result object, with ``to_frame()``.
 """
 
 from __future__ import annotations
@@ -93,43 +94,29 @@ def campbell(system: RotorSystem, rpm: ArrayLike, n_modes: int = 10, orders: dic
     return campbell_diagram(system, speeds, n_modes=n_modes, orders=orders)
 
 
-def _single_mesh(system: RotorSystem) -> bool:
-    """One gear pair whose excitation repeats every mesh cycle, and nothing else nonlinear:
-    the mesh-coordinate reduction serves it (its base is the mesh frequency)."""
-    from nlgrd.nonlinear.models.link_model import needs_links
-
-    return not needs_links(system) and system.gear_pairs[0].error_period == 1
-
-
-def model(system: RotorSystem, top: float, H: int):
-    """The reduced harmonic-balance model of ``system`` for base frequencies up to ``top``.
-
-    One gear pair alone is reduced onto its mesh coordinate
-    (:func:`nlgrd.nonlinear.models.geared.build_geared_model`); any other set of meshes,
-    clearances and unbalance onto all link coordinates
-    (:func:`nlgrd.nonlinear.models.link_model.build_link_model`). The two agree to 1e-9 on one
-    mesh (tests/test_engine_equivalence.py).
+def model(system: RotorSystem):
+    """The reduced harmonic-balance model of ``system``: every model, one mesh or many, with
+    or without clearances and unbalance, reduced onto all its link coordinates on its
+    frequency plan (:func:`nlgrd.nonlinear.models.link_model.build_link_model`: the mesh
+    frequency for one mesh excited at its mesh period, the error period's base when its
+    teeth differ, the shaft speed without gears). On one mesh it equals the former
+    mesh-coordinate reduction to 1e-9 (tests/test_engine_equivalence.py).
 
     Parameters
     ----------
     system : RotorSystem
         The model.
-    top : float
-        Highest base frequency [rad/s].
-    H : int
-        Largest number of harmonics of the base [-].
 
     Returns
     -------
-    GearedModel or LinkModel
+    LinkModel
     """
-    if _single_mesh(system):
-        from nlgrd.nonlinear.models.geared import build_geared_model
-
-        return build_geared_model(system, float(top), H=H)
     from nlgrd.nonlinear.models.link_model import build_link_model
 
     return build_link_model(system)
+
+
+build_model = model
 
 
 def _speed_per_base(system: RotorSystem) -> float:
@@ -149,12 +136,6 @@ def _omegas(system: RotorSystem, rpm, hz, name: str = "rpm") -> NDArray:
     if omegas.ndim != 1 or omegas.size < 1 or not np.all(np.isfinite(omegas)) or np.any(omegas <= 0):
         raise ModelError(name if rpm is not None else "hz", "must be positive finite speeds")
     return omegas
-
-
-def _ladder_top(system: RotorSystem, H: int | None) -> int:
-    from nlgrd.nonlinear.tracing.harmonic_convergence import LADDER
-
-    return int(H) if H is not None else LADDER[-1]
 
 
 def sweep(
@@ -191,41 +172,39 @@ def sweep(
         ``progress(i, n)`` once per point.
     time_domain : bool
         With ``period`` "auto" and stability: every point without a stable periodic
-        response answered (:func:`nlgrd.timedomain.sweep_answers.answer_sweep`): on one
-        mesh a Neimark-Sacker point by the torus harmonic balance where it converges
+        response answered (:func:`nlgrd.timedomain.sweep_answers.answer_sweep`): a
+        Neimark-Sacker point by the torus harmonic balance where it converges
         (``response`` "quasi-periodic"), the others by time integration (``response``
         "time domain" or "chaotic", values with their uncertainty).
     time_options : dict, optional
         Options of :func:`nlgrd.timedomain.time_answer.time_answer` (``max_periods``, ...).
     **options
-        Further options of :func:`nlgrd.nonlinear.tracing.sweep.sweep` (``tol``, ``jump``, ...).
+        Further options of :func:`nlgrd.nonlinear.models.link_model.link_sweep` and
+        :func:`nlgrd.nonlinear.tracing.sweep.sweep` (``tol``, ``jump``, ...;
+        ``harmonic_rtol`` is the ``rtol`` of the choice of H).
 
     Returns
     -------
-    GearedSweepResult or LinkSweepResult
-        Both with ``to_frame()`` and ``jumps()``.
+    LinkSweepResult
+        Every link's and linear bearing's outputs per point, with ``to_frame()``,
+        ``jumps()`` and ``plot()``.
     """
-    omegas = _omegas(system, rpm, hz)
-    m = model(system, float(omegas.max()), _ladder_top(system, H))
-    common = dict(directions=directions, stability=stability, progress=progress, period=period)
-    if _single_mesh(system):
-        from nlgrd.nonlinear.models.geared import geared_sweep
-
-        res = geared_sweep(system, omegas, H=H, model=m, **common, **options)
-    else:
-        from nlgrd.nonlinear.models.link_model import link_sweep
-
-        res = link_sweep(m, omegas, H, **common, **options)
+    from nlgrd.nonlinear.models.link_model import link_sweep
     from nlgrd.timedomain.sweep_answers import answer_sweep
 
+    omegas = _omegas(system, rpm, hz)
+    m = model(system)
+    rtol = {"rtol": options.pop("harmonic_rtol")} if "harmonic_rtol" in options else {}
+    kw = dict(directions=directions, stability=stability, progress=progress, period=period)
+    res = link_sweep(m, omegas, H, **kw, **rtol, **options)
     return answer_sweep(
         res,
         system=system,
-        model=None if _single_mesh(system) else m,
+        model=m,
         period=period,
         stability=stability,
         time_domain=time_domain,
-        **({"rtol": options["harmonic_rtol"]} if "harmonic_rtol" in options else {}),
+        **rtol,
         **(time_options or {}),
     )
 
@@ -256,21 +235,16 @@ def continuation(
 
     Returns
     -------
-    ContinuationResult or LinkContinuationResult
-        The latter (a link model) with every link's outputs along the curve.
+    LinkContinuationResult
+        The curve with every link's outputs along it.
     """
     ends = _omegas(system, rpm, hz)
     if ends.size != 2:
         raise ModelError("rpm" if rpm is not None else "hz", "a continuation takes (start, end)")
     w0, w1 = (float(w) for w in ends)
-    m = model(system, max(w0, w1), _ladder_top(system, H))
-    if _single_mesh(system):
-        from nlgrd.nonlinear.models.geared import geared_continuation
-
-        return geared_continuation(system, w0, w1, H, model=m, stability=stability, **options)
     from nlgrd.nonlinear.models.link_model import link_continuation
 
-    return link_continuation(m, w0, w1, H, stability=stability, **options)
+    return link_continuation(model(system), w0, w1, H, stability=stability, **options)
 
 
 def search_orbits(
@@ -302,13 +276,11 @@ def search_orbits(
     -------
     list of FoundOrbit
     """
-    from nlgrd.nonlinear.models.model_views import GearedView, LinkView
+    from nlgrd.nonlinear.models.model_views import LinkView
     from nlgrd.nonlinear.tracing.orbit_search import search_orbits as search
 
     omega = float(_omegas(system, rpm, hz)[0])
-    m = model(system, omega, int(H))
-    view = GearedView(m) if _single_mesh(system) else LinkView(m, None)
-    model_of = view.model_of(int(H), omega)
+    model_of = LinkView(model(system), None).model_of(int(H), omega)
     return search(model_of, omega, int(H), periods, **options)
 
 
@@ -338,16 +310,10 @@ def time_sweep(
 
     Returns
     -------
-    SweepResult or LinkSweepResult
-        The latter (a link model) with every link's and linear bearing's outputs, as
-        :func:`sweep` has them.
+    LinkSweepResult
+        Every link's and linear bearing's outputs, as :func:`sweep` has them.
     """
-    omegas = _omegas(system, rpm, hz)
-    m = model(system, float(omegas.max()), int(H))
-    if _single_mesh(system):
-        from nlgrd.timedomain.geared import time_sweep as geared_time_sweep
-
-        return geared_time_sweep(m, omegas, directions, H=H, **options)
     from nlgrd.timedomain.links import link_time_sweep
 
-    return link_time_sweep(m, omegas, directions, H=H, **options)
+    omegas = _omegas(system, rpm, hz)
+    return link_time_sweep(model(system), omegas, directions, H=H, **options)

@@ -61,7 +61,9 @@ def compare(model, hz, H, active, steps=STEPS, periods=PERIODS):
     Returns (rows, skipped): rows of (frequency [Hz], worst relative output difference,
     period-to-period change); skipped frequencies (unstable, not converged or not
     active)."""
-    res = link_sweep(model, 2 * np.pi * np.asarray(hz, dtype=float), H=H, directions="up", jump="none")
+    res = link_sweep(
+        model, 2 * np.pi * np.asarray(hz, dtype=float), H=H, directions="up", jump="none", period=1
+    )
     r = res.result
     rows, skipped = [], []
     for i, w in enumerate(r.omega):

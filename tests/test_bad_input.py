@@ -25,6 +25,7 @@ import pandas as pd
 import pytest
 
 import nlgrd.nonlinear.models.geared
+import nlgrd.nonlinear.models.link_model
 import nlgrd.rotor.modal
 from nlgrd.cli import main
 
@@ -109,6 +110,8 @@ def no_computation(monkeypatch):
 
     for name in ("build_geared_model", "geared_sweep", "geared_continuation"):
         monkeypatch.setattr(nlgrd.nonlinear.models.geared, name, forbidden)
+    for name in ("build_link_model", "link_sweep", "link_continuation"):
+        monkeypatch.setattr(nlgrd.nonlinear.models.link_model, name, forbidden)
     for name in ("modal_analysis", "campbell"):
         monkeypatch.setattr(nlgrd.rotor.modal, name, forbidden)
 
@@ -413,7 +416,7 @@ OPTION_CASES = {
     "link quantity on a gear model": (
         ["sweep", KUBO, "--rpm", "4000:5000:3", "--quantity", "mesh9.dslr"],
         "--quantity",
-        "unknown quantity",
+        "no link 'mesh9'",
     ),
     "modes rpm range": (["modes", TWO, "--rpm", "1:2:3"], "--rpm", "one speed"),
     "modes n-modes a word": (["modes", TWO, "--n-modes", "six"], "--n-modes", "int"),
@@ -728,14 +731,14 @@ def test_speeds_written_as_given_after_their_round_trip():
 def test_a_sweep_whose_every_point_fails_exits_1(tmp_path, capsys, monkeypatch):
     """A run in which no point converged is a failure (exit 1, one error line), not a
     success: the real sweep is run on two points and its points marked not converged."""
-    real = nlgrd.nonlinear.models.geared.geared_sweep
+    real = nlgrd.nonlinear.models.link_model.link_sweep
 
     def failing(*args, **kwargs):
         res = real(*args, **kwargs)
-        res.mesh.converged[:] = False
+        res.result.converged[:] = False
         return res
 
-    monkeypatch.setattr(nlgrd.nonlinear.models.geared, "geared_sweep", failing)
+    monkeypatch.setattr(nlgrd.nonlinear.models.link_model, "link_sweep", failing)
     out = tmp_path / "s.csv"
     argv = ["sweep", KUBO, "--rpm", "6000:7000:2", "--harmonics", "3", "--no-stability", "--direction", "up"]
     rc, stdout, err = run(capsys, *argv, "--out", out)

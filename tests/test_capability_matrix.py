@@ -123,8 +123,9 @@ def test_every_sweep_option_on_every_shipped_model(model, option, tmp_path, caps
 def _check_search(sweep_csv: Path, orbits_csv: Path) -> None:
     """The search at a grid speed where the sweep is stable and periodic finds the sweep's
     orbit again, from its own starts (two procedures, one orbit): a stable row flagged "on
-    the sweep" whose written outputs equal the sweep's at that speed. 1e-6 relative: the
-    flag's own criterion; both are Newton solutions to 1e-10 of the same equations."""
+    the sweep" whose written outputs equal the sweep's at that speed. 1e-6 of the value or
+    of the largest output in its unit: the flag's own criterion; both are Newton solutions to
+    1e-10 of the same equations."""
     sweep, orbits = pd.read_csv(sweep_csv), pd.read_csv(orbits_csv)
     freq = next(c for c in ("mesh_frequency [Hz]", "base_frequency [Hz]") if c in orbits.columns)
     mine = orbits[orbits["on the sweep"].astype(bool)]
@@ -135,4 +136,9 @@ def _check_search(sweep_csv: Path, orbits_csv: Path) -> None:
     for _, o in mine.iterrows():
         at = sweep[np.isclose(sweep[freq], o[freq], rtol=1e-9) & (sweep["period"] == o["period"])]
         assert len(at) >= 1
-        np.testing.assert_allclose(at[outputs].iloc[0].to_numpy(float), o[outputs].to_numpy(float), rtol=1e-6)
+        a, b = at[outputs].iloc[0].to_numpy(float), o[outputs].to_numpy(float)
+        # atol: 1e-6 of the largest output in the column's unit, the rounding of a bearing the
+        # mesh does not load (1e-66 to 1e-8 N beside 1e3 N on Kubo's rig) being no output
+        units = np.array([c.rsplit("[", 1)[-1] for c in outputs])
+        scale = np.array([np.max(np.abs(a[units == u])) for u in units])
+        np.testing.assert_array_less(np.abs(a - b), 1e-6 * scale + 1e-300)  # + 1e-300: 0 against 0

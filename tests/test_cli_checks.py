@@ -58,6 +58,8 @@ def no_computation(monkeypatch):
 
     for name in ("build_geared_model", "geared_sweep", "geared_continuation"):
         monkeypatch.setattr(nlgrd.nonlinear.models.geared, name, forbidden)
+    for name in ("build_link_model", "link_sweep", "link_continuation"):
+        monkeypatch.setattr(nlgrd.nonlinear.models.link_model, name, forbidden)
     for name in ("modal_analysis", "campbell"):
         monkeypatch.setattr(nlgrd.rotor.modal, name, forbidden)
 
@@ -73,7 +75,7 @@ def test_interrupted_sweep_keeps_the_previous_outputs(tmp_path, capsys, monkeypa
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(nlgrd.nonlinear.models.geared, "geared_sweep", interrupted)
+    monkeypatch.setattr(nlgrd.nonlinear.models.link_model, "link_sweep", interrupted)
     rc, _, err = run(capsys, "sweep", KUBO, "--hz", "3000:4000:3", "--out", out)
     assert rc == 130 and "interrupted" in one_line(err)
     assert out.read_text() == "previous\n" and png.read_bytes() == b"previous png"
@@ -188,7 +190,7 @@ def test_read_only_folder(tmp_path, capsys):
         (
             ["sweep", KUBO, "--hz", "3000:4000:3", "--quantity", "foo"],
             "--quantity",
-            "dte_rms, dte_p2p, force_max",
+            "links: mesh0",
         ),
         (["modes", TWO, "--n-modes", "0"], "--n-modes", "at least 1"),
         (["modes", TWO, "--n-modes", "-3"], "--n-modes", "at least 1"),
@@ -280,7 +282,7 @@ def test_continuation_both_ways_covers_the_range(tmp_path, capsys):
     df = pd.read_csv(out)
     assert set(df["trace"]) == {"up", "down"}
     down = df[df["trace"] == "down"]
-    assert down["mesh_frequency [Hz]"].iloc[0] == pytest.approx(5000)
+    assert down["base_frequency [Hz]"].iloc[0] == pytest.approx(5000)
 
 
 def test_continuation_count_sets_the_frequency_resolution(tmp_path, capsys):
@@ -299,7 +301,7 @@ def test_continuation_count_sets_the_frequency_resolution(tmp_path, capsys):
     ]
     rc, _, err = run(capsys, *argv, "--no-stability", "--out", out)
     assert rc == 0, err
-    f = pd.read_csv(out)["mesh_frequency [Hz]"].to_numpy()
+    f = pd.read_csv(out)["base_frequency [Hz]"].to_numpy()
     # the predictor moves at most (STOP - START) / (COUNT - 1); the corrector, at right
     # angles to the tangent, may add up to half a step (the tracer's acceptance test)
     assert np.max(np.abs(np.diff(f))) <= 1.5 * 20.0

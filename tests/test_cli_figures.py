@@ -47,8 +47,8 @@ def _raw(label: str) -> bool:
 
 
 def test_rpm_sweep_is_drawn_in_rpm_with_the_model_name(tmp_path, staged):
-    """--rpm: the up points sit at the CSV's pinion speeds (rtol 1e-12: the same numbers
-    through mesh Hz and back)."""
+    """--rpm: the up points sit at the CSV's reference shaft (pinion) speeds (rtol 1e-12:
+    the same numbers through mesh Hz and back)."""
     out = tmp_path / "k.csv"
     argv = [
         "sweep",
@@ -63,11 +63,11 @@ def test_rpm_sweep_is_drawn_in_rpm_with_the_model_name(tmp_path, staged):
     ]
     assert main(argv) == 0
     (xlabel, ylabel, title, lines) = staged[0]
-    assert xlabel == "pinion speed [rpm]" and not _raw(ylabel)
-    assert title.splitlines() == [load_model(KUBO).name, "H = 5 harmonics of the mesh frequency"]
+    assert xlabel == "shaft speed [rpm]" and not _raw(ylabel)
+    assert title.splitlines() == [load_model(KUBO).name, "base frequency: mesh, H = 5"]
     df = pd.read_csv(out)
-    up = df[df["direction"] == "up"]["pinion_speed [rpm]"].to_numpy(float)
-    drawn = next(x for k, x in lines.items() if k.startswith("up"))
+    up = df[df["direction"] == "up"]["shaft_speed [rpm]"].to_numpy(float)
+    drawn = next(x for k, x in lines.items() if k.startswith("sweep up"))
     np.testing.assert_allclose(np.sort(drawn), np.sort(up), rtol=1e-12)
     np.testing.assert_allclose(np.sort(drawn), [9000, 10000, 11000, 12000], rtol=1e-12)
 
@@ -88,7 +88,7 @@ def test_hz_sweep_and_continuation_are_drawn_in_mesh_hz(tmp_path, staged):
     assert main(argv) in (0, 1)
     assert len(staged) == 2
     for xlabel, ylabel, title, _ in staged:
-        assert xlabel == "mesh frequency [Hz]" and not _raw(ylabel)
+        assert xlabel == "base frequency [Hz]" and not _raw(ylabel)
         assert title.splitlines()[0] == load_model(KUBO).name
 
 

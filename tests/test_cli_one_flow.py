@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parent.parent
 #: model -> (range option, range, the speed column of the CSV); 3 points each, H = 5,
 #: below the first strong resonance (tests/test_capability_matrix.py's ranges): about 1 s.
 CASES = {
-    "two_shaft": ("--rpm", "1800:2000:3", "pinion_speed [rpm]"),
+    "two_shaft": ("--rpm", "1800:2000:3", "shaft_speed [rpm]"),
     "two_shaft_clearance": ("--rpm", "2000:3000:3", "shaft_speed [rpm]"),
 }
 #: The summary's first line: the same fields on every model, in this order.
@@ -70,3 +70,40 @@ def test_period_models_are_built_once_and_never_smaller():
     two = view.period_model(2, 3)
     assert two.H == 10 and view.period_model(2, 5) is two
     assert view.period_model(2, 7).H == 14
+
+
+def test_an_orbit_is_on_the_sweep_to_the_scale_of_its_unit():
+    """``same_outputs`` (the "on the sweep" flag of a link model): the unloaded bearing's
+    rounding (Kubo's stub bearings: force_mean 1e-66 N beside 1e3 N, BLAS-dependent) is no
+    difference; a change of 1e-5 of the largest force in any force column is, and so is a
+    change of 1e-5 of a dimensionless output. Sweep row: Kubo at 3100 Hz, H = 5, rounded."""
+    from nlgrd.nonlinear.models.model_views import same_outputs
+
+    sweep = {
+        "mesh0.dte_rms [m]": 3.342128e-06,
+        "mesh0.force_max [N]": 3.226900e03,
+        "mesh0.dslr [-]": 1.406053,
+        "mesh0.contact_loss_fraction [-]": 0.0,
+        "mesh0.back_contact": False,
+        "bearing 0.force_mean [N]": 1.147503e03,
+        "bearing 4.force_mean [N]": 9.272896e-67,
+        "bearing 4.force_max [N]": 4.441572e-08,
+        "bearing 4.displacement_max [m]": 4.441572e-17,
+    }
+    rounding = dict(sweep)
+    rounding["bearing 4.force_mean [N]"] = 1.090370e-66  # the search's own orbit
+    rounding["bearing 4.force_max [N]"] = 3.967392e-08
+    rounding["bearing 4.displacement_max [m]"] = 3.967392e-16
+    assert same_outputs(sweep, rounding)
+    # the comparison before (each column to 1e-6 of itself) fails on the rounding alone
+    assert not all(np.isclose(sweep[k], v, rtol=1e-6, atol=0) for k, v in rounding.items())
+    for key, step in (
+        ("bearing 4.force_max [N]", 1e-5 * 3.2269e03),
+        ("bearing 0.force_mean [N]", 1e-5 * 3.2269e03),
+        ("mesh0.contact_loss_fraction [-]", 1e-5 * 1.406053),
+        ("mesh0.dte_rms [m]", 1e-5 * 3.342128e-06),
+    ):
+        other = dict(sweep)
+        other[key] = sweep[key] + step
+        assert not same_outputs(sweep, other), key
+    assert not same_outputs(sweep, {**sweep, "mesh0.back_contact": True})

@@ -205,7 +205,8 @@ def system():
 @pytest.fixture(scope="module")
 def swept():
     model = build_link_model(system())
-    return model, link_sweep(model, 2 * np.pi * GRID, H=H, directions="both", period="auto")
+    # link_sweep's default period is "auto" (it was 1): the period-2 branch without asking
+    return model, link_sweep(model, 2 * np.pi * GRID, H=H, directions="both")
 
 
 def half_difference(d):

@@ -61,7 +61,7 @@ def _summary(text: str) -> str:
 
 def test_kubo_period_two_point_reports_one_H(tmp_path, captured, capsys):
     """--harmonics 13 with a period-2 point (26 harmonics of ω/2 in the arrays): 13 in the
-    CSV column, SweepResult.H, GearedSweepResult.H, the summary line and the title."""
+    CSV column, SweepResult.H, the summary line and the title."""
     out = tmp_path / "kubo.csv"
     assert main(["sweep", str(KUBO), *KUBO_DOWN, "--out", str(out)]) == 0
     text = capsys.readouterr().out
@@ -69,11 +69,11 @@ def test_kubo_period_two_point_reports_one_H(tmp_path, captured, capsys):
     assert (df["period"] == 2).sum() >= 1  # the case this test is about
     assert set(df["H"].dropna().astype(int)) == {13}
     (res,) = captured["results"]
-    assert res.mesh.base == 2 and res.mesh.H_stored == 26  # what the arrays hold
-    assert res.mesh.H == 13 and res.H == 13
+    assert res.result.base == 2 and res.result.H_stored == 26  # what the arrays hold
+    assert res.result.H == 13
     assert "H = 13," in _summary(text) and "26" not in _summary(text)
     (title,) = captured["titles"]
-    assert title.splitlines()[1] == "H = 13 harmonics of the mesh frequency"
+    assert title.splitlines()[1] == "base frequency: mesh, H = 13"
 
 
 def test_period_two_alone_checks_against_H_of_the_mesh(tmp_path, captured, capsys):
@@ -88,12 +88,12 @@ def test_period_two_alone_checks_against_H_of_the_mesh(tmp_path, captured, capsy
     # the one stable period-2 point, not the 110 grid points no period-2 branch reaches
     assert "period 2 (period doubled) at rpm: 9800.0\n" in text
     (res,) = captured["results"]
-    assert res.mesh.H == 13 and res.mesh.H_check == 17
+    assert res.result.H == 13 and res.result.H_check == 17
     assert "H = 13 (given; largest estimated error " in line and line.split(" against H = ")[1].startswith(
         "17)"
     )
     assert set(pd.read_csv(out)["H"].dropna().astype(int)) == {13}
-    assert res.mesh.max_harmonic_error <= 0.005
+    assert res.result.max_harmonic_error <= 0.005
 
 
 def test_link_sweep_harmonics_9_is_H_9_everywhere(tmp_path, captured, capsys):

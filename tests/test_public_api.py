@@ -198,3 +198,53 @@ def test_time_sweep_of_a_link_model_has_every_links_outputs():
         np.testing.assert_allclose(
             td[column], frame[column], rtol=1e-3, atol=1e-3 * np.max(scale), err_msg=column
         )
+
+
+def test_a_one_point_sweep_of_the_rub_rotor_lands_on_the_run_up_orbit():
+    """``nlgrd.sweep(rub_rotor, rpm=[4000])`` did not converge: Newton from the linear
+    response fails there (the disk rubs all round) and a one-point sweep had no next
+    frequency to approach from. Now its first point is approached from 0.9 x the speed
+    below (``landing.APPROACH_FRACTIONS``) and lands on the orbit a 21-point run-up from
+    2000 rpm reaches (rub force 84.04 N at H = 5): the same orbit to the solver's
+    tolerance (1e-8 relative, both Newton solutions to 1e-10 of the same equations).
+    Independent check of that orbit: ``nlgrd.time_sweep(rub_rotor, rpm=[4000],
+    directions="up", H=7)`` from rest (HHT-α, 512 steps per period) settles on 84.075 N,
+    contact all round (measured, 175 s; the 4e-4 difference is the integration's
+    second-order error, tests/test_public_api.py's time-sweep test above)."""
+    system = nlgrd.load(RUB)
+    one = nlgrd.sweep(system, rpm=[4000.0], H=5, time_domain=False).to_frame()
+    run_up = nlgrd.sweep(system, rpm=np.linspace(2000.0, 4000.0, 21), H=5, directions="up", time_domain=False)
+    ref = run_up.to_frame().iloc[-1]
+    assert one["converged"].all() and one["stable"].all() and list(one["direction"]) == ["up", "down"]
+    assert ref["rub.contact_fraction [-]"] == 1.0 and 80.0 < ref["rub.force_max [N]"] < 90.0
+    np.testing.assert_allclose(one["rub.force_max [N]"], ref["rub.force_max [N]"], rtol=1e-8)
+    np.testing.assert_allclose(one["rub.displacement_max [m]"], ref["rub.displacement_max [m]"], rtol=1e-8)
+
+
+def test_stability_with_a_loss_factor_is_refused_naming_the_material_and_the_file(tmp_path, capsys):
+    """A loss factor has no time-domain form, so no Floquet stability: the refusal names the
+    field (``materials.steel.loss_factor``), and the file on the command line and in a
+    study's task (it said ``loss_factor: ...`` with neither). Without stability the sweep runs."""
+    from nlgrd.cli import main
+
+    path = tmp_path / "clearance_loss.toml"
+    path.write_text(CLEARANCE.read_text().replace("loss_factor = 0.0", "loss_factor = 0.01"))
+    system = nlgrd.load(path)
+    with pytest.raises(nlgrd.ModelError) as err:
+        nlgrd.sweep(system, hz=[1000.0], H=3, directions="up")
+    assert err.value.key == "materials.steel.loss_factor"
+    assert nlgrd.sweep(system, hz=[1000.0], H=3, directions="up", stability=False).result.converged.all()
+    out = tmp_path / "s.csv"
+    assert main(["sweep", str(path), "--hz", "1000:1010:2", "--harmonics", "3", "--out", str(out)]) == 2
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("nlgrd:")]
+    assert len(lines) == 1 and str(path) in lines[0] and "materials.steel.loss_factor" in lines[0]
+    # a study's task records the one line with the file (the study goes on)
+    import tomllib
+
+    from nlgrd.studies.study_file import Analysis
+    from nlgrd.studies.study_tasks import TaskSpec, run_task
+
+    analysis = Analysis(unit="hz", start=1000.0, stop=1010.0, count=2, harmonics=3).as_dict()
+    task = run_task(TaskSpec(0, {}, tomllib.loads(path.read_text()), str(path), analysis))
+    assert task["summary"] is None
+    assert str(path) in task["error"] and "materials.steel.loss_factor" in task["error"]

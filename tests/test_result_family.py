@@ -56,7 +56,10 @@ def _sdof():
 
 
 def _one_mesh_sweep():
-    return nlgrd.sweep(nlgrd.load(TWO_SHAFT), hz=[1000.0, 1700.0], H=5, directions="up")
+    from nlgrd.nonlinear.models.geared import geared_sweep
+
+    hz = np.array([1000.0, 1700.0])
+    return geared_sweep(nlgrd.load(TWO_SHAFT), 2 * np.pi * hz, H=5, directions="up")
 
 
 def _floquet():

@@ -17,6 +17,8 @@ periods) are in docs/verification.md.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -38,7 +40,7 @@ def kb_sweep():
 
 def test_statistics_against_a_four_times_longer_integration(kb_sweep):
     system, res = kb_sweep
-    m = res.mesh
+    m = res.result
     assert list(np.asarray(m.no_stable)) == [False, True, True]  # the sweep's gap
     model = build_link_model(system)
     z = base_harmonics(m.harmonics[2], int(m.base))
@@ -65,11 +67,11 @@ def test_sweep_answers_its_gaps_and_draws_them_apart(kb_sweep):
     frame = out.to_frame()
     assert list(frame["response"].iloc[:1]) == ["periodic"]
     assert set(frame["response"].iloc[1:]) <= {TIME_DOMAIN, CHAOTIC}
-    assert np.all(np.isfinite(frame["dte_rms [um]"]))
-    assert np.isnan(frame["dte_rms_uncertainty [um]"].iloc[0])
-    assert np.all(frame["dte_rms_uncertainty [um]"].iloc[1:] > 0)
+    assert np.all(np.isfinite(frame["mesh0.dte_rms [m]"]))
+    assert np.isnan(frame["mesh0.dte_rms_uncertainty [m]"].iloc[0])
+    assert np.all(frame["mesh0.dte_rms_uncertainty [m]"].iloc[1:] > 0)
     assert frame["period"].iloc[1:].isna().all()  # no period: not a periodic orbit
-    bearing = [c for c in frame.columns if c.endswith("force_rms [N]")]
+    bearing = [c for c in frame.columns if c.endswith(".force_rms [N]") and c.startswith("bearing ")]
     assert bearing and np.all(np.isfinite(frame[bearing].to_numpy()))  # every row has them
     unc = [c.replace("force_rms [N]", "force_rms_uncertainty [N]") for c in bearing]
     assert frame[unc].iloc[0].isna().all() and (frame[unc].iloc[1:] > 0).all().all()
@@ -125,8 +127,9 @@ def test_kubo_bands_against_four_times_longer_integrations():
     rpm = np.linspace(2000, 16000, 300)
     rpm = rpm[rpm >= 6000]
     full = nlgrd.sweep(system, rpm=rpm, directions="down", time_domain=False)
-    res, speeds = full.mesh, full.rpm  # in sweep order: down
+    res = full.result  # in sweep order: down
     model = build_link_model(system)
+    speeds = res.omega * model.receptance.plan.speed_per_base * 30 / math.pi  # pinion [rpm]
     expect = {8602.0: (20.0e-6, 0.5), 8508.4: (20.0e-6, 0.5), 7056.9: (3.0e-6, 0.0)}
     for speed, (dte_low, loss_low) in expect.items():
         i = int(np.argmin(np.abs(speeds - speed)))

@@ -44,16 +44,21 @@ def test_a_sweep_answers_kubo_tori_against_time_integration():
     assert (frame["verdict"] == "not computed").all()  # the torus's stability: not computed
     assert frame["stable"].isna().all()
     assert (frame["harmonic_error [-]"] <= 5e-3).all()  # its own estimate, within the sweep's tolerance
-    for column, rtol in (("dte_rms", 0.01), ("force_max", 0.01), ("secondary_frequency", 0.005)):
-        ours = frame[[c for c in frame.columns if c.startswith(f"{column} [")][0]].to_numpy(float)
-        theirs = ref[[c for c in ref.columns if c.startswith(f"ti_{column} [")][0]].to_numpy(float)
-        np.testing.assert_allclose(ours, theirs, rtol=rtol, err_msg=column)
-    bearing = frame["bearing 0 (shaft 0, node 1) force_max [N]"].iloc[2]
+    for ours, theirs, scale, rtol in (
+        ("mesh0.dte_rms [m]", "ti_dte_rms [um]", 1e6, 0.01),
+        ("mesh0.force_max [N]", "ti_force_max [N]", 1.0, 0.01),
+        ("secondary_frequency [Hz]", "ti_secondary_frequency [Hz]", 1.0, 0.005),
+    ):
+        np.testing.assert_allclose(
+            frame[ours].to_numpy(float) * scale, ref[theirs].to_numpy(float), rtol=rtol, err_msg=ours
+        )
+    bearing = frame["bearing 0 (shaft 0, node 1).force_max [N]"].iloc[2]
     assert abs(bearing / 5520.880924 - 1) < 0.01
     # every metric and bearing column written; no sampling uncertainty (not a time answer)
     bearings = [c for c in frame.columns if c.startswith("bearing ") and "uncertainty" not in c]
     assert np.all(np.isfinite(frame[bearings].to_numpy(float)))
-    assert "dte_rms_uncertainty [um]" not in frame or frame["dte_rms_uncertainty [um]"].isna().all()
+    unc = "mesh0.dte_rms_uncertainty [m]"
+    assert unc not in frame or frame[unc].isna().all()
     ax = res.plot("dte_rms")
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert any("quasi-periodic (torus HB) (3)" in t for t in labels), labels
@@ -73,5 +78,5 @@ def test_a_torus_that_does_not_converge_falls_back_to_the_time_answer():
     frame = out.to_frame()
     assert frame["response"].iloc[0] in (TIME_DOMAIN, CHAOTIC)
     assert frame["verdict"].iloc[0] == "unstable"  # the periodic orbit's verdict, computed
-    assert frame["dte_rms_uncertainty [um]"].iloc[0] > 0
-    assert np.isnan(out.mesh.torus_frequency[0])
+    assert frame["mesh0.dte_rms_uncertainty [m]"].iloc[0] > 0
+    assert np.isnan(out.result.torus_frequency[0])

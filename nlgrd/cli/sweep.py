@@ -1,7 +1,10 @@
 """The ``nlgrd sweep`` command: a harmonic-balance sweep (or continuation) of any model file,
-written as a CSV table and a figure, with a summary; one flow for every model (its view,
-:mod:`nlgrd.nonlinear.models.model_views`, picks the library calls). A link model's columns
-are ``<link>.<quantity> [unit]`` (:func:`link_quantity` reads ``--quantity`` for them)."""
+written as a CSV table and a figure, with a summary; one flow for every model: its link
+model (:func:`nlgrd.analyses.model`, one mesh too) behind the link view
+(:class:`~nlgrd.nonlinear.models.model_views.LinkView`). The columns are
+``<link>.<quantity> [unit]`` (:func:`link_quantity` reads ``--quantity``). One gear pair
+whose teeth differ is still swept over the revolution on its mesh coordinate
+(:func:`_shaft_order_command`: H in mesh harmonics, ``period`` N, the spectra)."""
 
 from __future__ import annotations
 
@@ -22,7 +25,6 @@ from nlgrd.io.command_line import (
 )
 from nlgrd.io.model_checks import check_harmonics_memory, check_speed_range
 from nlgrd.nonlinear.results.response_kinds import QUASI_PERIODIC
-from nlgrd.nonlinear.tracing.harmonic_convergence import LADDER
 from nlgrd.nonlinear.tracing.period_branches import PERIOD_HARMONICS
 
 
@@ -63,10 +65,10 @@ def _title(system, args) -> str:
 def cmd_sweep(args) -> int:
     """Nonlinear harmonic-balance sweep (or continuation) of any model: CSV, PNG, summary.
 
-    One flow for every model: the model's view
-    (:mod:`nlgrd.nonlinear.models.model_views`: one gear pair on its mesh coordinate, or
-    any set of links) decides which library call does the work; the command parses, writes
-    and prints.
+    One flow for every model: the link model and its view
+    (:class:`~nlgrd.nonlinear.models.model_views.LinkView`) do the work; the command
+    parses, writes and prints. One gear pair whose teeth differ goes to
+    :func:`_shaft_order_command`.
 
     Parameters
     ----------
@@ -86,7 +88,6 @@ def cmd_sweep(args) -> int:
     import numpy as np
 
     from nlgrd.io.model_file import load_model
-    from nlgrd.nonlinear.models.link_model import needs_links
 
     if (args.rpm is None) == (args.hz is None):
         raise ModelError(
@@ -121,38 +122,17 @@ def cmd_sweep(args) -> int:
         check_harmonics_memory(system, args.harmonics, "--harmonics")
     except ModelError as err:
         raise err.within(file=str(args.model)) from None
-    links = needs_links(system)
-    if links and not system.gear_pairs and not system.bearing_clearances:
+    if not system.gear_pairs and not system.bearing_clearances:
         raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
-    if search is not None and not links and system.gear_pairs[0].error_period > 1:
+    revolution = _revolution(system)
+    if search is not None and revolution:
         key = "--search-at" if args.search_at is not None else "--period"
         raise ModelError(key, "searches the orbits of one gear pair excited at its mesh period", args.model)
     grid = None if args.continuation else values  # the values as typed, written in the CSV
     nu = period if period != "auto" and period >= 3 else 1  # --period N: searched and followed
-    if links:
-        from nlgrd.nonlinear.models.link_model import build_link_model
-        from nlgrd.nonlinear.models.model_views import LinkView
-
-        model = build_link_model(system)
-        per_base = model.receptance.plan.speed_per_base
-        unit = _Unit(args.rpm is not None, 1 / per_base, grid, speed="shaft speed", base="base frequency")
-        view = LinkView(model, link_quantity(args.quantity, model)[0])
-        quantity = view.column
-        omegas = unit.omega(values)
-        if not args.continuation:  # the grid as nlgrd.analyses.sweep makes it
-            omegas = values * math.pi / 30 / per_base if args.rpm is not None else 2 * math.pi * values
-    else:
-        quantity = check_quantity(args.quantity or "dslr")
-        gp = system.gear_pairs[0]
-        unit = _Unit(
-            args.rpm is not None,
-            gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio),
-            grid,
-        )
-        omegas = unit.omega(values)
     check_speed_range(system, float(max(values)), args.rpm is not None, option, repr(text))
     pyplot()
-    if not links and system.gear_pairs[0].error_period > 1:  # teeth that differ: the revolution's orders
+    if revolution:  # one gear pair whose teeth differ: the revolution's orders
         gp = system.gear_pairs[0]
         if args.continuation or period not in ("auto", gp.error_period):
             raise ModelError(
@@ -160,10 +140,28 @@ def cmd_sweep(args) -> int:
                 f"the gear errors repeat every {gp.error_period} mesh periods: a sweep over that "
                 "period only (no --continuation, --period auto)",
             )
-        return _shaft_order_command(args, system, omegas, unit, quantity, out, png)
-    if not links:  # one gear pair: its mesh coordinate (the period-N model for --period N)
-        H = args.harmonics or (PERIOD_HARMONICS if nu > 1 else LADDER[-1])
-        view = _geared_view(system, float(omegas.max()), H, nu)
+        quantity = check_quantity(args.quantity or "dslr")
+        unit = _Unit(
+            args.rpm is not None,
+            gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio),
+            grid,
+        )
+        return _shaft_order_command(args, system, unit.omega(values), unit, quantity, out, png)
+    from types import SimpleNamespace
+
+    from nlgrd.analyses import model as link_model
+    from nlgrd.nonlinear.models.link_model import model_links
+    from nlgrd.nonlinear.models.model_views import LinkView
+
+    column = link_quantity(args.quantity, SimpleNamespace(system=system, links=model_links(system)))[0]
+    model = link_model(system)
+    per_base = model.receptance.plan.speed_per_base
+    unit = _Unit(args.rpm is not None, 1 / per_base, grid, speed="shaft speed", base="base frequency")
+    view = LinkView(model, column)
+    quantity = view.column
+    omegas = unit.omega(values)
+    if not args.continuation:  # the grid as nlgrd.analyses.sweep makes it
+        omegas = values * math.pi / 30 / per_base if args.rpm is not None else 2 * math.pi * values
     if nu > 1:
         return _period_command(args, system, view, omegas, unit, quantity, out, png, search)
     if args.continuation:
@@ -268,15 +266,16 @@ def link_quantity(text: str | None, model) -> tuple[str, str]:
     return f"{name}.{match[0]}", f"{name}: {match[0]}"
 
 
-def _geared_view(system, top: float, H: int, nu: int = 1):
-    """The view of one gear pair's model for mesh frequencies up to ``top`` [rad/s], with H
-    mesh harmonics (ν H of the base ω/ν for period ν)."""
-    from nlgrd.nonlinear.models.geared import build_geared_model
-    from nlgrd.nonlinear.models.model_views import GearedView
-
-    if nu == 1:
-        return GearedView(build_geared_model(system, top, H=H))
-    return GearedView(build_geared_model(system, top, nu * H, period=nu), nu)
+def _revolution(system) -> bool:
+    """One gear pair, nothing else nonlinear, whose errors repeat over several mesh periods:
+    swept over the revolution by :func:`~nlgrd.nonlinear.models.shaft_orders.shaft_order_sweep`
+    (H in mesh harmonics, ``period`` N, and the spectra)."""
+    return (
+        len(system.gear_pairs) == 1
+        and not system.bearing_clearances
+        and not system.unbalance
+        and system.gear_pairs[0].error_period > 1
+    )
 
 
 def _check_period_options(args, period: int) -> None:

@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 import nlgrd
+from nlgrd.errors import ModelError
 from nlgrd.studies.study_file import Study
 from nlgrd.threads import single_blas_thread
 
@@ -389,6 +390,8 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
             out["error"] = None
         except Exception as err:  # recorded: the study goes on
             last = traceback.extract_tb(err.__traceback__)[-1]
+            if isinstance(err, ModelError) and err.file is None:  # the model is the culprit
+                err = err.within(file=spec.model_file)
             where = f" ({os.path.basename(last.filename)}:{last.lineno})"
             out["error"] = f"{type(err).__name__}: {' '.join(str(err).split())}{where}"
     out["warnings"] = sorted({" ".join(str(w.message).split()) for w in caught})

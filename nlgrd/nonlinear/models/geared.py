@@ -27,6 +27,7 @@ from nlgrd.nonlinear.fourier.harmonics import real_to_complex
 from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh
 from nlgrd.nonlinear.laws.mesh_law import gear_mesh_force, mesh_law
+from nlgrd.nonlinear.models.link_model import check_stability_damping
 from nlgrd.nonlinear.reduction.receptance import MeshReceptance
 from nlgrd.nonlinear.reduction.state_space import FloquetCache, LinearStateSpace
 from nlgrd.nonlinear.results.bearing_loads import (
@@ -340,6 +341,7 @@ def geared_sweep(
     if (rpm is None) == (omegas is None):
         raise ModelError("rpm", "give either pinion speeds (rpm) or mesh frequencies, not both")
     check_period(period, stability)
+    check_stability_damping(system, stability)
     if model is None:
         top = np.max(omegas) if omegas is not None else None
         if top is None:

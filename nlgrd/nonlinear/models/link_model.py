@@ -25,6 +25,7 @@ from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.links.contract import GearMeshLink
 from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.reduction.link_reduction import LinkReceptance
+from nlgrd.nonlinear.reduction.state_space import HYSTERETIC_REFUSAL
 from nlgrd.nonlinear.results.link_results import (  # re-exported: the tables live there
     LinkContinuationResult,
     LinkSweepResult,
@@ -196,13 +197,39 @@ def build_link_model(
     unbalance = system.unbalance if unbalance is None else tuple(unbalance)
     unb_orders = [abs(system.shafts[u.shaft].speed_ratio) for u in unbalance]
     plan = plan or FrequencyPlan.for_system(system, unb_orders)
-    links = list(links) + list(system.bearing_clearances)
-    given = {lk.index for lk in links if isinstance(lk, GearMeshLink) and lk.index is not None}
-    links += [lk for lk in gear_links(system, plan) if lk.index not in given]
+    links = model_links(system, links, plan)
     if not links:  # a linear rotor: its response is modal analysis and frequency response
         raise ModelError("gear_pairs", "the model has no gear pair and no clearance: no link to reduce onto")
     loads = dict(unbalance=unbalance, gravity=gravity, method=method, max_frequency=max_frequency)
-    return _reduce(system, tuple(links), plan, loads)
+    return _reduce(system, links, plan, loads)
+
+
+def model_links(system: RotorSystem, links: Sequence = (), plan: FrequencyPlan | None = None) -> tuple:
+    """The links :func:`build_link_model` reduces ``system`` onto, without reducing: ``links``,
+    the system's bearing clearances, then every gear pair not among ``links``
+    (:func:`gear_links`). What the command line checks ``--quantity`` against before any
+    computation.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    links : sequence of NonlinearLink
+        Links given.
+    plan : FrequencyPlan, optional
+        Default :meth:`FrequencyPlan.for_system` with the system's unbalance.
+
+    Returns
+    -------
+    tuple of NonlinearLink
+    """
+    if plan is None:
+        plan = FrequencyPlan.for_system(
+            system, [abs(system.shafts[u.shaft].speed_ratio) for u in system.unbalance]
+        )
+    links = list(links) + list(system.bearing_clearances)
+    given = {lk.index for lk in links if isinstance(lk, GearMeshLink) and lk.index is not None}
+    return tuple(links + [lk for lk in gear_links(system, plan) if lk.index not in given])
 
 
 def period_model(model: LinkModel, nu: int = 2) -> LinkModel:
@@ -334,13 +361,52 @@ def _reduce(system: RotorSystem, links: tuple, plan: FrequencyPlan, loads: dict,
     return LinkModel(system, links, rec, reduced, max(orders, default=1), period, dict(loads))
 
 
+#: Newton iterations per sweep point (the default of :func:`link_sweep`): the Jacobian
+#: jumps where contact is first lost (grazing), where damped Newton can need a hundred
+#: iterations, each cheap. Kahraman & Blankenship's rig at 3600 Hz, H = 5, one point from
+#: the linear response: 89 iterations on the link reduction (52 on the mesh-coordinate
+#: one, the same equations to 1e-10); with 50 the point was lost.
+SWEEP_MAX_ITER = 150
+
+
+def check_stability_damping(system: RotorSystem, stability: bool) -> None:
+    """Refuse Floquet stability of a model with hysteretic damping, naming the material.
+
+    A loss factor has no time-domain form (its force is in quadrature with the
+    displacement at every frequency at once), so the state space of the stability analysis
+    has none (:meth:`~nlgrd.nonlinear.reduction.link_reduction.LinkReceptance.state_space`).
+
+    Parameters
+    ----------
+    system : RotorSystem
+        The model.
+    stability : bool
+        Whether Floquet stability is asked for.
+
+    Raises
+    ------
+    ModelError
+        (``materials.<name>.loss_factor``) A material with a loss factor, with stability.
+    """
+    if not stability:
+        return
+    for shaft in system.shafts:
+        for el in shaft.elements:
+            mat = el.material
+            if mat.loss_factor > 0:
+                raise ModelError(
+                    f"materials.{mat.name}.loss_factor",
+                    f"{mat.loss_factor!r}: {HYSTERETIC_REFUSAL} (stability=False, --no-stability)",
+                )
+
+
 def link_sweep(
     model: LinkModel,
     omegas: NDArray,
     H: int | None = None,
     *,
     rtol: float = OUTPUT_RTOL,
-    period: int | str = 1,
+    period: int | str = "auto",
     **options,
 ) -> LinkSweepResult:
     """Harmonic-balance sweep of a link model with the links' outputs.
@@ -360,23 +426,19 @@ def link_sweep(
     rtol : float
         The tolerance of the estimated relative error of the outputs [-] (with H chosen,
         and of the period-2 points always).
-    period : {1, "auto", 2}
-        As :func:`nlgrd.nonlinear.models.geared.geared_sweep`, in base periods. 1 (default):
-        period-1 orbits only, every point's harmonics those of ω. "auto": the period-1
-        orbits where they are stable and, where one has lost stability by period doubling
-        (a real Floquet multiplier < -1), the stable period-2 orbit
-        (:func:`nlgrd.nonlinear.tracing.auto_period.beyond_period_one` on :func:`period_model`,
-        2 H harmonics of ω/2; ``nlgrd sweep``'s default); without ``stability`` it is 1.
-        2: the period-2 branches alone (needs ``stability``). The default is 1, not
-        geared_sweep's "auto", because with a period-2 point every point's harmonics are
-        of ω/2, which callers that start time integrations or recoveries from them on
-        the period-1 model do not expect (tests/link_comparison.py: the two-stage train
-        has a stable period-2 orbit at 358.25 Hz), and a period-2 sweep of a large model
-        costs many period-1 sweeps (the two-stage train's 34 points at H = 45: 20 s with
-        period 1, 360 s with "auto").
+    period : {"auto", 1, 2}
+        In base periods. "auto" (default, as ``nlgrd.sweep``, ``nlgrd sweep`` and the
+        studies): the period-1 orbits where they are stable and, where one has lost
+        stability by period doubling (a real Floquet multiplier < -1), the stable period-2
+        orbit (:func:`nlgrd.nonlinear.tracing.auto_period.beyond_period_one` on
+        :func:`period_model`, 2 H harmonics of ω/2); without ``stability`` it is 1. It
+        costs more than 1 only where a period doubling is found. 1: period-1 orbits only,
+        every point's harmonics those of ω (what a caller that starts time integrations
+        or recoveries on the period-1 model from the harmonics asks for). 2: the period-2
+        branches alone (needs ``stability``).
     **options
         Passed to :func:`nlgrd.nonlinear.tracing.sweep.sweep` (``directions``, ``tol``,
-        ``stability`` (default True), ``jump``, ...).
+        ``stability`` (default True), ``jump``, ``max_iter`` (default :data:`SWEEP_MAX_ITER`), ...).
 
     Returns
     -------
@@ -389,9 +451,12 @@ def link_sweep(
     ModelError
         A ``period`` other than 1, 2 or "auto", or 2 without stability.
     """
+    period_iter = options.get("max_iter", 50)  # the period-2 solves' own default
     options.setdefault("stability", True)
     options.setdefault("jump", "auto")
+    options.setdefault("max_iter", SWEEP_MAX_ITER)
     check_period(period, options["stability"])
+    check_stability_damping(model.system, options["stability"])
     omegas = np.asarray(omegas, dtype=float)
     top = float(np.max(np.abs(omegas))) if omegas.size else 0.0
     ladder = [h * model.top_order for h in LADDER]
@@ -427,7 +492,7 @@ def link_sweep(
             H_check,
             rtol,
             tol=options.get("tol", 1e-10),
-            max_iter=options.get("max_iter", 50),
+            max_iter=period_iter,
         )
     two = period_model(model, 2) if p2 is not None else None
     blank = dict.fromkeys(output_names(model), np.nan)
@@ -486,6 +551,7 @@ def link_continuation(
     -------
     LinkContinuationResult
     """
+    check_stability_damping(model.system, options.get("stability", True))
     top = max(abs(float(omega_start)), abs(float(omega_end)))
     model.receptance.prepare_stability(top)
     if H is None:

@@ -191,6 +191,41 @@ class GearedView:
         return GearedSweepResult(res, bearing_response(model, on_base), model.pinion_rpm(res.omega), names, H)
 
 
+def _unit(name: str) -> str:
+    """The unit of an output column ``<name> [unit]`` ("" without one)."""
+    return name.rsplit("[", 1)[1] if name.endswith("]") and "[" in name else ""
+
+
+def same_outputs(sweep: dict, orbit: dict, rtol: float = 1e-6) -> bool:
+    """Whether an orbit's outputs are the sweep point's: every column of ``orbit`` to
+    ``rtol`` of itself or of the largest of the sweep point's columns in its unit.
+
+    The absolute part is the problem's scale: a bearing the mesh does not load gets
+    rounding of the recovery (1e-66 to 1e-8 N beside 1e3 N on Kubo's rig, different on
+    every BLAS kernel), which no relative comparison of its own can pass.
+
+    Parameters
+    ----------
+    sweep : dict
+        The sweep point's outputs, ``<name> [unit]`` -> value.
+    orbit : dict
+        The orbit's outputs, keys among ``sweep``'s.
+    rtol : float
+        Relative tolerance [-].
+
+    Returns
+    -------
+    bool
+    """
+    scale: dict[str, float] = {}
+    for k, v in sweep.items():
+        number = isinstance(v, (float, int, np.floating, np.integer)) and not isinstance(v, bool)
+        if number and np.isfinite(v):
+            scale[_unit(k)] = max(scale.get(_unit(k), 0.0), abs(float(v)))
+    atol = {k: rtol * scale.get(_unit(k), 0.0) for k in orbit}
+    return all(bool(np.isclose(sweep[k], v, rtol=rtol, atol=atol[k])) for k, v in orbit.items())
+
+
 class LinkView:
     """A link model: its sweep and continuation, the sweep's table and figure, the period-ν
     models and what is written of each orbit and branch: the base frequency, the reference
@@ -310,7 +345,7 @@ class LinkView:
 
     def on_sweep(self, res):
         """``known(orbit, omega, followed)``: the sweep ``res`` has the orbit (its period and
-        every output to 1e-6) at a converged, stable point of that speed."""
+        every output, :func:`same_outputs`) at a converged, stable point of that speed."""
         r = res.result
 
         def known(o, w: float, followed) -> bool:
@@ -319,9 +354,7 @@ class LinkView:
             )[0]
             mine = self.values(o.harmonics, o.omega, o.period)
             return any(
-                int(r.period[i]) == o.period
-                and all(np.isclose(res.links[k].iloc[i], v, rtol=1e-6, atol=0) for k, v in mine.items())
-                for i in here
+                int(r.period[i]) == o.period and same_outputs(res.links.iloc[i].to_dict(), mine) for i in here
             )
 
         return known

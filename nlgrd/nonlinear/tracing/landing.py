@@ -362,11 +362,22 @@ def follow_branch(
     return fol, folds > 0
 
 
-def approach(model, problem, order, i, H, method, tol, max_iter, stability, lookahead=5):
+#: Fractions of a first point's frequency the fallback of :func:`approach` starts from
+#: (their reciprocals for a down sweep): close enough that the walk fits the landing
+#: budget, far enough that the linear start converges there. data/models/rub_rotor.toml
+#: at 4000 rpm (one point, up): from 0.9 and 0.75 the walk lands on the orbit a 21-point
+#: run-up from 2000 rpm reaches (rub force 84.04 N); from 0.5 it exceeds the budget.
+APPROACH_FRACTIONS = (0.9, 0.75)
+
+
+def approach(model, problem, order, i, H, method, tol, max_iter, stability, lookahead=5, direction="up"):
     """A start for a sweep's first point ``order[i]`` when Newton from the full-contact
     linear response fails there: solve at the next frequencies of the sweep (up to
     ``lookahead``) and follow the curve back by arc-length continuation
-    (:func:`nlgrd.nonlinear.tracing.arclength.jump_to_branch`). Returns a solution or None.
+    (:func:`nlgrd.nonlinear.tracing.arclength.jump_to_branch`); when none leads there (a
+    one-point sweep has none), from :data:`APPROACH_FRACTIONS` of the frequency on the
+    side the sweep comes from (below for "up", above for "down"), the orbit a slow run-up
+    or run-down reaches. Returns a solution or None.
 
     Parameters
     ----------
@@ -390,6 +401,8 @@ def approach(model, problem, order, i, H, method, tol, max_iter, stability, look
         Accept only a Floquet-stable crossing of ``order[i]`` (``require_stable``).
     lookahead : int
         Number of following frequencies tried.
+    direction : {"up", "down"}
+        The sweep's direction: the side the fallback starts are taken on.
 
     Returns
     -------
@@ -397,7 +410,8 @@ def approach(model, problem, order, i, H, method, tol, max_iter, stability, look
         The converged solution at ``order[i]``; None when no following frequency leads there.
     """
     omega = float(order[i])
-    for wk in order[i + 1 : i + 1 + lookahead]:
+    side = APPROACH_FRACTIONS if direction == "up" else tuple(1 / f for f in APPROACH_FRACTIONS)
+    for wk in [*order[i + 1 : i + 1 + lookahead], *(f * omega for f in side)]:
         start = solve(model.at(float(wk), H), None, method=method, tol=tol, max_iter=max_iter, fallback=True)
         if not start.converged:
             continue

@@ -322,7 +322,12 @@ def _sweep_pass(
             if not sol.converged and z is None and (zs := shooting_start(model, float(w), H)) is not None:
                 sol = solve(problem, zs, method=method, tol=tol, max_iter=max_iter, fallback=False)
             if not sol.converged and z is None and jump != "none":
-                sol = landing.approach(model, problem, order, k, H, method, tol, max_iter, stability) or sol
+                sol = (
+                    landing.approach(
+                        model, problem, order, k, H, method, tol, max_iter, stability, direction=direction
+                    )
+                    or sol
+                )
             restarts: list[HarmonicSolution] | None = None  # the restarts' unstable orbits, once run
             if not sol.converged and jump == "restart" and z is not None:
                 restarts = []
