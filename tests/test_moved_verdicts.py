@@ -21,7 +21,10 @@ balance orbit or at rest. The orbits are taken from the link engine's own sweep
   engine on an unstable one (12.8 µm, max|μ| 1.0748 on the full state). The integration
   from rest settles on the stable orbit, and from the link engine's orbit leaves it and
   settles there too: the old answer is right, the link engine's landing is not (strict
-  xfail below).
+  xfail below). The old path got there through a wrong multiplier (its basis gave the
+  unstable orbit a real +1.62, a fold, which makes a sweep look for another orbit); the
+  link engine's is the full state's complex pair, and a sweep leaves an unstable orbit
+  only at a real μ > 1.
 """
 
 from __future__ import annotations
