@@ -4,6 +4,7 @@ Run from the repository root::
 
     .venv/bin/python benchmarks/bench_nonlinear.py            # full size, about 4-6 min
     .venv/bin/python benchmarks/bench_nonlinear.py --quick    # smoke run, about 1 min
+    .venv/bin/python benchmarks/bench_nonlinear.py --cases 4  # old path and link engine, about 6 min
 
 Three cases, each printed as a table (figures and machine in ``benchmarks/README.md``):
 
@@ -25,6 +26,13 @@ Three cases, each printed as a table (figures and machine in ``benchmarks/README
    Target: TI / HB per point >= 1000.
 3. Per-point cost from 132 to 9 972 DOFs (more elements per shaft) with
    ``receptance="modal"`` and ``"direct"``, the one-off cost apart. Target: at most 2x.
+4. (``--cases 4``) The single mesh on the old path (:func:`geared_sweep`) and on the link
+   engine (:func:`~nlgrd.nonlinear.models.link_model.link_sweep`, what ``nlgrd.sweep`` runs)
+   side by side in one process, alternating, best of ``--repeats``: case 1's sweep (H = 5,
+   without and with stability) and the default sweep of ``data/models/two_shaft.toml`` at 40
+   base frequencies 1000-2900 Hz both ways (H chosen, stability, period "auto", without the
+   time-domain answers), with CPU and wall time, corrector evaluations of the landing
+   searches, sweeps per ladder and Floquet calls. Target (issue 33): link / old <= 1.10.
 
 How it measures
 ---------------
@@ -72,10 +80,13 @@ import nlgrd.nonlinear.reduction.receptance as nl_receptance
 import nlgrd.nonlinear.reduction.state_space as nl_state_space
 import nlgrd.nonlinear.results.metrics as nl_metrics
 import nlgrd.nonlinear.stability.floquet as nl_floquet
+import nlgrd.nonlinear.tracing.arclength as nl_arclength
+import nlgrd.nonlinear.tracing.harmonic_convergence as nl_harmonics
 import nlgrd.nonlinear.tracing.landing as nl_landing
 import nlgrd.nonlinear.tracing.sweep as nl_sweep
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
 from nlgrd.rotor.system import refined
 from nlgrd.timedomain.geared import time_response
@@ -890,6 +901,131 @@ def case_scaling(cfg, c1) -> None:
 # --------------------------------------------------------------------------------------
 
 
+# --------------------------------------------------------------------------------------
+# Case 4: the single mesh on the old path and on the link engine, side by side
+# --------------------------------------------------------------------------------------
+
+
+class Counts:
+    """Corrector evaluations of the landing searches, sweeps per ladder, lifts refused and
+    Floquet calls of one run (wrapping library functions for its duration, as :class:`Probe`)."""
+
+    def __init__(self):
+        self.n = defaultdict(int)
+        self._patched = []
+
+    def _wrap(self, owner, name, key, refused=False):
+        orig = vars(owner)[name]
+        counts = self.n
+
+        def wrapper(*args, **kwargs):
+            counts[key] += 1
+            out = orig(*args, **kwargs)
+            if refused and out is None:
+                counts["lifts refused"] += 1
+            return out
+
+        setattr(owner, name, wrapper)
+        self._patched.append((owner, name, orig))
+
+    def __enter__(self):
+        self._wrap(nl_arclength.Tracer, "system", "corrector evaluations")
+        self._wrap(nl_harmonics, "sweep", "sweeps")
+        self._wrap(nl_harmonics, "lift", "lifts", refused=True)
+        self._wrap(nl_floquet, "floquet_analysis", "Floquet calls")  # every caller's
+        return self
+
+    def __exit__(self, *exc):
+        for owner, name, orig in reversed(self._patched):
+            setattr(owner, name, orig)
+
+
+def _engines_run(run, *args) -> tuple[float, float, dict, object]:
+    """(wall, CPU, counts, result) of ``run(*args)``."""
+    with Counts() as counts:
+        w0, c0 = time.perf_counter(), time.process_time()
+        res = run(*args)
+        wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+    return wall, cpu, dict(counts.n), res
+
+
+def _verdicts(sweep_result) -> tuple[int, int, int]:
+    """(converged, stable, no stable response) points."""
+    r = sweep_result
+    return int(np.sum(r.converged)), int(np.sum(r.stable)), int(np.sum(r.no_stable))
+
+
+def case_engines(cfg) -> None:
+    section("Case 4: single mesh, old path (geared_sweep) and link engine (link_sweep) side by side")
+    base = load_model(MODEL_FILE)
+    system = refine(base, 2, cfg.zeta)
+    f_mode = float(round(gear_pair_mode(system)[0]))
+    omegas = TWO_PI * np.linspace(0.5 * f_mode, 1.5 * f_mode, cfg.n_points)
+    sub = TWO_PI * np.linspace(0.5 * f_mode, 1.5 * f_mode, cfg.n_stability)
+    hz40 = np.linspace(1000.0, 2900.0, 40)
+    print(
+        f"(a) case 1's sweep: {system.n_dofs} DOFs, 2 x {cfg.n_points} points H = 5 without stability, "
+        f"2 x {cfg.n_stability} with; models built once per engine, outside the timing.\n"
+        f"(b) {MODEL_FILE.relative_to(ROOT)} as in the file, 40 base frequencies 1000-2900 Hz both "
+        f"ways, H chosen, stability, period 'auto', no time-domain answers; each run builds its model.\n"
+        f"Alternating old / link, best of {cfg.repeats} by CPU time; load at start {load_average()}."
+    )
+    old_model = build_geared_model(system, float(omegas.max()), H=5)
+    link_model = build_link_model(system)
+    link_model.receptance.prepare(5 * float(omegas.max()))
+    engines = {
+        "old": lambda grid, stab, H, sys_: (
+            geared_sweep(sys_, omegas=grid, H=H, model=old_model if H else None, stability=stab).mesh
+        ),
+        "link": lambda grid, stab, H, sys_: (
+            link_sweep(
+                link_model if H else build_link_model(sys_),
+                grid,
+                H,
+                stability=stab,
+                period="auto" if stab else 1,
+            ).result
+        ),
+    }
+    cases = [
+        (f"(a) H = 5, 2 x {cfg.n_points}, stability=False", omegas, False, 5, system),
+        (f"(a) H = 5, 2 x {cfg.n_stability}, stability=True", sub, True, 5, system),
+        ("(b) two_shaft 2 x 40, H chosen, stability", TWO_PI * hz40, True, None, base),
+    ]
+    rows = []
+    for label, grid, stab, H, sys_ in cases:
+        best: dict[str, tuple] = {}
+        for _ in range(cfg.repeats):
+            for name in ("old", "link"):
+                wall, cpu, counts, res = _engines_run(engines[name], grid, stab, H, sys_)
+                if name not in best or cpu < best[name][1]:
+                    best[name] = (wall, cpu, counts, res)
+        for name in ("old", "link"):
+            wall, cpu, counts, res = best[name]
+            conv, stable, lost = _verdicts(res)
+            rows.append(
+                [
+                    label if name == "old" else "",
+                    name,
+                    f"{cpu:.2f}",
+                    f"{wall:.2f}",
+                    f"{1e3 * cpu / len(grid) / 2:.1f}",
+                    str(res.H),
+                    f"{conv}/{stable}/{lost}",
+                    str(counts.get("corrector evaluations", 0)),
+                    str(counts.get("sweeps", 1 if H else 0)),
+                    str(counts.get("lifts refused", 0)),
+                    str(counts.get("Floquet calls", 0)),
+                ]
+            )
+        ratio = best["link"][1] / best["old"][1]
+        print(f"{label}: link / old CPU {ratio:.2f}  {verdict(ratio <= 1.10)} (target <= 1.10)")
+    header = ["case", "engine", "CPU s", "wall s", "CPU ms/pt", "H", "conv/stable/no stable"]
+    header += ["corrector evals", "sweeps", "lifts refused", "Floquet calls"]
+    print(table(header, rows))
+    print(f"load average at end of case 4: {load_average()}")
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="small grids and models (smoke run, about 1 min)")
@@ -903,7 +1039,10 @@ def main(argv=None) -> None:
         "--before",
         help="with --full-stability: another floquet.py run side by side (module docstring)",
     )
-    ap.add_argument("--cases", default="123", help="which cases to run, e.g. 13 (case 1 always runs)")
+    ap.add_argument(
+        "--cases", default="123", help="which cases to run, e.g. 13 (case 1 runs with 2 or 3), 4 alone"
+    )
+    ap.add_argument("--repeats", type=int, default=2, help="case 4: runs per engine, alternating (best)")
     ap.add_argument(
         "--blas-default", action="store_true", help="primary figures with the default BLAS threads, not 1"
     )
@@ -937,6 +1076,11 @@ def main(argv=None) -> None:
     print("\n".join(machine_lines()))
     print(f"primary setting: {cfg.primary_label}; side by side: {cfg.secondary_label or 'none'}")
     with BLAS.threads(cfg.primary):
+        if "4" in cfg.cases:
+            case_engines(cfg)
+        if not set(cfg.cases) & set("123"):
+            print(f"\nload average at end: {load_average()}")
+            return
         c1 = case_sweep(cfg)
         if "2" in cfg.cases:
             case_time_domain(cfg, c1)

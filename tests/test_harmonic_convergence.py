@@ -223,3 +223,62 @@ def test_link_model_climbs_the_ladder_by_lifting_without_resweeping(monkeypatch)
         np.testing.assert_allclose(
             a[ok], b[ok], rtol=1e-8, atol=1e-12 * np.max(np.abs(b[ok]), initial=0), err_msg=col
         )
+
+
+def test_lift_keeps_a_contact_fraction_that_grows_with_h_on_the_same_branch():
+    """The two-shaft rotor as a link model, swept up at 1000, 1048.7 and 1097.4 Hz (the
+    40-point grid of benchmarks/README.md) at H = 5: at 1097.4 Hz the mesh keeps contact
+    all period at H = 5 and loses it for 0.055 of the period at H = 7, more than
+    SIGNATURE_ATOL, on the same branch. The lift keeps the point because the sweep step at
+    H = 7 from the lifted point before reaches it; judged against an independent fresh sweep
+    at H = 7 (natural continuation from point to point): the same stability, harmonics
+    within 1e-8 relative (both Newton solutions of the same equations to a residual of
+    1e-10)."""
+    from nlgrd.nonlinear.models.link_model import build_link_model
+    from nlgrd.nonlinear.tracing.harmonic_convergence import SIGNATURE_ATOL, lift
+
+    model = build_link_model(load_model(DATA / "models/two_shaft.toml"))
+    omegas = 2 * np.pi * np.linspace(1000.0, 2900.0, 40)[:3]
+    model.receptance.prepare_stability(omegas[-1])
+    model.receptance.prepare(9 * omegas[-1])
+    rm = model.reduced
+    res = sweep(rm, omegas, 5, "up", max_iter=150)
+    check = check_harmonics(rm, res, 7)
+    w = omegas[2]
+    moved = rm.branch_signature(check.solutions[2].harmonics, w) - rm.branch_signature(res.harmonics[2], w)
+    assert np.max(np.abs(moved)) > SIGNATURE_ATOL  # the case the sweep-step check decides
+    lifted = lift(rm, res, check, True)
+    assert lifted is not None
+    fresh = sweep(rm, omegas, 7, "up", max_iter=150)
+    assert np.array_equal(lifted.stable, fresh.stable) and np.all(fresh.converged)
+    scale = np.max(np.abs(fresh.harmonics))
+    assert np.max(np.abs(lifted.harmonics - fresh.harmonics)) <= 1e-8 * scale
+
+
+def test_lift_refuses_a_point_moved_onto_the_other_branch():
+    """Kahraman & Blankenship's single-DOF case at 0.57-0.72 ω_n, swept up at H = 5 (no jump
+    inside; the up sweep is in contact all period, the down sweep's coexisting orbit loses
+    contact for 0.62 of it at 0.66 ω_n). With the check's H = 7 orbit at 0.66 ω_n replaced by
+    the coexisting one, the lift must refuse (None: a fresh sweep), since a sweep at H = 7
+    from the point before stays on the contact branch; with the check as it is, it lifts."""
+    from dataclasses import replace
+
+    from nlgrd.nonlinear.hb.solvers import solve
+    from nlgrd.nonlinear.tracing.harmonic_convergence import SIGNATURE_ATOL, lift
+
+    sdof = sdof_model(load_model(DATA / "case_studies/kahraman_blankenship.toml"))
+    rm = sdof.reduced_model()
+    grid = np.linspace(0.3, 1.5, 41) * sdof.natural_frequency
+    omegas = grid[9:15]
+    res = sweep(rm, omegas, 5, "up")
+    assert not np.any(res.branch_switch) and np.all(res.stable)
+    check = check_harmonics(rm, res, 7)
+    assert lift(rm, res, check, True) is not None
+    w = omegas[3]
+    down = sweep(rm, grid, 5, "down")  # from 1.5 ω_n down: on the loss-of-contact branch
+    other = solve(rm.at(w, 7), pad_harmonics(down.harmonics[down.omega == w][0], 7), fallback=False)
+    assert other.converged
+    moved = rm.branch_signature(other.harmonics, w) - rm.branch_signature(res.harmonics[3], w)
+    assert np.max(np.abs(moved)) > 10 * SIGNATURE_ATOL  # the coexisting branch
+    swapped = replace(check, solutions={**check.solutions, 3: other})
+    assert lift(rm, res, swapped, True) is None

@@ -23,8 +23,9 @@ is stable, H' would jump later and the jump is off by at least one grid step.
 0.5 %) at every accepted point and every jump holds, and returns that sweep with the
 estimate stored per point. Only the first rung is swept point by point (with its jumps);
 the next rung is the check's re-solved points (:func:`lift`) when they stay on the same
-branches (the same branch signature, each contact's fractions of the period, to 0.05; the
-same stability; every jump held), for every model, else a fresh sweep. Points still above
+branches (the same branch signature, each contact's fractions of the period, to 0.05, or
+else the orbit a sweep step at H' from the lifted point before reaches; the same
+stability; every jump held), for every model, else a fresh sweep. Points still above
 ``rtol`` at the top of the ladder are returned as not converged (their outputs are not the
 converged answer) with a :class:`HarmonicsWarning`.
 """
@@ -51,6 +52,7 @@ from nlgrd.nonlinear.results.sweep_results import (
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 from nlgrd.nonlinear.stability.verdicts import converge_verdicts
 from nlgrd.nonlinear.tracing.harmonic_ladder import LADDER, ladder_for
+from nlgrd.nonlinear.tracing.landing import WANDER_ITER, same_orbit
 from nlgrd.nonlinear.tracing.sweep import sweep
 
 #: Default output tolerance: RMS DTE and maximum mesh force within 0.5 %.
@@ -61,7 +63,8 @@ FLOOR = 1e-2
 #: A continuation's fold is located to this relative frequency (see :func:`_fold_band`).
 FOLD_RTOL = 1e-3
 #: A point lifted to H' whose branch signature (contact fractions) moved by more than this
-#: is on another branch: the next rung is swept afresh.
+#: may be on another branch: it is kept only if a sweep step at H' reaches it
+#: (:func:`lift`), else the next rung is swept afresh.
 SIGNATURE_ATOL = 0.05
 #: The check at H' polishes a solution that is already close: few Newton iterations.
 CHECK_MAX_ITER = 30
@@ -301,15 +304,28 @@ def _jump_holds(model, result, i, left, fine, H2, tol, rtol) -> bool:
     return bool(np.all(np.abs(v - v_after) <= rtol * np.maximum(np.abs(v_after), 1e-300)))
 
 
+def _swept_to(model: ReducedModel, w: float, z_before: NDArray | None, z: NDArray, tol: float) -> bool:
+    """Whether the sweep step at ``w`` from the orbit ``z_before`` (the lifted point before,
+    same direction) reaches ``z``: Newton converges within WANDER_ITER iterations (the sweep
+    accepts it without a branch check) to the same orbit."""
+    if z_before is None:
+        return False
+    sol = solve(model.at(w, (z.shape[-1] - 1) // 2), z_before, tol=tol, max_iter=WANDER_ITER, fallback=False)
+    return bool(sol.converged and same_orbit(sol.harmonics, z))
+
+
 def lift(
-    model: ReducedModel, result: SweepResult, check: HarmonicCheck, stability: bool
+    model: ReducedModel, result: SweepResult, check: HarmonicCheck, stability: bool, tol: float = 1e-10
 ) -> SweepResult | None:
     """The sweep at ``check.H_check`` from the check's re-solved points, or None when a
     full sweep is needed: a converged point that has no solution near it at H', a point
     whose branch signature (``model.branch_signature``: each contact's fraction of the
-    period in each state) moved by more than 0.05 or whose stability changed (the branch
-    structure differs), or a jump that does not hold. Each point is then the H' solution
-    on the branch the sweep chose, as a sweep at H' would find it. Serves every model.
+    period in each state) moved by more than 0.05 and that the sweep step at H' from the
+    lifted point before does not reach (:func:`_swept_to`: a contact fraction that grows
+    with H on the same branch is kept, another branch is not), a point whose stability
+    changed (the branch structure differs), or a jump that does not hold. Each point is
+    then the H' solution on the branch the sweep chose, as a sweep at H' would find it.
+    Serves every model.
 
     Parameters
     ----------
@@ -321,6 +337,8 @@ def lift(
         Its check against H' (:func:`check_harmonics`), with the re-solved points.
     stability : bool
         Compute Floquet multipliers at H' (and compare stability with ``result``).
+    tol : float
+        Convergence tolerance of the sweep step's Newton (relative residual).
 
     Returns
     -------
@@ -335,6 +353,7 @@ def lift(
     residual, iterations, fmax = np.full(n, np.nan), np.zeros(n, dtype=int), np.full(n, np.nan)
     dominant = np.full(n, np.nan + 0j)
     metrics = []
+    before: dict[str, int] = {}  # the last converged row of each direction
     for i in range(n):
         w = float(result.omega[i])
         if not result.converged[i]:
@@ -343,9 +362,13 @@ def lift(
         sol = check.solutions.get(i)
         if sol is None:
             return None
+        j = before.get(result.direction[i])
+        before[result.direction[i]] = i
         if not result.no_stable[i]:  # the response's branch (an unstable orbit is not one)
             moved = model.branch_signature(sol.harmonics, w) - model.branch_signature(result.harmonics[i], w)
-            if np.max(np.abs(moved), initial=0.0) > SIGNATURE_ATOL:
+            if np.max(np.abs(moved), initial=0.0) > SIGNATURE_ATOL and not _swept_to(
+                model, w, None if j is None else z[j], sol.harmonics, tol
+            ):
                 return None
         ss = model.linear_state_space(w) if stability else None
         if ss is not None:
@@ -504,7 +527,7 @@ def converged_sweep(
             _warn_exhausted(check, rtol)
             break
         if H_check != ladder[-1]:  # the next rung: lifted from the check, else swept afresh
-            res = lift(model, res, check, stability)
+            res = lift(model, res, check, stability, tol)
     else:
         _warn_exhausted(check, rtol)
     return _finish(res, check, history, rtol)
