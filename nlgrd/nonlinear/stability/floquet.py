@@ -577,7 +577,8 @@ def floquet_analysis(
     A state space on a truncated basis with its ``larger`` and ``full`` ones: where the
     orbit's tangent varies over the period, the multipliers on ``larger`` when max |μ| moved
     by at most :data:`TRUNCATION_ATOL`, else on ``full`` (docs/conventions.md, "Stability
-    state space"; a time-invariant tangent keeps the basis).
+    state space"; a time-invariant tangent keeps the basis); either basis only where its
+    max |μ| exceeds its dropped modes' (``state_space.dropped``) by more than that.
 
     Parameters
     ----------
@@ -600,13 +601,18 @@ def floquet_analysis(
         raise ModelError("method", f"one of {', '.join(map(repr, METHODS))}, got {method!r}")
     Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
     full, n = state_space.full, state_space.W.shape[1]
-    if full is None or method == "expm" or _time_invariant(nonlinearities, Y, n):
+    if full is None or method == "expm":
         return _analysis(state_space, nonlinearities, Y, omega, deflate, method)
-    if state_space.larger is not None:  # the truncation checked by twice the cut-off
+    if _time_invariant(nonlinearities, Y, n):
         res = _analysis(state_space, nonlinearities, Y, omega, deflate, method)
-        big = _analysis(state_space.larger(), nonlinearities, Y, omega, deflate, method)
+        if state_space.keeps(float(np.max(np.abs(res.multipliers))), TRUNCATION_ATOL):
+            return res
+    elif state_space.larger is not None:  # the truncation checked by twice the cut-off
+        res = _analysis(state_space, nonlinearities, Y, omega, deflate, method)
+        larger = state_space.larger()
+        big = _analysis(larger, nonlinearities, Y, omega, deflate, method)
         top = [float(np.max(np.abs(r.multipliers))) for r in (res, big)]
-        if abs(top[1] - top[0]) <= TRUNCATION_ATOL:
+        if abs(top[1] - top[0]) <= TRUNCATION_ATOL and larger.keeps(top[1], TRUNCATION_ATOL):
             return big
     return _analysis(full(), nonlinearities, Y, omega, deflate, method)
 
