@@ -78,7 +78,7 @@ class LinearStateSpace:
     dropped : float, optional
         For a state space on a truncated basis: the largest multiplier modulus of the modes
         it drops, to first order in their damping [-] (0: none); Floquet analysis takes
-        ``full`` where the kept result's max |μ| is not above it by ``TRUNCATION_ATOL``.
+        ``full`` where it exceeds the kept result's max |μ| by more than ``TRUNCATION_ATOL``.
 
     Raises
     ------
@@ -105,9 +105,9 @@ class LinearStateSpace:
             raise ModelError("state_space", "M, D, K must be N x N and W N x n_nl")
 
     def keeps(self, top: float, atol: float) -> bool:
-        """Whether max |μ| = ``top`` on this state space exceeds its dropped modes'
-        multiplier :attr:`dropped` by more than ``atol``, so that none of them can be the
-        largest (always where none are dropped).
+        """Whether max |μ| = ``top`` on this state space stands for the whole model's: its
+        dropped modes' multiplier :attr:`dropped` is at most ``top`` + ``atol``, so none
+        of them can raise max |μ| by more (always where none are dropped).
 
         Parameters
         ----------
@@ -120,7 +120,7 @@ class LinearStateSpace:
         -------
         bool
         """
-        return self.dropped <= 0 or self.dropped < top - atol
+        return self.dropped <= 0 or self.dropped <= top + atol
 
     def rigid_body_modes(self) -> NDArray:
         """M-orthonormal basis (N, r) of the free modes: K φ = 0, D φ = 0 and Wᵀ φ = 0.

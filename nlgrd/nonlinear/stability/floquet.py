@@ -580,7 +580,7 @@ def floquet_analysis(
     A truncated basis with ``larger`` and ``full``: where the tangent varies, the multipliers
     on ``larger`` when max |μ| moved by at most :data:`TRUNCATION_ATOL` (the basis at the same
     Magnus steps), else on ``full`` (docs/conventions.md, "Stability state space"; a constant
-    tangent keeps the basis); a basis only where its max |μ| exceeds its dropped modes' by more.
+    tangent keeps the basis); a basis only where its dropped modes' exceed its max |μ| by no more.
 
     Parameters
     ----------
