@@ -2,9 +2,12 @@
 single-mesh mesh-receptance path, a mesh with a bearing clearance, two meshes.
 
 Run from the repository root (``--evaluations``: only the per-evaluation timing;
-``--banded``: only the single mesh on the link path's strategies against ``geared_sweep``)::
+``--banded``: only the single mesh on the link path's strategies against ``geared_sweep``;
+``--hertz [--idler]``: one mesh against mesh + Hertzian clearance with stability, the
+clearance's Floquet on the truncated basis and on the full state, and the idler train)::
 
-    .venv/bin/python benchmarks/bench_geared_links.py [--evaluations | --banded [--rounds N]]
+    .venv/bin/python benchmarks/bench_geared_links.py [--evaluations | --banded | --hertz [--idler]]
+        [--rounds N]
 
 Up sweeps with Floquet stability, one BLAS thread, fixed H, the same grid for the two
 paths of the single mesh (data/models/two_shaft.toml, 132 DOFs, H = 9, mesh frequency
@@ -225,6 +228,91 @@ def scaling(factors=(1, 8, 25, 83), only: str | None = None) -> None:
                 )
 
 
+def hertz(rounds: int = 2, idler: bool = False) -> None:
+    """One mesh against mesh + 20 µm Hertzian clearance (data/models/two_shaft_clearance.toml)
+    with stability, equal H = 9, up sweeps of 15 mesh frequencies 1000-1700 Hz: the
+    clearance's Floquet on the truncated basis (the default since issue 34 item 1) and on
+    the full state (its stability basis's ``state_space`` replaced by ``full_state``). Each
+    model built and warmed up on two points; ``rounds`` rounds of the three in turn, the
+    fastest of each reported, with the time inside Floquet (``floquet_multipliers``) and,
+    per state dimension, inside each basis's analysis (``floquet._analysis``). Last, the
+    largest difference of max |μ| of the two clearance runs and their verdicts. With
+    ``idler``, also idler_train.toml (2 meshes) on the points of the grid where one sweep
+    found a stable orbit (the others take the landing search, issue 34 item 2)."""
+    import sys
+
+    from nlgrd.nonlinear.stability import floquet
+
+    spent = {"floquet": 0.0}
+    original, analysis = floquet.floquet_multipliers, floquet._analysis
+
+    def timed(*args, **kwargs):
+        t0 = time.perf_counter()
+        try:
+            return original(*args, **kwargs)
+        finally:
+            spent["floquet"] += time.perf_counter() - t0
+
+    def timed_analysis(state_space, *args):
+        t0 = time.perf_counter()
+        try:
+            return analysis(state_space, *args)
+        finally:
+            key = f"n={state_space.M.shape[0]}"
+            spent[key] = spent.get(key, 0.0) + time.perf_counter() - t0
+
+    floquet._analysis = timed_analysis
+    for name, mod in list(sys.modules.items()):
+        if name.startswith("nlgrd") and mod is not floquet and hasattr(mod, "floquet_multipliers"):
+            mod.floquet_multipliers = timed
+    grid = 2 * np.pi * np.linspace(1000.0, 1700.0, 15)
+    H = 9
+    one = build_link_model(load_model(MODELS / "two_shaft.toml"))
+    clear = build_link_model(load_model(MODELS / "two_shaft_clearance.toml"))
+    full = build_link_model(load_model(MODELS / "two_shaft_clearance.toml"))
+    stab = full.receptance.stability
+    stab.state_space = lambda omega, speed: stab.full_state(speed)
+    runs = {
+        "one mesh": one,
+        "mesh + clearance, truncated basis": clear,
+        "mesh + clearance, full state": full,
+    }
+    grids = dict.fromkeys(runs, grid)
+    if idler:
+        model = build_link_model(load_model(MODELS / "idler_train.toml"))
+        r = link_sweep(model, grid, H=H, directions="up", period=1).result
+        runs["idler_train, 2 meshes, its stable points"] = model
+        grids["idler_train, 2 meshes, its stable points"] = grid[r.converged & r.stable.astype(bool)]
+    for label, model in runs.items():
+        t0 = time.perf_counter()
+        link_sweep(model, grids[label][:2], H=H, directions="up", period=1)
+        print(f"{label}: set-up, 2 points {time.perf_counter() - t0:.2f} s", flush=True)
+    best, out = {}, {}
+    for _ in range(rounds):
+        for label, model in runs.items():
+            for key in spent:
+                spent[key] = 0.0
+            t0 = time.perf_counter()
+            out[label] = link_sweep(model, grids[label], H=H, directions="up", period=1).result
+            n = grids[label].size
+            per = 1e3 * (time.perf_counter() - t0) / n
+            if per < best.get(label, (np.inf,))[0]:
+                best[label] = (per, {k: 1e3 * v / n for k, v in spent.items() if v > 0})
+    for label, (per, parts) in best.items():
+        r = out[label]
+        ok = int(np.sum(r.converged & r.stable.astype(bool)))
+        split = ", ".join(f"{k} {v:.1f}" for k, v in parts.items())
+        print(f"{label}: {per:.1f} ms per point ({ok}/{r.omega.size} stable; ms per point: {split})")
+    ref = best["one mesh"][0]
+    for label in list(runs)[1:]:
+        print(f"{label} against one mesh: {best[label][0] / ref:.1f}x", flush=True)
+    a, b = out["mesh + clearance, truncated basis"], out["mesh + clearance, full state"]
+    both = a.converged & b.converged
+    diff = np.max(np.abs(a.floquet_max[both] - b.floquet_max[both]))
+    same = int(np.sum(a.stable[both] == b.stable[both]))
+    print(f"clearance: max |μ| truncated - full state {diff:.1e}, verdicts equal {same}/{int(both.sum())}")
+
+
 if __name__ == "__main__":
     import sys
 
@@ -233,6 +321,9 @@ if __name__ == "__main__":
             scaling()
         elif "--scaling-clearance" in sys.argv:  # the mesh + clearance rows alone
             scaling(only="mesh + clearance")
+        elif "--hertz" in sys.argv:  # --rounds N as --banded
+            rounds = int(sys.argv[sys.argv.index("--rounds") + 1]) if "--rounds" in sys.argv else 2
+            hertz(rounds, idler="--idler" in sys.argv)
         elif "--banded" in sys.argv:  # --rounds N: N rounds, the fastest reported (default 2)
             rounds = int(sys.argv[sys.argv.index("--rounds") + 1]) if "--rounds" in sys.argv else 2
             banded(rounds)

@@ -58,7 +58,7 @@ from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.reduction.direct_receptance import DirectSolution, DirectSolver, coupled_dofs
 from nlgrd.nonlinear.reduction.link_mean import MeanProblem
 from nlgrd.nonlinear.reduction.link_poles import LinkPoleForm
-from nlgrd.nonlinear.reduction.link_stability import TruncatedStability
+from nlgrd.nonlinear.reduction.link_stability import TruncatedStability, truncatable
 from nlgrd.nonlinear.reduction.modal_basis import (
     ModeCapWarning,
     attachment_basis,
@@ -740,20 +740,18 @@ class LinkReceptance:
 
     @property
     def truncates_stability(self) -> bool:
-        """Whether Floquet stability runs on the truncated basis of :meth:`state_space`: every
-        link a gear mesh (a clearance's contact excites modes far above the cut-off
-        parametrically: benchmarks/README.md), at most :data:`DENSE_STABILITY_LIMIT` DOFs
-        and no modal basis (whose own modes serve then)."""
-        from nlgrd.nonlinear.links.contract import GearMeshLink
-
+        """Whether Floquet stability runs on the truncated basis of :meth:`state_space`:
+        every link a gear mesh or a bearing clearance
+        (:func:`~nlgrd.nonlinear.reduction.link_stability.truncatable`), at most
+        :data:`DENSE_STABILITY_LIMIT` DOFs and no modal basis (whose own modes serve then)."""
         small = self.model.n_dofs <= DENSE_STABILITY_LIMIT and self.basis is None
-        return small and bool(self.links) and all(isinstance(lk, GearMeshLink) for lk in self.links)
+        return small and truncatable(self.links)
 
     def state_space(self, omega: float) -> LinearStateSpace | None:
         """The linear part for Floquet stability at base frequency ``omega``.
 
-        Where every link is a gear mesh (:attr:`truncates_stability`), on the modes below
-        3x the highest mesh frequency and the static attachment vectors of the link
+        Where every link is a gear mesh or a clearance (:attr:`truncates_stability`), on the
+        modes below 3x the highest mesh (or unbalance) frequency and the static attachment vectors of the link
         coordinates, checked by Floquet analysis where the orbit's tangent varies over the
         period (:mod:`nlgrd.nonlinear.reduction.link_stability`). Else on the modes and
         static attachment vectors of the modal basis when there is one, else dense up to

@@ -1,20 +1,21 @@
 """The linear state space of a link model for Floquet stability, on a truncated basis.
 
-Where every link of a model is a gear mesh, Floquet multipliers are taken on the modes of
-(K + K_L, M) below :data:`STABILITY_CUTOFF` times the highest mesh frequency of the sweep
+Where every link of a model is a gear mesh or a bearing clearance (:func:`truncatable`),
+Floquet multipliers are taken on the modes of (K + K_L, M) below
+:data:`STABILITY_CUTOFF` times the highest base harmonic a mesh or an unbalance sits at
 plus the static attachment vectors (K + K_L + M)⁻¹ P of the link coordinates (the
 single-mesh path's basis; K_L the links' linear stiffness). Each state space carries the
 one on twice the cut-off and the full one, with which
 :func:`nlgrd.nonlinear.stability.floquet.floquet_analysis` checks the truncation where the
-orbit's tangent varies over the period (docs/conventions.md, "Stability state space").
-A model with a bearing clearance takes the full state: a truncation can hide a parametric
-instability of the modes far above the cut-off that its contact excites
-(benchmarks/README.md, "State reduction ... not adopted").
+orbit's tangent varies over the period (docs/conventions.md, "Stability state space"):
+a clearance's contact varies the tangent at every point, so every point of a clearance
+model is checked, and the full state decides where the check fails.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg as sla
@@ -22,6 +23,7 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from nlgrd.cache import BoundedCache
+from nlgrd.nonlinear.links.contract import BearingClearance, GearMeshLink
 from nlgrd.nonlinear.reduction.modal_basis import STABILITY_MODE_CAP, lowest_modes, modes_then_attachments
 from nlgrd.nonlinear.reduction.state_space import FloquetCache, LinearStateSpace
 from nlgrd.rotor.assembly import LinearModel
@@ -31,6 +33,23 @@ STABILITY_CUTOFF = 3.0
 #: Up to this many DOFs the modes come from a dense generalised eigenproblem (faster
 #: than ARPACK's shift-invert there).
 DENSE_MODES_LIMIT = 300
+
+
+def truncatable(links) -> bool:
+    """Whether a model with ``links`` takes the truncated basis: at least one link, each a
+    gear mesh or a bearing clearance (the laws whose checks on twice the cut-off and the
+    full state are measured: docs/conventions.md, "Stability state space").
+
+    Parameters
+    ----------
+    links : sequence
+        The model's nonlinear links.
+
+    Returns
+    -------
+    bool
+    """
+    return bool(links) and all(isinstance(lk, (GearMeshLink, BearingClearance)) for lk in links)
 
 
 class TruncatedStability:
@@ -59,6 +78,7 @@ class TruncatedStability:
         # the state spaces per frequency, the bases per cut-off, one store of Floquet work
         self._spaces, self._bases, self._floquet = BoundedCache(4), BoundedCache(8), FloquetCache(4096)
         self._kept_modes: tuple = (0.0, None)  # (up to [rad/s], eigenpairs) of the dense case
+        self._rates = BoundedCache(8)  # the dropped modes' decay rates per cut-off (and speed)
 
     def prepare(self, top: float) -> None:
         """Size the basis for base frequencies up to ``top`` [rad/s] (a sweep's highest):
@@ -114,6 +134,47 @@ class TruncatedStability:
             self._kept_modes = (top, pairs)
         return pairs
 
+    def dropped(self, cutoff: float, speed: float, omega: float) -> float:
+        """Largest multiplier modulus of the modes of (K + K_L, M) above ``cutoff``, which
+        the basis drops, to first order in their damping: exp(-φⱼᵀ D φⱼ T / 2) of the
+        M-normalised modes φⱼ at the period T = 2π/ω (Rayleigh's first-order decay rate; the
+        gyroscopic part of D is skew and adds nothing). 1 for an undamped dropped mode (a
+        rotor's torsion without damping), which no check on the kept modes sees.
+
+        Parameters
+        ----------
+        cutoff : float
+            The basis's cut-off [rad/s].
+        speed : float
+            Reference shaft speed [rad/s] (tabulated bearings' damping).
+        omega : float
+            Base frequency [rad/s].
+
+        Returns
+        -------
+        float
+            The estimate [-], 0 when no mode is dropped.
+        """
+
+        def rates():
+            lam, vec = self._all_modes
+            V = vec[:, lam > cutoff**2]
+            m = self.model
+            C = m.C + m.Ci + self.C_link
+            if m.tabulated_bearings:
+                C = C + m._bearing_matrices(speed)[1]
+            return 0.5 * np.einsum("ij,ij->j", V, C @ V)
+
+        key = (float(cutoff), float(speed) if self.model.tabulated_bearings else None)
+        sigma = self._rates.get(key, rates)
+        return float(np.exp(-sigma.min() * 2 * np.pi / omega)) if sigma.size else 0.0
+
+    @cached_property
+    def _all_modes(self) -> tuple[NDArray, NDArray]:
+        """Every eigenpair of (K + K_L, M), M-normalised (dense, once per model)."""
+        m = self.model
+        return sla.eigh((m.stiffness(0.0) + self.K_link).toarray(), m.M.toarray())
+
     def state_space(self, omega: float, speed: float) -> LinearStateSpace:
         """The state space at base frequency ``omega`` on the basis of the top frequency
         (:meth:`prepare`, or ``omega`` when higher), with its ``larger`` and ``full`` ones.
@@ -136,12 +197,18 @@ class TruncatedStability:
             kept = BoundedCache(2)  # built where a tangent varies
 
             def larger():
-                return kept.get("larger", lambda: self._on_basis(self.basis(2 * cutoff), speed))
+                return kept.get(
+                    "larger",
+                    lambda: self._on_basis(
+                        self.basis(2 * cutoff), speed, dropped=self.dropped(2 * cutoff, speed, omega)
+                    ),
+                )
 
             def full():
                 return kept.get("full", lambda: self.full_state(speed))
 
-            return self._on_basis(self.basis(cutoff), speed, larger, full)
+            dropped = self.dropped(cutoff, speed, omega)
+            return self._on_basis(self.basis(cutoff), speed, larger, full, dropped)
 
         return self._spaces.get((float(omega), cutoff), make)
 
@@ -162,11 +229,16 @@ class TruncatedStability:
         return LinearStateSpace(*(A.toarray() for A in mats), self.P)
 
     def _on_basis(
-        self, basis: tuple, speed: float, larger: Callable | None = None, full: Callable | None = None
+        self,
+        basis: tuple,
+        speed: float,
+        larger: Callable | None = None,
+        full: Callable | None = None,
+        dropped: float = 0.0,
     ) -> LinearStateSpace:
         S, (M, C, G, K, Kc, Ps) = basis
         D, K = C + speed * G, K + speed * Kc
         if self.model.tabulated_bearings:
             Kb, Cb = self.model._bearing_matrices(speed)
             D, K = D + S.T @ (Cb @ S), K + S.T @ (Kb @ S)
-        return LinearStateSpace(M, D, K, Ps, cache=self._floquet, larger=larger, full=full)
+        return LinearStateSpace(M, D, K, Ps, cache=self._floquet, larger=larger, full=full, dropped=dropped)

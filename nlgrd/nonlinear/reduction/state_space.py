@@ -75,6 +75,10 @@ class LinearStateSpace:
         cut-off and the whole model's, with which Floquet analysis checks the truncation
         where the orbit's tangent varies over the period
         (:func:`nlgrd.nonlinear.stability.floquet.floquet_analysis`).
+    dropped : float, optional
+        For a state space on a truncated basis: the largest multiplier modulus of the modes
+        it drops, to first order in their damping [-] (0: none); Floquet analysis takes
+        ``full`` where it exceeds the kept result's max |μ| by more than ``TRUNCATION_ATOL``.
 
     Raises
     ------
@@ -89,6 +93,7 @@ class LinearStateSpace:
     cache: FloquetCache | None = field(default=None, compare=False, repr=False)
     larger: Callable[[], LinearStateSpace] | None = field(default=None, compare=False, repr=False)
     full: Callable[[], LinearStateSpace] | None = field(default=None, compare=False, repr=False)
+    dropped: float = field(default=0.0, compare=False, repr=False)
 
     def __post_init__(self):
         for name in ("M", "D", "K", "W"):
@@ -98,6 +103,24 @@ class LinearStateSpace:
         N = self.M.shape[0]
         if self.D.shape != (N, N) or self.K.shape != (N, N) or self.W.shape[0] != N:
             raise ModelError("state_space", "M, D, K must be N x N and W N x n_nl")
+
+    def keeps(self, top: float, atol: float) -> bool:
+        """Whether max |μ| = ``top`` on this state space stands for the whole model's: its
+        dropped modes' multiplier :attr:`dropped` is at most ``top`` + ``atol``, so none
+        of them can raise max |μ| by more (always where none are dropped).
+
+        Parameters
+        ----------
+        top : float
+            Largest multiplier modulus on this state space [-].
+        atol : float
+            Required margin [-].
+
+        Returns
+        -------
+        bool
+        """
+        return self.dropped <= 0 or self.dropped <= top + atol
 
     def rigid_body_modes(self) -> NDArray:
         """M-orthonormal basis (N, r) of the free modes: K φ = 0, D φ = 0 and Wᵀ φ = 0.

@@ -63,7 +63,7 @@ from nlgrd.nonlinear.reduction.linear_algebra import (
     psd_null_space,
     psd_to_tolerance,
 )
-from nlgrd.nonlinear.stability.magnus_steps import interaction_piece
+from nlgrd.nonlinear.stability.magnus_steps import interaction_piece, set_distance
 from nlgrd.rotor.rigid_body import CONSTRAINT_RTOL
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -459,12 +459,15 @@ class FloquetResult:
         unbounded; so not Richardson's /15).
     converged : bool
         ``error`` <= ``MAGNUS_ATOL`` (always True for the exact product).
+    steps : ndarray of int or None
+        The accepted Magnus product's steps per piece (None without one).
     """
 
     multipliers: NDArray[np.complex128]
     exponentials: int = 0
     error: float = 0.0
     converged: bool = True
+    steps: NDArray | None = None
 
     def to_frame(self):
         """One row per multiplier, largest modulus first: its real and imaginary parts and
@@ -574,10 +577,10 @@ def floquet_analysis(
     ``MAGNUS_MAX_STEPS``; ``converged`` says if it got there).
     Piecewise-constant tangents keep the exact product, one exponential per interval.
 
-    A state space on a truncated basis with its ``larger`` and ``full`` ones: where the
-    orbit's tangent varies over the period, the multipliers on ``larger`` when max |μ| moved
-    by at most :data:`TRUNCATION_ATOL`, else on ``full`` (docs/conventions.md, "Stability
-    state space"; a time-invariant tangent keeps the basis).
+    A truncated basis with ``larger`` and ``full``: where the tangent varies, the multipliers
+    on ``larger`` when max |μ| moved by at most :data:`TRUNCATION_ATOL` (the basis at the same
+    Magnus steps), else on ``full`` (docs/conventions.md, "Stability state space"; a constant
+    tangent keeps the basis); a basis only where its dropped modes' exceed its max |μ| by no more.
 
     Parameters
     ----------
@@ -600,13 +603,18 @@ def floquet_analysis(
         raise ModelError("method", f"one of {', '.join(map(repr, METHODS))}, got {method!r}")
     Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
     full, n = state_space.full, state_space.W.shape[1]
-    if full is None or method == "expm" or _time_invariant(nonlinearities, Y, n):
+    if full is None or method == "expm":
         return _analysis(state_space, nonlinearities, Y, omega, deflate, method)
-    if state_space.larger is not None:  # the truncation checked by twice the cut-off
+    if _time_invariant(nonlinearities, Y, n):
         res = _analysis(state_space, nonlinearities, Y, omega, deflate, method)
-        big = _analysis(state_space.larger(), nonlinearities, Y, omega, deflate, method)
+        if state_space.keeps(float(np.max(np.abs(res.multipliers))), TRUNCATION_ATOL):
+            return res
+    elif state_space.larger is not None:  # the truncation checked by twice the cut-off
+        larger = state_space.larger()
+        big = _analysis(larger, nonlinearities, Y, omega, deflate, method)
+        res = _analysis(state_space, nonlinearities, Y, omega, deflate, method, big.steps)  # same steps
         top = [float(np.max(np.abs(r.multipliers))) for r in (res, big)]
-        if abs(top[1] - top[0]) <= TRUNCATION_ATOL:
+        if abs(top[1] - top[0]) <= TRUNCATION_ATOL and larger.keeps(top[1], TRUNCATION_ATOL):
             return big
     return _analysis(full(), nonlinearities, Y, omega, deflate, method)
 
@@ -618,14 +626,15 @@ def _time_invariant(nonlinearities: Sequence, Y: NDArray, n: int) -> bool:
     return len(_state_sequence(*_tangent_pieces(nonlinearities, Y, n))[0]) == 1
 
 
-def _analysis(state_space, nonlinearities: Sequence, Y: NDArray, omega: float, deflate: bool, method: str):
-    """:func:`floquet_analysis` on ``state_space`` as it is (not its ``full`` one)."""
+def _analysis(state_space, nonlinearities, Y: NDArray, omega: float, deflate: bool, method: str, at=None):
+    """:func:`floquet_analysis` on ``state_space`` as it is (not its ``full`` one); a
+    Magnus product at ``at`` steps per piece alone when given (no refinement)."""
     if method != "expm":
         pieces = _smooth_pieces(nonlinearities, Y, state_space.W.shape[1])
         if pieces is not None:
             dominant = method == "auto" and 2 * state_space.M.shape[0] > DENSE_STATE_LIMIT
             ss = state_space.deflated if deflate else state_space
-            return _magnus(ss, pieces, omega, dominant, (Y.shape[1] - 1) // 2)
+            return _magnus(ss, pieces, omega, dominant, (Y.shape[1] - 1) // 2, at)
     if method == "expm":
         ss = state_space.deflated if deflate else state_space
         breaks, Kt = _tangent_pieces(nonlinearities, Y, ss.W.shape[1])
@@ -677,14 +686,19 @@ def _eigen(Phi: NDArray, side: NDArray, dense: bool) -> NDArray[np.complex128]:
     return np.concatenate([mu, side[np.abs(side) >= (1 - BAND) * np.max(np.abs(mu))]])
 
 
-def _magnus(ss: LinearStateSpace, pieces, omega: float, dominant: bool, H: int) -> FloquetResult:
+def _magnus(ss: LinearStateSpace, pieces, omega: float, dominant: bool, H: int, at=None) -> FloquetResult:
     """The Magnus product refined by step doubling (:func:`floquet_analysis`), from at
     least H + 1 steps per period (rounded up to a power of 2): 2H + 2 Gauss points, more
-    than the 2H + 1 samples that resolve the orbit's H harmonics."""
+    than the 2H + 1 samples that resolve the orbit's H harmonics. With ``at`` (steps per
+    piece), that product alone, its error not estimated (NaN)."""
     breaks, K0, active = pieces
     prep = _prepared(ss)
     dense = not (dominant and 2 * prep.N > DENSE_STATE_LIMIT)
     side = np.exp(prep.side * (breaks[-1] - breaks[0]) / omega)
+    if at is not None:
+        Phi, counts = _magnus_monodromy(prep, breaks, K0, active, omega, 1, at)
+        mu = _eigen(Phi, side, dense) if np.all(np.isfinite(Phi)) else np.array([np.inf + 0j])
+        return FloquetResult(mu, int(counts.sum()), float("nan"), False, counts)
     steps, prev = max(MAGNUS_FIRST_STEPS, 1 << int(np.ceil(np.log2(H + 1)))), None
     least, memo = None, {}
     while True:  # every piece's step count doubles from one product to the next
@@ -693,21 +707,13 @@ def _magnus(ss: LinearStateSpace, pieces, omega: float, dominant: bool, H: int) 
         top = float(np.max(np.abs(mu)))
         lead = mu[np.abs(mu) >= (1 - MAGNUS_LEADING) * top]
         if prev is not None:
-            err = max(abs(top - prev[0]), _set_distance(lead, prev[1]))
+            err = max(abs(top - prev[0]), set_distance(lead, prev[1]))
             if not err > MAGNUS_ATOL or 2 * steps > MAGNUS_MAX_STEPS:
-                return FloquetResult(mu, int(counts.sum()), err, bool(err <= MAGNUS_ATOL))
+                return FloquetResult(mu, int(counts.sum()), err, bool(err <= MAGNUS_ATOL), counts)
         active_counts = counts[[bool(a) for a in active]]
         prev, steps, least = (top, lead), 2 * steps, 2 * counts
         if active_counts.size and active_counts.min() > MAGNUS_MAX_STEPS:
-            return FloquetResult(mu, int(counts.sum()), float("inf"), False)
-
-
-def _set_distance(a: NDArray, b: NDArray) -> float:
-    """Hausdorff distance of two sets of multipliers (inf when one is empty)."""
-    if a.size == 0 or b.size == 0:
-        return float("inf")
-    d = np.abs(a[:, None] - b[None, :])
-    return float(max(d.min(axis=1).max(), d.min(axis=0).max()))
+            return FloquetResult(mu, int(counts.sum()), float("inf"), False, counts)
 
 
 def _exponentials(prep: _Prepared, states, seq, times: NDArray) -> tuple[list[NDArray], list[NDArray]]:
