@@ -125,7 +125,7 @@ def _speed_per_base(system: RotorSystem) -> float:
     return FrequencyPlan.of_model(system).speed_per_base
 
 
-def _in_rpm(result, system: RotorSystem, rpm):
+def _with_speed(result, system: RotorSystem, rpm):
     """``result`` whose table has the reference shaft's speed [rpm] beside the base
     frequency, first when the speeds were given in rpm."""
     import dataclasses
@@ -217,7 +217,7 @@ def sweep(
         **rtol,
         **(time_options or {}),
     )
-    return _in_rpm(res, system, rpm)
+    return _with_speed(res, system, rpm)
 
 
 def continuation(
@@ -255,7 +255,8 @@ def continuation(
     w0, w1 = (float(w) for w in ends)
     from nlgrd.nonlinear.models.link_model import link_continuation
 
-    return _in_rpm(link_continuation(model(system), w0, w1, H, stability=stability, **options), system, rpm)
+    curve = link_continuation(model(system), w0, w1, H, stability=stability, **options)
+    return _with_speed(curve, system, rpm)
 
 
 def search_orbits(
@@ -327,4 +328,4 @@ def time_sweep(
     from nlgrd.timedomain.links import link_time_sweep
 
     omegas = _omegas(system, rpm, hz)
-    return _in_rpm(link_time_sweep(model(system), omegas, directions, H=H, **options), system, rpm)
+    return _with_speed(link_time_sweep(model(system), omegas, directions, H=H, **options), system, rpm)

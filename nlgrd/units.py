@@ -6,7 +6,9 @@ frequencies in Hz and speeds in rpm. The conversions below are the expressions t
 tables have always used (``x * 1e6``, ``ω / (2π)``, ``Ω · 30 / π``), so the numbers
 written are unchanged to the last bit. A column is named by :func:`column`:
 ``<quantity> [unit]``, or ``<link>.<quantity> [unit]`` for one link's or bearing's output
-(docs/conventions.md, "Column names").
+(docs/conventions.md, "Column names"). A table of SI columns is written by
+:func:`written_frame`; rounding beside the row's values is written 0 by
+:func:`floor_rounding`.
 """
 
 from __future__ import annotations
