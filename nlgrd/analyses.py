@@ -125,6 +125,16 @@ def _speed_per_base(system: RotorSystem) -> float:
     return FrequencyPlan.of_model(system).speed_per_base
 
 
+def _with_speed(result, system: RotorSystem, rpm):
+    """``result`` whose table has the reference shaft's speed [rpm] beside the base
+    frequency, first when the speeds were given in rpm."""
+    import dataclasses
+
+    return dataclasses.replace(
+        result, speed_per_base=_speed_per_base(system), speed_unit="Hz" if rpm is None else "rpm"
+    )
+
+
 def _omegas(system: RotorSystem, rpm, hz, name: str = "rpm") -> NDArray:
     """Base frequencies [rad/s] from reference shaft speeds [rpm] or base frequencies [Hz]."""
     if (rpm is None) == (hz is None):
@@ -197,7 +207,7 @@ def sweep(
     rtol = {"rtol": options.pop("harmonic_rtol")} if "harmonic_rtol" in options else {}
     kw = dict(directions=directions, stability=stability, progress=progress, period=period)
     res = link_sweep(m, omegas, H, **kw, **rtol, **options)
-    return answer_sweep(
+    res = answer_sweep(
         res,
         system=system,
         model=m,
@@ -207,6 +217,7 @@ def sweep(
         **rtol,
         **(time_options or {}),
     )
+    return _with_speed(res, system, rpm)
 
 
 def continuation(
@@ -244,7 +255,8 @@ def continuation(
     w0, w1 = (float(w) for w in ends)
     from nlgrd.nonlinear.models.link_model import link_continuation
 
-    return link_continuation(model(system), w0, w1, H, stability=stability, **options)
+    curve = link_continuation(model(system), w0, w1, H, stability=stability, **options)
+    return _with_speed(curve, system, rpm)
 
 
 def search_orbits(
@@ -316,4 +328,4 @@ def time_sweep(
     from nlgrd.timedomain.links import link_time_sweep
 
     omegas = _omegas(system, rpm, hz)
-    return link_time_sweep(model(system), omegas, directions, H=H, **options)
+    return _with_speed(link_time_sweep(model(system), omegas, directions, H=H, **options), system, rpm)

@@ -130,7 +130,7 @@ def test_sweep_writes_csv_png_and_summary(tmp_path, capsys):
     assert "0 not converged" in text
     df = pd.read_csv(out)
     assert sorted(df["direction"].unique()) == ["down", "up"] and len(df) == 14
-    assert {"shaft_speed [rpm]", "mesh0.dslr [-]", "mesh0.dte_rms [m]"} <= set(df.columns)
+    assert {"shaft_speed [rpm]", "mesh0.dslr [-]", "mesh0.dte_rms [um]"} <= set(df.columns)
     assert out.with_suffix(".png").exists()
 
 
@@ -152,10 +152,10 @@ def test_sweep_period_auto_and_one(tmp_path, capsys):
         and "period 2 (period doubled) at rpm: 9800.0" in text
     )
     df = pd.read_csv(out).round({"shaft_speed [rpm]": 6}).set_index("shaft_speed [rpm]")
-    assert df.loc[9800.0, "period"] == 2 and df.loc[9800.0, "subharmonic_amp [um]"] > 1
-    assert df.loc[9900.0, "period"] == 1 and df.loc[9900.0, "subharmonic_amp [um]"] == 0
+    assert df.loc[9800.0, "period"] == 2 and df.loc[9800.0, "subharmonic_amplitude [um]"] > 1
+    assert df.loc[9900.0, "period"] == 1 and df.loc[9900.0, "subharmonic_amplitude [um]"] == 0
     assert df.loc[14000.0, "response"] == "quasi-periodic" and df.loc[14000.0, "secondary_frequency [Hz]"] > 0
-    assert np.isnan(df.loc[14000.0, "mesh0.dte_rms [m]"]) and np.isnan(
+    assert np.isnan(df.loc[14000.0, "mesh0.dte_rms [um]"]) and np.isnan(
         df.loc[9900.0, "secondary_frequency [Hz]"]
     )
     one = tmp_path / "one.csv"
@@ -182,8 +182,8 @@ def test_sweep_search_at_writes_the_orbits_the_sweep_does_not_reach(tmp_path, ca
     mine = orbits[orbits["on the sweep"]]
     assert len(mine) == 1 and mine["period"].iloc[0] == 1 and mine["stable"].iloc[0]
     sweep = pd.read_csv(out).round({"shaft_speed [rpm]": 6}).set_index("shaft_speed [rpm]")
-    assert mine["mesh0.dte_rms [m]"].iloc[0] == pytest.approx(
-        sweep.loc[9800.0, "mesh0.dte_rms [m]"], rel=1e-6
+    assert mine["mesh0.dte_rms [um]"].iloc[0] == pytest.approx(
+        sweep.loc[9800.0, "mesh0.dte_rms [um]"], rel=1e-6
     )
     two = orbits[(orbits["period"] == 2) & orbits["stable"]]
     assert len(two) == 1 and not two["on the sweep"].iloc[0]
@@ -191,7 +191,7 @@ def test_sweep_search_at_writes_the_orbits_the_sweep_does_not_reach(tmp_path, ca
     branches = pd.read_csv(tmp_path / "s_branches.csv")
     at = branches[branches["converged"] & np.isclose(branches["shaft_speed [rpm]"], 9800.0)]
     assert set(at["response"]) == {"period 2"} and set(branches["branch"]) == {"period 2 from 9800.0 rpm"}
-    assert at["mesh0.dte_rms [m]"].iloc[0] == pytest.approx(two["mesh0.dte_rms [m]"].iloc[0], rel=1e-9)
+    assert at["mesh0.dte_rms [um]"].iloc[0] == pytest.approx(two["mesh0.dte_rms [um]"].iloc[0], rel=1e-9)
     assert (tmp_path / "s.png").stat().st_size > 0
 
 

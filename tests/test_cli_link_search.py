@@ -30,7 +30,7 @@ def test_link_search_finds_and_follows_the_rubbing_orbit(tmp_path, capsys):
     assert "(the sweep's)" in text and "followed: period 1" in text
     orbits = pd.read_csv(tmp_path / "rub_orbits.csv")
     branches = pd.read_csv(tmp_path / "rub_branches.csv")
-    force, radius = orbits["rub.force_max [N]"], orbits["rub.displacement_max [m]"]
+    force, radius = orbits["rub.force_max [N]"], orbits["rub.displacement_max [um]"] * 1e-6
     free = orbits["on the sweep"].astype(bool)
     assert free.sum() == 1 and force[free].iloc[0] == 0 and radius[free].iloc[0] < CLEARANCE
     rubbing = ~free & orbits["stable"].astype(bool)
@@ -42,6 +42,7 @@ def test_link_search_finds_and_follows_the_rubbing_orbit(tmp_path, capsys):
     assert ok.any() and set(branches.loc[ok, "shaft_speed [rpm]"]) == {5000, 5500, 6000, 6500, 7000}
     sweep = pd.read_csv(out)
     assert list(sweep["shaft_speed [rpm]"]) == [5000, 5500, 6000, 6500, 7000]
-    b_force, b_radius = branches.loc[ok, "rub.force_max [N]"], branches.loc[ok, "rub.displacement_max [m]"]
+    b_force = branches.loc[ok, "rub.force_max [N]"]
+    b_radius = branches.loc[ok, "rub.displacement_max [um]"] * 1e-6
     assert (b_force > 0).all()
     np.testing.assert_allclose(b_force, STIFFNESS * (b_radius - CLEARANCE), rtol=1e-9)

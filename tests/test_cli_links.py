@@ -58,7 +58,7 @@ def test_idler_train_sweep_writes_both_meshes(tmp_path, capsys):
     assert df.loc[stable, "harmonic_error [-]"].le(5e-3).all()
     assert len(df) == 2 and (df["direction"] == "up").all()
     assert np.allclose(df["shaft_speed [rpm]"], df["base_frequency [Hz]"] * 60 / 25, rtol=1e-12)
-    for q in ("dte_rms [m]", "force_max [N]", "dslr [-]", "contact_loss_fraction [-]"):
+    for q in ("dte_rms [um]", "force_max [N]", "dslr [-]", "contact_loss_fraction [-]"):
         for mesh in ("mesh0", "mesh1"):
             col = df[f"{mesh}.{q}"]
             assert col.notna().equals(df["stable"].eq(True)), (mesh, q)
@@ -78,7 +78,7 @@ def test_clearance_model_sweep_writes_the_bearing_link(tmp_path, capsys):
     ok = df["stable"].eq(True)  # empty (not converged) is not stable
     assert ok.any()
     assert (df.loc[ok, "B1.contact_fraction [-]"] == 1).all()
-    assert (df.loc[ok, "B1.displacement_max [m]"] > 20e-6).all()
+    assert (df.loc[ok, "B1.displacement_max [um]"] > 20.0).all()
 
 
 @pytest.mark.parametrize(

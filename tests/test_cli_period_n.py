@@ -155,7 +155,7 @@ def test_period_three_by_default_search_against_time_integration(tmp_path, capsy
     assert tr.converged and np.max(np.abs(d[256:] - d[:-256])) / np.ptp(d) > 1e-3  # not period 1
     ref = amplitudes(tr.harmonics(27)) * 1e6  # ω/3, 2ω/3, ω, ... [µm]
     # the link table's DTE: its RMS over the orbit (the alternating part of the 27 harmonics)
-    sub, rms = at["subharmonic_amp [um]"].to_numpy(), at["mesh0.dte_rms [m]"].to_numpy() * 1e6
+    sub, rms = at["subharmonic_amplitude [um]"].to_numpy(), at["mesh0.dte_rms [um]"].to_numpy()
     ref_rms = np.sqrt(np.sum(ref**2) / 2)
     with capsys.disabled():
         print(
@@ -216,7 +216,7 @@ def test_period_three_on_a_link_model_against_time_integration(tmp_path, capsys)
     tr = integrate(pair, 2.6 * WN / 3, [-12.57e-6, -204.16e-6 * WN], tol=1e-8, max_periods=600)
     ref = amplitudes(tr.harmonics(27))  # ω/3, 2ω/3, ω, ... [m]
     rms = np.sqrt(np.sum(ref**2) / 2)
-    sub, dte = at["subharmonic_amp [um]"].to_numpy() * 1e-6, at["mesh0.dte_rms [m]"].to_numpy()
+    sub, dte = at["subharmonic_amplitude [um]"].to_numpy() * 1e-6, at["mesh0.dte_rms [um]"].to_numpy() * 1e-6
     with capsys.disabled():
         print(f"omega/3: {sub[0] * 1e6:.4f} um against {ref[0] * 1e6:.4f}; RMS DTE {dte[0]:.5e} vs {rms:.5e}")
     assert np.all(np.abs(sub / ref[0] - 1) < 5e-3) and np.all(np.abs(dte / rms - 1) < 5e-3)

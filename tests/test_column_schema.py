@@ -1,6 +1,7 @@
 """docs/conventions.md, "Column names": the rename table lists every column the package's
-result tables write today (old column), so the rename can be applied in one step; each
-of its new names follows the schema of :func:`nlgrd.units.column`."""
+result tables write (old column where a table is not renamed yet, new column where it is:
+the link results and ``nlgrd sweep``'s CSV, issue 33 item 5); each of its new names
+follows the schema of :func:`nlgrd.units.column`."""
 
 from __future__ import annotations
 
@@ -52,10 +53,22 @@ def _pattern(name: str) -> re.Pattern:
 
 
 OLD = [_pattern(n) for _, olds, _ in _rows() for n in olds]
+NEW = [_pattern(n) for _, _, news in _rows() for n in news]
+#: The rows of the tables renamed (the sweeps' and curves' of the link engine and of
+#: ``nlgrd sweep``): their old names with a new one, and every name they may write now.
+APPLIED = [r for r in _rows() if r[0].startswith(("sweep", "curve", "continuation"))]
+RENAMED = [_pattern(n) for _, olds, news in APPLIED if news for n in olds]
+CURRENT = [_pattern(n) for _, olds, news in APPLIED for n in (news or olds)]
 
 
 def _unlisted(columns) -> list[str]:
-    return [c for c in columns if not any(p.match(c) for p in OLD)]
+    """Columns in neither the old nor the new names of the table."""
+    return [c for c in columns if not any(p.match(c) for p in OLD + NEW)]
+
+
+def _stale(columns) -> list[str]:
+    """Columns still under an old name the table renames (no new or unchanged name fits)."""
+    return [c for c in columns if any(p.match(c) for p in RENAMED) and not any(p.match(c) for p in CURRENT)]
 
 
 def test_the_table_is_there():
@@ -104,8 +117,27 @@ def test_the_command_line_tables_are_listed(tmp_path):
         out = tmp_path / f"{key}.csv"
         args = [str(ROOT / args[0]), *args[1:]]
         assert main(["sweep", *args, "--out", str(out)]) == 0
-        assert _unlisted(pd.read_csv(out).columns) == [], key
+        columns = pd.read_csv(out).columns
+        assert _unlisted(columns) == [], key
+        assert _stale(columns) == [], key  # the rename applied (issue 33 item 5)
 
 
 def test_a_column_not_in_the_table_is_caught():
     assert _unlisted(["dte_rms [um]", "mesh0.dte_rms [m]", "not_a_column [m]"]) == ["not_a_column [m]"]
+
+
+def test_a_column_under_its_old_name_is_caught():
+    """The link tables' old names (lengths in m, ``subharmonic_amp``) are stale; their new
+    names and the unchanged ones are not."""
+    old = ["mesh0.dte_rms [m]", "B1.displacement_max [m]", "subharmonic_amp [um]", "mesh_frequency [Hz]"]
+    new = ["mesh0.dte_rms [um]", "B1.displacement_max [um]", "subharmonic_amplitude [um]"]
+    assert _stale(old) == old
+    assert _stale([*new, "base_frequency [Hz]", "mesh0.force_max [N]", "B1.force_mean [N]"]) == []
+
+
+def test_the_link_result_tables_use_the_new_names():
+    """``nlgrd.sweep`` and ``nlgrd.continuation`` tables (the link engine, every model):
+    no column under a renamed old name."""
+    for name in ("LinkSweepResult", "LinkContinuationResult"):
+        key = f"nlgrd.nonlinear.results.link_results.{name}"
+        assert _stale(family.CASES[key]().to_frame().columns) == [], name

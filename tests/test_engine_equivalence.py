@@ -470,11 +470,12 @@ def test_a_tabulated_bearing_in_place_of_a_linear_one_builds_on_both_paths():
 BEARING_POINTS_HZ = {"two_shaft": (1500.0, 2500.0, 5200.0), "kubo": (2000.0, 3000.0, 3400.0)}
 #: The bearing columns of the two tables: single path (unit, factor to SI), link path.
 BEARING_COLUMNS = {
-    "displacement_max": ("[um]", 1e-6, "[m]"),
-    "displacement_rms": ("[um]", 1e-6, "[m]"),
+    "displacement_max": ("[um]", 1.0, "[um]"),
+    "displacement_rms": ("[um]", 1.0, "[um]"),
     "force_mean": ("[N]", 1.0, "[N]"),
     "force_rms": ("[N]", 1.0, "[N]"),
     "force_max": ("[N]", 1.0, "[N]"),
+    "force_amplitude": ("[N]", 1.0, "[N]"),
 }
 
 
@@ -793,7 +794,7 @@ SWEEP_RTOL = 1e-8
 def test_fold_free_sweep_agrees():
     """two_shaft, 2200-2900 Hz (8 points, up and down, H = 5, stability): below the
     superharmonic rise at 3000-3100 Hz, no fold, shown by both jump lists being empty.
-    RMS DTE (single ``dte_rms [um]``, link ``mesh0.dte_rms [m]``), largest mesh force and
+    RMS DTE (single ``dte_rms [um]``, link ``mesh0.dte_rms [um]``), largest mesh force and
     DSLR from the two tables, to SWEEP_RTOL."""
     s = system("two_shaft")
     g, lk = models("two_shaft")
@@ -806,7 +807,7 @@ def test_fold_free_sweep_agrees():
     assert np.allclose(fg["mesh_frequency [Hz]"], fl["base_frequency [Hz]"], rtol=1e-15)
     worst = 0.0
     for single, link, to_single in (
-        ("dte_rms [um]", "mesh0.dte_rms [m]", 1e6),
+        ("dte_rms [um]", "mesh0.dte_rms [um]", 1.0),
         ("force_max [N]", "mesh0.force_max [N]", 1.0),
         ("dslr [-]", "mesh0.dslr [-]", 1.0),
     ):
@@ -868,7 +869,7 @@ def test_the_api_sweeps_one_mesh_on_the_link_engine():
     assert fn["converged"].all() and np.array_equal(fo["stable"], fn["stable"])
     worst = 0.0
     for single, link, to_single in (
-        ("dte_rms [um]", "mesh0.dte_rms [m]", 1e6),
+        ("dte_rms [um]", "mesh0.dte_rms [um]", 1.0),
         ("force_max [N]", "mesh0.force_max [N]", 1.0),
         ("dslr [-]", "mesh0.dslr [-]", 1.0),
     ):

@@ -305,9 +305,9 @@ def test_sweeps_land_on_the_stable_period_two_branch(swept):
         expected = np.where(GRID >= BRANCH[0], 2, 1)
         np.testing.assert_array_equal(part["period"].to_numpy(dtype=int), expected)
         assert (part.loc[part["period"] == 2, "response"] == "period 2").all()
-        assert (part.loc[part["period"] == 2, "subharmonic_amp [um]"] > 1.0).all()
-        assert (part.loc[part["period"] == 1, "subharmonic_amp [um]"] == 0).all()
-        assert part["mesh0.dte_rms [m]"].notna().all() and part["B1.force_max [N]"].notna().all()
+        assert (part.loc[part["period"] == 2, "subharmonic_amplitude [um]"] > 1.0).all()
+        assert (part.loc[part["period"] == 1, "subharmonic_amplitude [um]"] == 0).all()
+        assert part["mesh0.dte_rms [um]"].notna().all() and part["B1.force_max [N]"].notna().all()
     assert (df["B1.contact_fraction [-]"] == 1).all()  # the journal on its clearance throughout
     assert df.loc[df["period"] == 2, "harmonic_error [-]"].le(1e-3).all()
     # where period 2 is reported, the period-1 orbit is flip-unstable
@@ -399,14 +399,15 @@ def test_cli_link_sweep_period_auto(tmp_path, capsys):
     assert "period 2 (period doubled) at Hz: 5525.0, 5575.0" in text
     assert "period doubling (up): 5475.0 -> 5525.0 Hz, periodic -> period 2" in text
     df = pd.read_csv(out)
-    for col in ("period", "response", "subharmonic_amp [um]", "secondary_frequency [Hz]", "instability"):
+    columns = ("period", "response", "subharmonic_amplitude [um]", "secondary_frequency [Hz]", "instability")
+    for col in columns:
         assert col in df.columns, col
     assert list(df["period"]) == [1, 2, 2] and list(df["response"]) == ["periodic", "period 2", "period 2"]
-    assert df["stable"].all() and (df["subharmonic_amp [um]"].iloc[1:] > 1.0).all()
-    assert df["mesh0.dte_rms [m]"].notna().all()
+    assert df["stable"].all() and (df["subharmonic_amplitude [um]"].iloc[1:] > 1.0).all()
+    assert df["mesh0.dte_rms [um]"].notna().all()
     assert main([*argv, "--out", str(out), "--period", "1"]) == 0
     capsys.readouterr()
     df = pd.read_csv(out)
     assert list(df["response"].iloc[1:]) == [NO_STABLE] * 2
     assert list(df["instability"].iloc[1:]) == ["real < -1"] * 2
-    assert df["mesh0.dte_rms [m]"].iloc[1:].isna().all()
+    assert df["mesh0.dte_rms [um]"].iloc[1:].isna().all()

@@ -411,7 +411,8 @@ def test_link_continuation_table_never_calls_an_unstable_orbit_periodic():
     assert c.turning_omegas.size == 2
     links = pd.DataFrame({"mesh.dte_rms [m]": c.curve.dte_rms})
     frame = LinkContinuationResult(c, links).to_frame()
-    assert "mesh.dte_rms [m]" in frame and "base_frequency [Hz]" in frame
+    assert "mesh.dte_rms [um]" in frame and "base_frequency [Hz]" in frame  # written in µm
+    np.testing.assert_array_equal(frame["mesh.dte_rms [um]"], c.curve.dte_rms * 1e6)
     unstable = frame["stable"].eq(False).to_numpy(bool)
     assert unstable.sum() >= 5
     assert set(frame.loc[unstable, "response"]) == {"unstable periodic"}

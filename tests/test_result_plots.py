@@ -37,15 +37,15 @@ def rub_sweep():
 
 def test_link_sweep_plot_draws_its_column_on_the_given_axes(rub_sweep):
     """``plot(ax=ax)`` draws on ``ax``, returns it, and the values drawn are the table's
-    ``rub.displacement_max [m]`` column (every one of them: all points converged, stable)."""
+    ``rub.displacement_max [um]`` column (every one of them: all points converged, stable)."""
     frame = rub_sweep.to_frame()
     assert frame["converged"].all() and frame["stable"].all()
     fig, ax = plt.subplots()
     assert rub_sweep.plot("rub.displacement_max", ax=ax) is ax
     drawn = _drawn_y(ax)
-    for v in frame["rub.displacement_max [m]"].to_numpy(float):
+    for v in frame["rub.displacement_max [um]"].to_numpy(float):
         assert np.any(np.isclose(drawn, v, rtol=1e-12, atol=0))
-    assert ax.get_ylabel() == "rub: displacement max [m]"
+    assert ax.get_ylabel() == "rub: displacement max [µm]"
     plt.close(fig)
 
 
@@ -77,6 +77,42 @@ def test_link_continuation_plot_draws_its_curve():
     for v in values:
         assert np.any(np.isclose(drawn, v, rtol=1e-12, atol=0))
     plt.close(fig)
+
+
+def _points(ax, gid: str, markers: bool = True) -> int:
+    """Points drawn by the artists of ``gid`` (markers only, or every finite vertex)."""
+    lines = [ln for ln in ax.get_lines() if ln.get_gid() == gid]
+    if markers:
+        lines = [ln for ln in lines if ln.get_linestyle() == "None"]
+    return sum(int(np.isfinite(np.asarray(ln.get_ydata(), dtype=float)).sum()) for ln in lines)
+
+
+def test_link_sweep_figure_marks_stability_gaps_and_jumps_as_the_one_mesh_figure():
+    """Kubo's rig over its main resonance (3-6 kHz, H = 5, no time answers: quasi-periodic
+    points stay gaps): ``nlgrd.sweep(...).plot()`` draws the same kinds of marks (gids of
+    :mod:`nlgrd.plotting.common`) as the former one-mesh figure (``geared_sweep(...).plot()``),
+    and each as many as its table says: a filled marker per stable point, an edge mark per
+    point without a stable periodic response, one arrow per jump whose two ends are drawn."""
+    from nlgrd.nonlinear.models.geared import geared_sweep
+    from nlgrd.plotting.common import JUMP_GID, NO_RESPONSE_GID, STABILITY_GIDS, STABLE
+
+    system = nlgrd.load(ROOT / "data" / "case_studies" / "kubo.toml")
+    hz = np.linspace(3000.0, 6000.0, 16)
+    res = nlgrd.sweep(system, hz=hz, H=5, time_domain=False)
+    old = geared_sweep(system, 2 * np.pi * hz, H=5)
+    ax, ax_old = res.plot("dte_rms"), old.plot("dte_rms")
+    kinds = {ln.get_gid() for ln in ax.get_lines()} - {None}
+    assert kinds == {ln.get_gid() for ln in ax_old.get_lines()} - {None}
+    assert {STABILITY_GIDS[STABLE], NO_RESPONSE_GID, JUMP_GID} <= kinds
+    frame = res.to_frame()
+    assert _points(ax, STABILITY_GIDS[STABLE]) == int(frame["stable"].eq(True).sum())
+    gaps = frame["converged"].astype(bool) & ~frame["response"].isin(["periodic"])
+    assert _points(ax, NO_RESPONSE_GID) == int(gaps.sum()) > 0
+    drawn = [j for j in res.jumps() if np.isfinite([j.value_from, j.value_to]).all()]
+    shafts = [ln for ln in ax.get_lines() if ln.get_gid() == JUMP_GID and ln.get_linestyle() != "None"]
+    assert sum(int(ln.get_label().rsplit("(", 1)[1].rstrip(")")) for ln in shafts) == len(drawn) > 0
+    plt.close(ax.figure)
+    plt.close(ax_old.figure)
 
 
 # ----------------------------------------------------------------------------- time responses

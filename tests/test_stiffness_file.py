@@ -231,8 +231,8 @@ def test_cli_sweep_with_the_file_writes_the_series_numbers(tmp_path, capsys):
     with np.errstate(invalid="ignore", divide="ignore"), capsys.disabled():
         print(f"CLI, file against series: largest relative difference {np.nanmax(np.abs(a / b - 1)):.1e}")
     np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
-    c = frames["constant"]["mesh0.dte_rms [m]"].to_numpy(float)
-    change = np.max(np.abs(c / s["mesh0.dte_rms [m]"].to_numpy(float) - 1))
+    c = frames["constant"]["mesh0.dte_rms [um]"].to_numpy(float)
+    change = np.max(np.abs(c / s["mesh0.dte_rms [um]"].to_numpy(float) - 1))
     with capsys.disabled():
         print(f"CLI, constant k_h against the series: RMS DTE differs by up to {change:.1%}")
     assert change > 1e-2  # the series matters: the comparison can fail

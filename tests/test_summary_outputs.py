@@ -68,7 +68,7 @@ def test_summary_units_and_forces_by_hand(model):
         means = frame[[c for c in frame.columns if c.endswith(" force_mean [N]")]].to_numpy(float)
         np.testing.assert_allclose(means, w0 / 2, rtol=1e-9)
     else:
-        dte = frame["mesh0.dte_rms [m]"].max() * 1e6
+        dte = frame["mesh0.dte_rms [um]"].max()
         forces = [c for c in frame.columns if c.endswith(".force_max [N]") and not c.startswith("mesh0.")]
         assert "B1.force_max [N]" in forces and len(forces) == 4
     assert s["dte_rms_peak [um]"] == pytest.approx(dte, rel=1e-15)

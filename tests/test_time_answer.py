@@ -27,6 +27,7 @@ from nlgrd.nonlinear.models.link_model import build_link_model
 from nlgrd.nonlinear.results.response_kinds import CHAOTIC, TIME_DOMAIN, uncertainty_column
 from nlgrd.timedomain.sweep_answers import answer_sweep, base_harmonics, with_time_answers
 from nlgrd.timedomain.time_answer import time_answer
+from nlgrd.units import written_name
 
 KB = "data/case_studies/kahraman_blankenship.toml"
 
@@ -67,9 +68,9 @@ def test_sweep_answers_its_gaps_and_draws_them_apart(kb_sweep):
     frame = out.to_frame()
     assert list(frame["response"].iloc[:1]) == ["periodic"]
     assert set(frame["response"].iloc[1:]) <= {TIME_DOMAIN, CHAOTIC}
-    assert np.all(np.isfinite(frame["mesh0.dte_rms [m]"]))
-    assert np.isnan(frame["mesh0.dte_rms_uncertainty [m]"].iloc[0])
-    assert np.all(frame["mesh0.dte_rms_uncertainty [m]"].iloc[1:] > 0)
+    assert np.all(np.isfinite(frame["mesh0.dte_rms [um]"]))
+    assert np.isnan(frame["mesh0.dte_rms_uncertainty [um]"].iloc[0])
+    assert np.all(frame["mesh0.dte_rms_uncertainty [um]"].iloc[1:] > 0)
     assert frame["period"].iloc[1:].isna().all()  # no period: not a periodic orbit
     bearing = [c for c in frame.columns if c.endswith(".force_rms [N]") and c.startswith("bearing ")]
     assert bearing and np.all(np.isfinite(frame[bearing].to_numpy()))  # every row has them
@@ -158,12 +159,12 @@ def test_link_sweep_answers_its_gaps():
     out = with_time_answers(res, model, periods=80, max_periods=80)
     frame = out.to_frame()
     assert frame["response"].iloc[1] in (TIME_DOMAIN, CHAOTIC)
-    assert np.isfinite(frame["mesh0.dte_rms [m]"].iloc[1])
-    assert frame["mesh0.dte_rms_uncertainty [m]"].iloc[1] > 0
-    assert np.isnan(frame["mesh0.dte_rms_uncertainty [m]"].iloc[0])
+    assert np.isfinite(frame["mesh0.dte_rms [um]"].iloc[1])
+    assert frame["mesh0.dte_rms_uncertainty [um]"].iloc[1] > 0
+    assert np.isnan(frame["mesh0.dte_rms_uncertainty [um]"].iloc[0])
     # the linear bearings' columns at the answered row too, with their uncertainty
-    assert out.bearings and all(np.isfinite(frame[c].iloc[1]) for c in out.bearings)
-    unc = [uncertainty_column(c) for c in out.bearings]
+    assert out.bearings and all(np.isfinite(frame[written_name(c)].iloc[1]) for c in out.bearings)
+    unc = [written_name(uncertainty_column(c)) for c in out.bearings]
     assert all(frame[c].iloc[1] > 0 for c in unc) and frame[unc].iloc[0].isna().all()
 
 

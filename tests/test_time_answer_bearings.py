@@ -76,8 +76,8 @@ def test_bearing_record_is_the_full_dof_recurrence(kb):
 
 def test_time_answer_bearings_equal_the_harmonic_balance_at_a_stable_point(kb):
     system, model = kb
-    # the mesh-coordinate sweep: its bearing table has force_amplitude and displacement_mean,
-    # which the link sweep's has not yet
+    # the mesh-coordinate sweep: its bearing table has displacement_mean, which the link
+    # sweep's has not (its force_amplitude: tests/test_result_schema.py)
     from nlgrd.nonlinear.models.geared import geared_sweep
 
     hb = {H: geared_sweep(system, 2 * np.pi * np.array([3500.0]), H=H, directions="up") for H in (10, 20)}

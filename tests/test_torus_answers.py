@@ -45,7 +45,7 @@ def test_a_sweep_answers_kubo_tori_against_time_integration():
     assert frame["stable"].isna().all()
     assert (frame["harmonic_error [-]"] <= 5e-3).all()  # its own estimate, within the sweep's tolerance
     for ours, theirs, scale, rtol in (
-        ("mesh0.dte_rms [m]", "ti_dte_rms [um]", 1e6, 0.01),
+        ("mesh0.dte_rms [um]", "ti_dte_rms [um]", 1.0, 0.01),
         ("mesh0.force_max [N]", "ti_force_max [N]", 1.0, 0.01),
         ("secondary_frequency [Hz]", "ti_secondary_frequency [Hz]", 1.0, 0.005),
     ):
@@ -57,7 +57,7 @@ def test_a_sweep_answers_kubo_tori_against_time_integration():
     # every metric and bearing column written; no sampling uncertainty (not a time answer)
     bearings = [c for c in frame.columns if c.startswith("bearing ") and "uncertainty" not in c]
     assert np.all(np.isfinite(frame[bearings].to_numpy(float)))
-    unc = "mesh0.dte_rms_uncertainty [m]"
+    unc = "mesh0.dte_rms_uncertainty [um]"
     assert unc not in frame or frame[unc].isna().all()
     ax = res.plot("dte_rms")
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
@@ -78,5 +78,5 @@ def test_a_torus_that_does_not_converge_falls_back_to_the_time_answer():
     frame = out.to_frame()
     assert frame["response"].iloc[0] in (TIME_DOMAIN, CHAOTIC)
     assert frame["verdict"].iloc[0] == "unstable"  # the periodic orbit's verdict, computed
-    assert frame["mesh0.dte_rms_uncertainty [m]"].iloc[0] > 0
+    assert frame["mesh0.dte_rms_uncertainty [um]"].iloc[0] > 0
     assert np.isnan(out.result.torus_frequency[0])

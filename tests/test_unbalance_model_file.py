@@ -156,5 +156,5 @@ def test_cli_sweep_with_unbalance_is_the_link_sweep(tmp_path, capsys):
     ref = link_sweep(plain, omegas * 25, H=1, directions="up", stability=False).to_frame()
     np.testing.assert_allclose(mesh_columns(zero), mesh_columns(ref), rtol=1e-9, atol=0)
     # the unbalance (1e-2 kg m on the gear blank) moves the DTE
-    change = mesh_columns(df)["mesh0.dte_rms [m]"] / mesh_columns(zero)["mesh0.dte_rms [m]"] - 1
+    change = mesh_columns(df)["mesh0.dte_rms [um]"] / mesh_columns(zero)["mesh0.dte_rms [um]"] - 1
     assert (change.abs() > 1e-4).all(), change

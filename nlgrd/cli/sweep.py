@@ -26,6 +26,7 @@ from nlgrd.io.command_line import (
 from nlgrd.io.model_checks import check_harmonics_memory, check_speed_range
 from nlgrd.nonlinear.results.response_kinds import QUASI_PERIODIC
 from nlgrd.nonlinear.tracing.period_branches import PERIOD_HARMONICS
+from nlgrd.units import floor_rounding, written_frame, written_name
 
 
 class _Unit:
@@ -353,7 +354,7 @@ def _write_sweep(view, res, quantity, out, png, extra=None, found=None, unit=Non
     with Outputs() as files:
         files.csv(frame, out)
         if found is not None:
-            files.csv(found[0], _beside(out, "orbits"))
+            files.csv(floor_rounding(written_frame(found[0])), _beside(out, "orbits"))
             files.csv(found[1], _beside(out, "branches"))
         files.figure(figure, png)
         if extra is not None:
@@ -546,7 +547,7 @@ def _continuation(args, system, view, unit, omegas, count, quantity, out, png) -
         for name, res in traces.items():
             ax = plot_continuation(
                 res,
-                quantity=quantity,
+                quantity=written_name(quantity),
                 ax=ax,
                 color="k" if name == "up" else "C3",
                 label=name,

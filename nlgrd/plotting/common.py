@@ -63,6 +63,12 @@ NO_MEASUREMENT_TEXT = "no measured curve shipped\n(to add one: data/experimental
 
 #: gid of the jumps' shafts and heads (:func:`mark_jumps`).
 JUMP_GID = "jump"
+#: gids of the markers and segments of :func:`draw_points`, per stability code.
+STABILITY_GIDS = {STABLE: "stable", UNSTABLE: "unstable", UNKNOWN: "stability unknown"}
+#: gid of the marks on the bottom edge (:func:`mark_not_converged`): no value drawn.
+NOT_CONVERGED_GID = "not converged"
+#: gid of the edge marks of converged points without a stable periodic response.
+NO_RESPONSE_GID = "no response"
 
 #: Readable axis labels of table columns (:func:`axis_label`).
 COLUMN_LABELS = {
@@ -577,17 +583,18 @@ def draw_points(
         bad = (codes[:-1] == UNSTABLE) | (codes[1:] == UNSTABLE)
         unknown = (codes[:-1] == UNKNOWN) & (codes[1:] == UNKNOWN) & ~bad
         if markers:
-            kinds = ((seg & ~bad, "-", None), (seg & bad, "--", None))
+            kinds = ((seg & ~bad, "-", None, STABLE), (seg & bad, "--", None, UNSTABLE))
         else:
             kinds = (
-                (seg & ~bad & ~unknown, "-", label),
-                (seg & bad, "--", f"{label}, unstable"),
-                (seg & unknown, ":", f"{label}, {UNKNOWN_TEXT}"),
+                (seg & ~bad & ~unknown, "-", label, STABLE),
+                (seg & bad, "--", f"{label}, unstable", UNSTABLE),
+                (seg & unknown, ":", f"{label}, {UNKNOWN_TEXT}", UNKNOWN),
             )
-        for keep, ls, lab in kinds:
+        for keep, ls, lab, code in kinds:
             if np.any(keep):
                 px, py = _pieces(x, y, keep)
-                (ln,) = ax.plot(px, py, ls=ls, color=colour, lw=lw, alpha=alpha, zorder=zorder, label=lab)
+                style = {"ls": ls, "color": colour, "lw": lw, "alpha": alpha, "zorder": zorder}
+                (ln,) = ax.plot(px, py, label=lab, gid=STABILITY_GIDS[code], **style)
                 artists.append(ln)
     if not markers:
         return artists
@@ -612,6 +619,7 @@ def draw_points(
                 label=lab,
                 alpha=alpha,
                 zorder=zorder + 0.1,
+                gid=STABILITY_GIDS[code],
                 **{("markerfacecoloralt" if k == "mfcalt" else k): v for k, v in kw.items()},
             )
             artists.append(mk)
@@ -646,7 +654,7 @@ def mark_not_converged(
     Returns
     -------
     matplotlib.lines.Line2D or None
-        The marks, or None when ``x`` has no finite value.
+        The marks (gid :data:`NOT_CONVERGED_GID`), or None when ``x`` has no finite value.
     """
     from matplotlib.transforms import ScaledTranslation
 
@@ -667,6 +675,7 @@ def mark_not_converged(
         clip_on=False,
         zorder=5,
         label=f"{label}: {text} ({x.size})",
+        gid=NOT_CONVERGED_GID,
     )
     # the lifted transform hides the data branch from autoscaling: include x by hand
     ax.update_datalim(np.column_stack([x, np.zeros_like(x)]), updatey=False)

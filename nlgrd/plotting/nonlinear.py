@@ -13,6 +13,7 @@ import pandas as pd
 
 from nlgrd.plotting.common import (
     DIRECTION_MARKERS,
+    NO_RESPONSE_GID,
     UNKNOWN,
     answer_marker_style,
     axis_label,
@@ -220,6 +221,10 @@ def _draw_jumps(ax, jumps: pd.DataFrame, xv, yv, colour: str, name: str) -> None
     mark_jumps(ax, (a + b) / 2, at(a), at(b), colour, name)
 
 
+#: Legend wording of the edge marks of converged points without a stable periodic response.
+NO_RESPONSE_TEXT = "no stable periodic response"
+
+
 def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms, inner=False) -> None:
     """Period-ν points ringed where they are drawn (the down sweep's ring inside the up
     sweep's, ``inner``); points without a stable periodic response (quasi-periodic, or none
@@ -238,10 +243,10 @@ def _mark_responses(ax, resp, conv, xv, yv, colour, name, ms, inner=False) -> No
     lost = conv & ~period & ~np.isin(resp, (PERIODIC, "<NA>", "nan", *answered))
     quasi = resp == QUASI_PERIODIC
     row = int(inner)
-    mark_not_converged(ax, xv[lost & quasi], colour, name, "quasi-periodic", marker="2", row=row)
-    mark_not_converged(
-        ax, xv[lost & ~quasi], colour, name, "no stable periodic response", marker="1", row=row
-    )
+    for at, text, marker in ((lost & quasi, "quasi-periodic", "2"), (lost & ~quasi, NO_RESPONSE_TEXT, "1")):
+        marks = mark_not_converged(ax, xv[at], colour, name, text, marker=marker, row=row)
+        if marks is not None:
+            marks.set_gid(NO_RESPONSE_GID)
 
 
 def _uncertainty_column(column: str) -> str:

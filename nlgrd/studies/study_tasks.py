@@ -203,12 +203,13 @@ class SummaryColumns:
 
 
 def _link_columns(model) -> SummaryColumns:
-    """The summary columns of a link sweep, from the model's typed outputs
-    (:func:`~nlgrd.nonlinear.results.link_results.output_columns`): the linear bearings'
-    first, then each link's in the model's order."""
+    """The summary columns of a link sweep's table, from the model's typed outputs
+    (:func:`~nlgrd.nonlinear.results.link_results.output_columns`, in their written units:
+    :meth:`nlgrd.units.OutputColumn.written`): the linear bearings' first, then each
+    link's in the model's order."""
     from nlgrd.nonlinear.results.link_results import output_columns
 
-    outputs = output_columns(model)
+    outputs = [c.written() for c in output_columns(model)]  # as the table writes them
     return SummaryColumns.of(
         [c for c in outputs if c.kind == "bearing"] + [c for c in outputs if c.kind != "bearing"]
     )

@@ -98,7 +98,8 @@ class TimeAnswer:
         "chaotic" or "time domain" (:mod:`nlgrd.nonlinear.results.response_kinds`).
     links : dict of str to Estimate
         ``<link>.<quantity>`` with the units of the links' own outputs (the columns of a
-        link sweep): a mesh's ``dte_rms [m]``, ``force_max [N]``, ``dslr [-]``,
+        link sweep): a mesh's ``dte_mean [m]``, ``dte_rms [m]``, ``dte_p2p [m]``,
+        ``force_max [N]``, ``force_min [N]``, ``dslr [-]``,
         ``contact_loss_fraction [-]``, ``back_contact``; a clearance's
         ``contact_fraction [-]``, ``force_max [N]``, ``displacement_max [m]``.
     mesh : dict of str to Estimate
@@ -394,8 +395,11 @@ def _statistics_of(rec: _Recorder, cut: int, stop: int | None) -> tuple[dict, di
             if not mesh:
                 mesh = m
             for k, unit in (
+                ("dte_mean", " [m]"),
                 ("dte_rms", " [m]"),
+                ("dte_p2p", " [m]"),
                 ("force_max", " [N]"),
+                ("force_min", " [N]"),
                 ("dslr", " [-]"),
                 ("contact_loss_fraction", " [-]"),
                 ("back_contact", ""),

@@ -538,7 +538,8 @@ class GearMeshLink:
         return (1j * np.arange(H + 1) * omega * self.mesh.damping * E)[:, None]
 
     def metrics(self, harmonics: NDArray, omega: float) -> dict[str, float]:
-        """DTE RMS, largest mesh force, DSLR and contact loss of the mesh.
+        """DTE mean, RMS and peak-to-peak, the mesh force's extremes, DSLR and contact loss
+        of the mesh (:class:`~nlgrd.nonlinear.results.metrics.MeshMetrics`).
 
         Parameters
         ----------
@@ -550,8 +551,8 @@ class GearMeshLink:
         Returns
         -------
         dict
-            ``dte_rms [m]``, ``force_max [N]``, ``dslr [-]``, ``contact_loss_fraction [-]``,
-            ``back_contact``.
+            ``dte_mean [m]``, ``dte_rms [m]``, ``dte_p2p [m]``, ``force_max [N]``,
+            ``force_min [N]``, ``dslr [-]``, ``contact_loss_fraction [-]``, ``back_contact``.
         """
         return self.metrics_of_points(np.asarray(harmonics).reshape(1, -1), [omega])[0]
 
@@ -575,8 +576,11 @@ class GearMeshLink:
         ms = metrics_of_points(Z, np.asarray(omegas, dtype=float), self.mesh)
         return [
             {
+                "dte_mean [m]": m.dte_mean,
                 "dte_rms [m]": m.dte_rms,
+                "dte_p2p [m]": m.dte_p2p,
                 "force_max [N]": m.force_max,
+                "force_min [N]": m.force_min,
                 "dslr [-]": m.dslr,
                 "contact_loss_fraction [-]": m.contact_loss_fraction,
                 "back_contact": float(m.back_contact),
@@ -602,8 +606,11 @@ class GearMeshLink:
             As :meth:`metrics`.
         """
         return {
+            "dte_mean [m]": float(metrics["dte_mean"][i]),
             "dte_rms [m]": float(metrics["dte_rms"][i]),
+            "dte_p2p [m]": float(metrics["dte_p2p"][i]),
             "force_max [N]": float(metrics["force_max"][i]),
+            "force_min [N]": float(metrics["force_min"][i]),
             "dslr [-]": float(metrics["dslr"][i]),
             "contact_loss_fraction [-]": float(metrics["contact_loss_fraction"][i]),
             "back_contact": float(metrics["back_contact"][i]),

@@ -280,14 +280,17 @@ class LinkView:
 
     def continuation(self, begin: float, end: float, H, quantity: str, stability: bool, **options):
         """:func:`~nlgrd.nonlinear.models.link_model.link_continuation` from ``begin`` to
-        ``end`` [rad/s]: the curve (its metrics hold the output column ``quantity``) and its
-        table."""
+        ``end`` [rad/s]: the curve (its metrics hold the output column ``quantity`` as the
+        table writes it, :func:`nlgrd.units.written_name`) and its table."""
         import dataclasses
 
         from nlgrd.nonlinear.models.link_model import link_continuation
+        from nlgrd.units import written_frame
 
         res = link_continuation(self.model, begin, end, H, stability=stability, **options)
-        metrics = {**res.curve.curve.metrics, quantity: res.links[quantity].to_numpy()}
+        table = written_frame(res.links[[quantity]])  # the column as the CSV writes it
+        name = str(table.columns[0])
+        metrics = {**res.curve.curve.metrics, name: table[name].to_numpy()}
         curve = dataclasses.replace(res.curve, curve=dataclasses.replace(res.curve.curve, metrics=metrics))
         return curve, res.to_frame()
 
@@ -317,7 +320,10 @@ class LinkView:
         }
 
     def text(self, row: dict) -> str:
-        return f"{self.column} {row[self.column]:.4g}"
+        from nlgrd.units import written_frame
+
+        one = written_frame(pd.DataFrame({self.column: [row[self.column]]}))  # as the CSV writes it
+        return f"{one.columns[0]} {one.iloc[0, 0]:.4g}"
 
     def table(self, res) -> pd.DataFrame:
         """The sweep's table (:meth:`LinkSweepResult.to_frame`) with the reference shaft
@@ -339,9 +345,10 @@ class LinkView:
         """The sweep's figure: the column ``quantity`` of ``frame`` against its column ``x``,
         the branches when given (:func:`nlgrd.plotting.sweep_figures.plot_link_sweep`)."""
         from nlgrd.plotting.sweep_figures import plot_link_sweep
+        from nlgrd.units import written_name
 
         title = f"{title}\nbase frequency: {self.model.receptance.plan.name}, H = {res.result.H}"
-        return plot_link_sweep(frame, x, quantity, title, branches).figure
+        return plot_link_sweep(frame, x, written_name(quantity), title, branches).figure
 
     def on_sweep(self, res):
         """``known(orbit, omega, followed)``: the sweep ``res`` has the orbit (its period and

@@ -26,6 +26,7 @@ BEARING_OUTPUTS = (
     "force_mean [N]",
     "force_rms [N]",
     "force_max [N]",
+    "force_amplitude [N]",
 )
 
 #: The fields of :class:`BearingResponse` and their SI units: the typed description of a
@@ -320,7 +321,9 @@ def link_bearing_outputs(model, harmonics: NDArray, omega: float) -> dict[str, f
     dict
         ``<bearing>.displacement_max [m]``, ``.displacement_rms [m]``, ``.force_mean [N]``,
         ``.force_rms [N]``, ``.force_max [N]`` per bearing (radial magnitudes, as
-        :class:`BearingResponse`).
+        :class:`BearingResponse`) and ``.force_amplitude [N]``: the amplitude of the base
+        frequency's harmonic of the force, the larger of y and z (for one mesh its mesh
+        harmonic, as :class:`BearingResponse`'s).
     """
     return link_bearing_outputs_of_points(model, [harmonics], [omega])[0]
 
@@ -365,6 +368,10 @@ def link_bearing_outputs_of_points(model, harmonics, omegas) -> list[dict[str, f
             Q[j] = real_to_complex(rec.recover(w, H, z, complex_to_real(G.T), dofs)).T  # (H+1, 2 n_b)
             Fb[j] = bearing_forces(system, Q[j], w, rec.plan.speed(w))
         samples = model.output_cache.get(H, lambda H=H: _period_samples(H))
+        k = model.period  # the base frequency's harmonic on the base of a period-ν model
+        amp = np.zeros((len(rows), dofs.size // 2))
+        if H >= k:
+            amp = np.maximum(np.abs(Fb[:, k, 0::2]), np.abs(Fb[:, k, 1::2]))
         stats = dict(
             zip(
                 BEARING_OUTPUTS,
@@ -374,6 +381,7 @@ def link_bearing_outputs_of_points(model, harmonics, omegas) -> list[dict[str, f
                     np.hypot(Fb[:, 0, 0::2].real, Fb[:, 0, 1::2].real),
                     _radial_rms(Fb),
                     _radial_maxima(Fb, samples),
+                    amp,
                 ),
                 strict=True,
             )

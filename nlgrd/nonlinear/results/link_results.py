@@ -19,11 +19,13 @@ from nlgrd.nonlinear.results.bearing_loads import (
     link_bearing_outputs_of_points,
 )
 from nlgrd.nonlinear.results.sweep_results import ContinuationResult, SweepResult
-from nlgrd.units import OutputColumn, parse_column
+from nlgrd.units import OutputColumn, floor_rounding, parse_column, rpm, written_frame, written_name
 
 __all__ = [
     "LinkContinuationResult",
     "LinkSweepResult",
+    "NOT_JUMP_QUANTITIES",
+    "POINT_RENAMES",
     "bearing_columns",
     "link_column",
     "link_rows",
@@ -33,27 +35,76 @@ __all__ = [
     "point_outputs",
     "points_outputs",
     "with_links",
+    "with_speed",
 ]
 
 
 def with_links(frame: pd.DataFrame, links: pd.DataFrame) -> pd.DataFrame:
     """A sweep's or curve's table with the link columns in place of the first mesh's
-    metrics, its frequency column named ``base_frequency [Hz]``.
+    metrics, its frequency column named ``base_frequency [Hz]``: the links' columns in
+    their written units (:func:`nlgrd.units.written_frame`: lengths in µm) with rounding
+    written as 0 (:func:`nlgrd.units.floor_rounding`).
 
     Parameters
     ----------
     frame : pandas.DataFrame
         :meth:`SweepResult.to_frame` of the points.
     links : pandas.DataFrame
-        One row per point: ``<link>.<quantity>`` columns.
+        One row per point: ``<link>.<quantity> [SI unit]`` columns.
 
     Returns
     -------
     pandas.DataFrame
     """
     drop = [c for c in frame.columns if c.startswith(("dte_", "force_", "dslr", "contact_loss", "back_"))]
-    frame = frame.drop(columns=drop).rename(columns={"mesh_frequency [Hz]": "base_frequency [Hz]"})
-    return pd.concat([frame, links], axis=1)
+    frame = frame.drop(columns=drop).rename(columns=POINT_RENAMES)
+    return pd.concat([frame, floor_rounding(written_frame(links))], axis=1)
+
+
+#: The point columns of :meth:`SweepResult.to_frame` a link table renames
+#: (docs/conventions.md, "Column names").
+POINT_RENAMES = {
+    "mesh_frequency [Hz]": "base_frequency [Hz]",
+    "subharmonic_amp [um]": "subharmonic_amplitude [um]",
+}
+
+
+def with_speed(frame: pd.DataFrame, omega: NDArray, speed_per_base: float | None, unit: str = "Hz"):
+    """``frame`` with the reference shaft's speed ``shaft_speed [rpm]`` when
+    ``speed_per_base`` is known: first when the speeds were given in rpm, else after
+    ``base_frequency [Hz]``.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        A link table (``base_frequency [Hz]`` first).
+    omega : ndarray
+        The base frequency of each row [rad/s].
+    speed_per_base : float or None
+        Reference shaft speed per base frequency [-]; None: no speed column.
+    unit : {"Hz", "rpm"}
+        How the speeds were given.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    if speed_per_base is not None and "shaft_speed [rpm]" not in frame:
+        values = rpm(np.asarray(omega, dtype=float) * speed_per_base)
+        frame.insert(0 if unit == "rpm" else 1, "shaft_speed [rpm]", values)
+    return frame
+
+
+#: A mesh's outputs that the default jumps do not ask: the mean DTE, its peak-to-peak and
+#: the smallest mesh force, written since issue 33 item 5 for the one-mesh table; the jumps
+#: stay those of the RMS, the largest force, the DSLR and the contact (a mean or a smallest
+#: force that moves by a tenth is no jump of the response level).
+NOT_JUMP_QUANTITIES = ("dte_mean", "dte_p2p", "force_min")
+
+
+def _jumps_on(column: str) -> bool:
+    """Whether the default jumps ask ``column`` (not one of :data:`NOT_JUMP_QUANTITIES`)."""
+    return parse_column(column)[1] not in NOT_JUMP_QUANTITIES
 
 
 def link_column(links: pd.DataFrame, quantity: str | None, bearings: Sequence[str] = ()) -> str:
@@ -113,20 +164,33 @@ class LinkSweepResult:
         NaN where the point did not converge or has no stable periodic response.
     bearings : tuple of str
         Which of those columns are the linear bearings' (recovered, not a link's own).
+    speed_per_base : float or None
+        Reference shaft speed per base frequency: the table has ``shaft_speed [rpm]``
+        (:func:`with_speed`); None: not known, no speed column.
+    speed_unit : {"Hz", "rpm"}
+        How the speeds were given: "rpm" puts the shaft speed first.
+
+    :attr:`links` holds the outputs in SI units as the engine computed them; the table
+    (:meth:`to_frame`) writes them in the units of docs/conventions.md ("Column names").
     """
 
     result: SweepResult
     links: pd.DataFrame
     bearings: tuple = ()
+    speed_per_base: float | None = None
+    speed_unit: str = "Hz"
 
     def to_frame(self) -> pd.DataFrame:
-        """The sweep's table (frequency column ``base_frequency [Hz]``) with the link columns.
+        """The sweep's table: ``base_frequency [Hz]`` (a one-mesh model's mesh frequency)
+        and ``shaft_speed [rpm]`` (:func:`with_speed`), the points' columns
+        and every link's and linear bearing's ``<name>.<quantity> [unit]`` in written units.
 
         Returns
         -------
         pandas.DataFrame
         """
-        return with_links(self.result.to_frame(), self.links)
+        frame = with_links(self.result.to_frame(), self.links)
+        return with_speed(frame, self.result.omega, self.speed_per_base, self.speed_unit)
 
     def jumps(self, quantities: str | Sequence[str] | None = None, rtol: float = 0.1, ratio: float = 3.0):
         """Jumps of each sweep direction in the links' outputs (:meth:`SweepResult.jumps`
@@ -135,8 +199,9 @@ class LinkSweepResult:
         Parameters
         ----------
         quantities : str or sequence of str, optional
-            ``<link>.<quantity>`` columns; default every link's (the linear bearings follow
-            them: a bearing whose force changes smoothly by a third is no jump).
+            ``<link>.<quantity>`` columns; default every link's but
+            :data:`NOT_JUMP_QUANTITIES` (the linear bearings follow them: a bearing whose
+            force changes smoothly by a third is no jump).
         rtol, ratio : float
             As :func:`nlgrd.nonlinear.results.jumps.find_jumps` [-].
 
@@ -145,7 +210,7 @@ class LinkSweepResult:
         list of Jump
         """
         if quantities is None:
-            quantities = [c for c in self.links.columns if c not in self.bearings]
+            quantities = [c for c in self.links.columns if c not in self.bearings and _jumps_on(c)]
         qs = [quantities] if isinstance(quantities, str) else list(quantities)
         for q in qs:
             if q not in self.links.columns:
@@ -175,7 +240,7 @@ class LinkSweepResult:
         from nlgrd.plotting.nonlinear import jump_table
         from nlgrd.plotting.sweep_figures import plot_link_sweep
 
-        column = link_column(self.links, quantity, self.bearings)
+        column = written_name(link_column(self.links, quantity, self.bearings))
         jumps = jump_table(self.jumps())  # the jumps the command line lists
         return plot_link_sweep(self.to_frame(), "base_frequency [Hz]", column, None, ax=ax, jumps=jumps)
 
@@ -352,11 +417,15 @@ class LinkContinuationResult:
         The curve (stable and unstable parts, turning points).
     links : pandas.DataFrame
         One row per curve point: ``<link>.<quantity>`` columns, for stable and unstable
-        points alike (the curve's ``stable`` column tells which).
+        points alike (the curve's ``stable`` column tells which), in SI units.
+    speed_per_base, speed_unit
+        As :class:`LinkSweepResult`'s.
     """
 
     curve: ContinuationResult
     links: pd.DataFrame
+    speed_per_base: float | None = None
+    speed_unit: str = "Hz"
 
     @property
     def omega(self) -> NDArray:
@@ -370,7 +439,8 @@ class LinkContinuationResult:
         -------
         pandas.DataFrame
         """
-        return with_links(self.curve.to_frame(), self.links)
+        frame = with_links(self.curve.to_frame(), self.links)
+        return with_speed(frame, self.omega, self.speed_per_base, self.speed_unit)
 
     def plot(self, quantity: str | None = None, ax=None):
         """One link's output along the curve, stable solid and unstable dashed
@@ -393,7 +463,9 @@ class LinkContinuationResult:
         from nlgrd.plotting.nonlinear import plot_continuation
 
         column = link_column(self.links, quantity)
+        table = written_frame(self.links[[column]])  # the column as the table writes it
+        column = str(table.columns[0])
         points = self.curve.curve
-        metrics = {**points.metrics, column: self.links[column].to_numpy()}
+        metrics = {**points.metrics, column: table[column].to_numpy()}
         curve = replace(self.curve, curve=replace(points, metrics=metrics))
         return plot_continuation(curve, quantity=column, ax=ax, xaxis=("base frequency [Hz]", 1.0))

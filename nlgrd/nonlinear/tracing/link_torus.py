@@ -134,7 +134,8 @@ def torus_link_columns(
 ) -> dict:
     """Every link's outputs over a torus, in the columns of a link sweep
     (``<link>.<quantity> [unit]``, :func:`nlgrd.nonlinear.results.link_results.output_names`):
-    a gear mesh's RMS DTE, largest force, DSLR, contact-loss fraction and back contact
+    a gear mesh's mean, RMS and peak-to-peak DTE, largest and smallest force, DSLR,
+    contact-loss fraction and back contact
     (:func:`~nlgrd.nonlinear.tracing.torus_outputs.torus_outputs` on its coordinate), a
     bearing clearance's contact fraction, largest contact force and radial displacement,
     then every linear bearing's (:func:`torus_link_bearings`); NaN for a link of another
@@ -165,8 +166,11 @@ def torus_link_columns(
         if hasattr(link, "mesh"):
             o = torus_outputs(sol, link.mesh, n_samples, coord=sl.start)
             for q, key in (
+                ("dte_mean [m]", "dte_mean"),
                 ("dte_rms [m]", "dte_rms"),
+                ("dte_p2p [m]", "dte_p2p"),
                 ("force_max [N]", "force_max"),
+                ("force_min [N]", "force_min"),
                 ("dslr [-]", "dslr"),
                 ("contact_loss_fraction [-]", "contact_loss_fraction"),
             ):
