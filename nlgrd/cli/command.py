@@ -233,7 +233,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--time-periods",
         type=int,
         default=4096,
-        help="most base periods integrated per time-domain point (default 4096; at least 80)",
+        help=(
+            "base periods integrated per time-domain point before the last doubling (default 4096;"
+            " at least 80); a decision within noise of its threshold doubles it once"
+        ),
     )
     sw.add_argument("--out", default="sweep.csv", help="CSV file (default sweep.csv)")
     sw.add_argument("--plot", default=None, help="PNG file (default: the CSV's name with .png)")

@@ -9,8 +9,9 @@ from that unstable orbit (its mesh-periodic part), and its ``response`` becomes
 "time domain" or "chaotic" with the values' sampling uncertainty beside them.
 
 A point whose harmonic balance did not converge stays "not converged" (no orbit to start
-from); a point whose transient outlasts ``max_periods`` (its MSER-5 cut in the record's
-second half) stays unanswered, as it was. The linear bearings' displacements and forces
+from); a point whose transient outlasts the record (its MSER-5 cut in the record's
+second half at ``max_periods``, or at twice that where a decision sat within noise of its
+threshold) stays unanswered, as it was. The linear bearings' displacements and forces
 are recorded along the integration (:mod:`nlgrd.timedomain.bearing_record`), so a
 time-answered row has the same bearing columns as a periodic one, each with its
 uncertainty.
