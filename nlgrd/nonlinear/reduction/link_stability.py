@@ -30,6 +30,8 @@ from nlgrd.rotor.assembly import LinearModel
 
 #: Modes below this times the highest mesh frequency, with the static attachment vectors.
 STABILITY_CUTOFF = 3.0
+#: State spaces kept per model, one per frequency (a sweep's passes come back to them).
+SPACES_KEPT = 64
 #: Up to this many DOFs the modes come from a dense generalised eigenproblem (faster
 #: than ARPACK's shift-invert there).
 DENSE_MODES_LIMIT = 300
@@ -75,8 +77,11 @@ class TruncatedStability:
     def __init__(self, model: LinearModel, P: NDArray, K_link, C_link, top_order: int = 1):
         self.model, self.P, self.K_link, self.C_link = model, P, K_link, C_link
         self.top_order, self.top = int(top_order), None
-        # the state spaces per frequency, the bases per cut-off, one store of Floquet work
-        self._spaces, self._bases, self._floquet = BoundedCache(4), BoundedCache(8), FloquetCache(4096)
+        # per frequency the state spaces (a sweep's grid: each pass comes back to them), those
+        # on twice the cut-off and the full ones (larger: fewer kept); the bases per cut-off;
+        # one store of Floquet work
+        self._spaces, self._larger, self._full = BoundedCache(SPACES_KEPT), BoundedCache(16), BoundedCache(4)
+        self._bases, self._floquet = BoundedCache(8), FloquetCache(4096)
         self._kept_modes: tuple = (0.0, None)  # (up to [rad/s], eigenpairs) of the dense case
         self._rates = BoundedCache(8)  # the dropped modes' decay rates per cut-off (and speed)
 
@@ -192,25 +197,24 @@ class TruncatedStability:
         """
         self.prepare(omega)
         cutoff = STABILITY_CUTOFF * self.top_order * self.top
+        key = (float(omega), float(speed), cutoff)
 
-        def make():
-            kept = BoundedCache(2)  # built where a tangent varies
-
+        def make():  # larger and full are built where a tangent varies
             def larger():
-                return kept.get(
-                    "larger",
+                return self._larger.get(
+                    key,
                     lambda: self._on_basis(
                         self.basis(2 * cutoff), speed, dropped=self.dropped(2 * cutoff, speed, omega)
                     ),
                 )
 
             def full():
-                return kept.get("full", lambda: self.full_state(speed))
+                return self._full.get(key, lambda: self.full_state(speed))
 
             dropped = self.dropped(cutoff, speed, omega)
             return self._on_basis(self.basis(cutoff), speed, larger, full, dropped)
 
-        return self._spaces.get((float(omega), cutoff), make)
+        return self._spaces.get(key, make)
 
     def full_state(self, speed: float) -> LinearStateSpace:
         """The full (dense) state space at reference speed ``speed`` [rad/s].

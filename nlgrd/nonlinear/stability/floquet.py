@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -64,6 +64,12 @@ from nlgrd.nonlinear.reduction.linear_algebra import (
     psd_to_tolerance,
 )
 from nlgrd.nonlinear.stability.magnus_steps import interaction_piece, set_distance
+from nlgrd.nonlinear.stability.tangent import (  # noqa: F401  (importable from here)
+    _smooth_pieces,
+    _state_sequence,
+    _tangent_pieces,
+    _time_invariant,
+)
 from nlgrd.rotor.rigid_body import CONSTRAINT_RTOL
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -103,70 +109,6 @@ MAGNUS_COMMUTATOR = 1.0
 #: The estimate also compares, as sets, the multipliers within this fraction of the largest
 #: modulus (their position, not only max |μ|: a complex pair that is still turning).
 MAGNUS_LEADING = 0.1
-
-
-def _tangent_pieces(nonlinearities: Sequence, harmonics: NDArray, n: int) -> tuple[NDArray, NDArray]:
-    """Common breaks over [0, 2π] and the n x n tangent stiffness on each piece."""
-    segs = []
-    for nl in nonlinearities:
-        idx = list(nl.coords)
-        br, kt = nl.tangent_segments(harmonics[idx])
-        segs.append((idx, br, kt))
-    if all(kt.shape[0] == 1 for _, _, kt in segs):  # one state all period: no breaks inside
-        Kt = np.zeros((1, n, n))
-        for idx, _, kt in segs:
-            Kt[np.ix_([0], idx, idx)] += kt[:1]
-        return np.array([0.0, 2 * np.pi]), Kt
-    allb = [np.mod(br[:-1], 2 * np.pi) for _, br, _ in segs]
-    breaks = np.unique(np.concatenate([[0.0, 2 * np.pi], *allb])) if allb else np.array([0.0, 2 * np.pi])
-    breaks = breaks[np.append(True, np.diff(breaks) > 1e-14)]
-    mids = 0.5 * (breaks[:-1] + breaks[1:])
-    Kt = np.zeros((mids.size, n, n))
-    for idx, br, kt in segs:
-        rel = np.mod(mids - br[0], 2 * np.pi) + br[0]
-        seg = np.clip(np.searchsorted(br, rel, side="right") - 1, 0, kt.shape[0] - 1)
-        Kt[np.ix_(np.arange(mids.size), idx, idx)] += kt[seg]
-    return breaks, Kt
-
-
-def _smooth_pieces(nonlinearities: Sequence, harmonics: NDArray, n: int):
-    """Union breaks over one period of every law's exact breaks (contact changes), the
-    constant part of the n x n tangent per piece, and per piece the laws whose tangent
-    varies there: [(coords, tangent function)], or None when no law has a smooth tangent."""
-    if not any(hasattr(nl, "tangent_function") for nl in nonlinearities):
-        return None
-    parts, smooth = [], False
-    for nl in nonlinearities:
-        idx = list(nl.coords)
-        f = getattr(nl, "tangent_function", None)
-        if f is not None:
-            br, fn, var = f(harmonics[idx])
-            smooth |= bool(np.any(var))
-            parts.append((idx, np.asarray(br, dtype=float), None, fn, np.asarray(var, dtype=bool)))
-        else:
-            br, kt = nl.tangent_segments(harmonics[idx])
-            parts.append((idx, np.asarray(br, dtype=float), kt, None, None))
-    if not smooth:
-        return None
-    allb = [np.mod(br[:-1], 2 * np.pi) for _, br, *_ in parts]
-    breaks = np.unique(np.concatenate([[0.0, 2 * np.pi], *allb]))
-    breaks = breaks[np.append(True, np.diff(breaks) > 1e-14)]
-    mids = 0.5 * (breaks[:-1] + breaks[1:])
-    K0 = np.zeros((mids.size, n, n))
-    active: list[list] = [[] for _ in mids]
-    for idx, br, kt, fn, var in parts:
-        rel = np.mod(mids - br[0], 2 * np.pi) + br[0]
-        nseg = br.size - 1
-        seg = np.clip(np.searchsorted(br, rel, side="right") - 1, 0, nseg - 1)
-        if fn is None:
-            K0[np.ix_(np.arange(mids.size), idx, idx)] += kt[seg]
-            continue
-        v = var[seg]
-        if np.any(~v):
-            K0[np.ix_(np.flatnonzero(~v), idx, idx)] += fn(mids[~v])
-        for i in np.flatnonzero(v):
-            active[i].append((idx, fn))
-    return breaks, K0, active
 
 
 def _magnus_monodromy(
@@ -239,31 +181,6 @@ def _magnus_monodromy(
             U0[N:], V0t[:, :N] = prep.MW, prep.Wt / ws
             Es.append(interaction_piece(piece["A0"], U0, V0t, piece["Kbar"], p[2], p[1] / omega, piece))
     return _product(Es), counts
-
-
-def _state_sequence(breaks: NDArray, Kt: NDArray) -> tuple[list[NDArray], list[tuple[int, float]]]:
-    """Distinct tangents and the cyclic sequence (state, angle) with equal neighbours merged.
-
-    The last piece is merged into the first when both have the same tangent: the
-    monodromy matrices of cyclic shifts of the period are similar.
-    """
-    states: list[NDArray] = []
-    keys: dict[bytes, int] = {}
-    seq: list[tuple[int, float]] = []
-    for i in range(Kt.shape[0]):
-        key = Kt[i].tobytes()
-        if key not in keys:
-            keys[key] = len(states)
-            states.append(Kt[i])
-        s, dth = keys[key], float(breaks[i + 1] - breaks[i])
-        if seq and seq[-1][0] == s:
-            seq[-1] = (s, seq[-1][1] + dth)
-        else:
-            seq.append((s, dth))
-    if len(seq) > 1 and seq[0][0] == seq[-1][0]:
-        seq[0] = (seq[0][0], seq[0][1] + seq[-1][1])
-        seq.pop()
-    return states, seq
 
 
 class _Prepared:
@@ -602,9 +519,23 @@ def floquet_analysis(
     if method not in METHODS:
         raise ModelError("method", f"one of {', '.join(map(repr, METHODS))}, got {method!r}")
     Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
-    full, n = state_space.full, state_space.W.shape[1]
+    full = state_space.full
     if full is None or method == "expm":
         return _analysis(state_space, nonlinearities, Y, omega, deflate, method)
+    # a truncated basis: the model's store keeps each orbit's result (lift repeats converge_verdicts)
+    laws, memo = tuple(nonlinearities), state_space.cache
+    key = ("analysis", state_space.digest, float(omega), Y.shape, Y.tobytes(), bool(deflate), method)
+    hit = None if memo is None else memo.peek(key)
+    if hit is None or len(hit[0]) != len(laws) or any(a is not b for a, b in zip(hit[0], laws, strict=True)):
+        hit = (laws, _checked(state_space, laws, Y, omega, deflate, method))
+        if memo is not None:
+            memo.put(key, hit)
+    return replace(hit[1], multipliers=hit[1].multipliers.copy())
+
+
+def _checked(state_space, nonlinearities, Y: NDArray, omega: float, deflate: bool, method: str):
+    """:func:`floquet_analysis` on a truncated basis: the basis, twice its cut-off or the full state."""
+    full, n = state_space.full, state_space.W.shape[1]
     if _time_invariant(nonlinearities, Y, n):
         res = _analysis(state_space, nonlinearities, Y, omega, deflate, method)
         if state_space.keeps(float(np.max(np.abs(res.multipliers))), TRUNCATION_ATOL):
@@ -617,13 +548,6 @@ def floquet_analysis(
         if abs(top[1] - top[0]) <= TRUNCATION_ATOL and larger.keeps(top[1], TRUNCATION_ATOL):
             return big
     return _analysis(full(), nonlinearities, Y, omega, deflate, method)
-
-
-def _time_invariant(nonlinearities: Sequence, Y: NDArray, n: int) -> bool:
-    """Whether the orbit's tangent is one constant over the period (no contact change)."""
-    if _smooth_pieces(nonlinearities, Y, n) is not None:
-        return False
-    return len(_state_sequence(*_tangent_pieces(nonlinearities, Y, n))[0]) == 1
 
 
 def _analysis(state_space, nonlinearities, Y: NDArray, omega: float, deflate: bool, method: str, at=None):
