@@ -378,3 +378,34 @@ def test_certificate_cache_sees_the_damping(swept):
             cached = LinearStateSpace(s.M, s.D, s.K, s.W, cache=shared)
             assert fl._neutral_count(cached, kt, True) == plain[i]
             assert fl._neutral_count(cached, kt, True) == plain[i]  # the stored answer
+
+
+def test_truncated_basis_analysis_is_kept_per_orbit(swept):
+    """On a truncated basis (``full`` given) the result of an orbit is kept in the shared
+    cache: the same orbit again takes no new analysis and returns equal multipliers (a
+    copy: changing one leaves the kept one alone); another orbit, or the same numbers with
+    other law objects, is analysed afresh; every result equals the full state's own."""
+    model, pts = _points(swept)
+    nl = tuple(model.reduced.nonlinearities)
+    w, z = next((w, z) for w, z in pts if fl._tangent_pieces(nl, z, 1)[0].size > 2)
+    mats = model.receptance.state_space(w, model.max_mesh_frequency)
+    built = []
+
+    def full():
+        built.append(LinearStateSpace(*mats))
+        return built[-1]
+
+    ss = LinearStateSpace(*mats, cache=hb_state_space.FloquetCache(16), full=full)
+    with threadpool_limits(limits=1):
+        ref = fl.floquet_multipliers(LinearStateSpace(*mats), nl, z, w)
+        first = fl.floquet_multipliers(ss, nl, z, w)
+        first[:] = np.nan
+        again = fl.floquet_multipliers(ss, nl, z, w)
+        assert len(built) == 1
+        np.testing.assert_array_equal(again, ref)
+        np.testing.assert_array_equal(fl.floquet_multipliers(ss, [dc.replace(n) for n in nl], z, w), ref)
+        assert len(built) == 2
+        z2 = z.copy()
+        z2[..., 1] *= 1 + 1e-6
+        fl.floquet_multipliers(ss, nl, z2, w)
+        assert len(built) == 3

@@ -498,6 +498,8 @@ def floquet_analysis(
     on ``larger`` when max |μ| moved by at most :data:`TRUNCATION_ATOL` (the basis at the same
     Magnus steps), else on ``full`` (docs/conventions.md, "Stability state space"; a constant
     tangent keeps the basis); a basis only where its dropped modes' exceed its max |μ| by no more.
+    Its result is kept in the basis's shared ``cache`` per (state space, ω, orbit), and
+    returned again for the same orbit (the H' lift after the verdicts' check).
 
     Parameters
     ----------
