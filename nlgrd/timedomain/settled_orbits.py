@@ -3,8 +3,9 @@
 A sweep answers a point without a stable periodic response by integrating from its
 unstable orbit (:mod:`nlgrd.timedomain.sweep_answers`). Where the motion goes to a stable
 mesh-periodic orbit the sweep's landing missed (two_shaft at 1730.8 Hz up:
-tests/test_moved_verdicts.py), the record's last periods repeat. Such an answer is
-polished:
+tests/test_moved_verdicts.py), the record's last periods repeat. Such a record is
+polished, whether its transient cut lies in its first half (an answer) or not (a slow
+approach to the orbit, at 1730.8 Hz down):
 
 1. **Settled**: every link coordinate over the record's last period equals that over the
    period before to :data:`SETTLED_RTOL` of its range (:func:`settled`).
