@@ -24,7 +24,9 @@ balance orbit or at rest. The orbits are taken from the link engine's own sweep
   xfail below). The old path got there through a wrong multiplier (its basis gave the
   unstable orbit a real +1.62, a fold, which makes a sweep look for another orbit); the
   link engine's is the full state's complex pair, and a sweep leaves an unstable orbit
-  only at a real μ > 1.
+  only at a real μ > 1. The default ``nlgrd.sweep`` answers the point with the stable
+  orbit all the same: its time answer from the landing settles on it and is polished
+  into it (nlgrd.timedomain.settled_orbits).
 """
 
 from __future__ import annotations
@@ -163,13 +165,82 @@ def landed_1730(model):
 @pytest.mark.xfail(
     strict=True,
     raises=AssertionError,
-    reason="link engine lands at 1730.8 Hz up on an unstable orbit (max|mu| 1.0748) while a "
-    "stable one exists (time integration; the old single-mesh path's branch switch found it)",
+    reason="link_sweep lands at 1730.8 Hz up on an unstable orbit (max|mu| 1.0748) while a "
+    "stable one exists (time integration; the old single-mesh path's branch switch found it); "
+    "the default nlgrd.sweep answers the point with that stable orbit, polished from its time "
+    "answer (test_1730_hz_default_sweep_answers_the_stable_orbit)",
 )
 def test_1730_hz_up_sweep_answers_the_stable_orbit(landed_1730):
-    """The up sweep should answer 1730.8 Hz with the stable orbit that time integration
-    settles on (test above); it reports no stable response (docs/verification.md)."""
+    """link_sweep's own landing at 1730.8 Hz up should be the stable orbit that time
+    integration settles on (test above); it is the unstable one (docs/verification.md)."""
     assert landed_1730.stable[-1]
+
+
+@pytest.mark.slow  # three points (H chosen), two time answers (8192 periods at 1730.8 Hz): ~50 s
+def test_1730_hz_default_sweep_answers_the_stable_orbit(stable_1730):
+    """The default ``nlgrd.sweep`` (H chosen by its estimate, time answers on) over the same
+    three points up answers 1730.8 Hz with the stable orbit: its time answer, started from
+    the unstable landing, settles on a period-1 motion that the harmonic balance polishes
+    (:mod:`nlgrd.timedomain.settled_orbits`).
+
+    Reference: the orbit solved at H = 17 from the from-rest integration's settled period
+    (fixture ``stable_1730``, independent of the sweep and its landing; 3.516777 µm). The
+    row is "periodic", stable, without uncertainty, its truncation estimate within the
+    sweep's 5e-3 (measured 4.1e-4 at H = 7 against 9), and its DTE RMS within 1e-3 relative
+    of the reference's (measured 3.516595 µm, 5e-5: the H = 7 truncation; the unstable
+    landing is 12.8 µm, 3.6 x). 1682.1 Hz, whose time answer is chaotic (measured max|μ|
+    1.22 there, DTE RMS 12.75 µm ± 0.27), keeps its time answer.
+    """
+    from nlgrd.analyses import sweep
+    from nlgrd.nonlinear.results.response_kinds import CHAOTIC, TIME_DOMAIN
+    from nlgrd.nonlinear.tracing.harmonic_convergence import OUTPUT_RTOL
+
+    out = sweep(load_model(TWO_SHAFT), hz=GRID[13:16], directions="up")
+    r, frame = out.result, out.to_frame()
+    rms_a = float(np.std(sample(stable_1730[3].harmonics, 4096)[0]))
+    rms = float(r.metrics["dte_rms"][2])
+    print(
+        list(frame["response"]),
+        f"H {r.H}, error {r.harmonic_error[2]:.2e}; RMS {rms:.6e} reference {rms_a:.6e}",
+    )
+    assert frame["response"].iloc[2] == "periodic"
+    assert r.stable[2] and r.converged[2] and not r.no_stable[2] and int(r.period[2]) == 1
+    assert r.harmonic_error[2] <= OUTPUT_RTOL
+    assert np.isnan(frame["mesh0.dte_rms_uncertainty [um]"].iloc[2])
+    assert abs(rms / rms_a - 1) < 1e-3
+    assert frame["response"].iloc[1] in (TIME_DOMAIN, CHAOTIC)
+    assert frame["mesh0.dte_rms_uncertainty [um]"].iloc[1] > 0
+
+
+@pytest.mark.slow  # the 40-point down sweep (~30 s) and one time answer of 8192 periods (~30 s)
+def test_1730_hz_down_time_answer_settles_on_the_stable_orbit(model, stable_1730):
+    """1730.8 Hz down: the link engine lands on orbit C (max|μ| 1.33, a complex pair); the
+    integration from it approaches A so slowly that the transient cut sits at the record's
+    middle (measured 4097 of 8192 periods: unanswered before). Its last period repeats
+    the one before to 1e-6 of the range, and polished it is A: the point is "periodic",
+    stable, DTE RMS within 1e-3 relative of the reference (measured 3.516777 µm both, H =
+    17). Only this gap is asked (``no_stable`` kept at its row, as the studies' workers
+    split a sweep). Whether the cut falls just before or after the middle, the row is A.
+    """
+    import dataclasses as dc
+
+    from nlgrd.nonlinear.results.link_results import LinkSweepResult
+    from nlgrd.timedomain.sweep_answers import with_time_answers
+
+    down = link_sweep(model, 2 * np.pi * GRID, H, directions="down")
+    r = down.result
+    i = int(np.argmin(np.abs(r.omega - 2 * np.pi * GRID[15])))
+    assert r.no_stable[i] and r.floquet_max[i] > 1.3  # orbit C
+    keep = np.zeros(len(r), bool)
+    keep[i] = True
+    one = LinkSweepResult(dc.replace(r, no_stable=r.no_stable & keep), down.links, down.bearings)
+    out = with_time_answers(one, model)
+    rms_a = float(np.std(sample(stable_1730[3].harmonics, 4096)[0]))
+    rms = float(out.result.metrics["dte_rms"][i])
+    frame = out.to_frame()
+    print(frame["response"].iloc[i], f"DTE RMS {rms:.6e} m, reference {rms_a:.6e} m")
+    assert frame["response"].iloc[i] == "periodic" and out.result.stable[i]
+    assert abs(rms / rms_a - 1) < 1e-3
 
 
 @pytest.mark.slow  # shares the three-point sweep above

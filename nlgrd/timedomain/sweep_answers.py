@@ -6,15 +6,26 @@ time domain (:func:`with_time_answers`): every point where the harmonic balance
 converged on an orbit but no stable periodic response exists (``no_stable``: quasi-periodic
 or none) gets the statistics of :func:`nlgrd.timedomain.time_answer.time_answer`, started
 from that unstable orbit (its mesh-periodic part), and its ``response`` becomes
-"time domain" or "chaotic" with the values' sampling uncertainty beside them.
+"time domain" or "chaotic" with the values' sampling uncertainty beside them. On a link
+sweep (``nlgrd.sweep``) a record that settled on a period-1 motion (its last period
+repeats the one before to 1e-3 of each link coordinate's range; its transient cut in the
+first half or not: a slow approach to an orbit) is polished
+(:mod:`nlgrd.timedomain.settled_orbits`): the harmonic balance at the sweep's H solved
+from the last period's harmonics, its Floquet verdict, and, where the sweep chose H, its
+truncation estimate; where it converges, is stable, meets the sweep's tolerance and lies
+within 0.1 of each coordinate's range of the record (the integrator's step error), the
+row is that orbit ("periodic", its values and multipliers, no uncertainty), else the
+time answer stands (or the point stays unanswered). So a speed is answered by a stable
+periodic orbit wherever the integration from the sweep's unstable one finds it
+(two_shaft at 1730.8 Hz: tests/test_moved_verdicts.py).
 
 A point whose harmonic balance did not converge stays "not converged" (no orbit to start
 from); a point whose transient outlasts the record (its MSER-5 cut in the record's
 second half at ``max_periods``, or at twice that where a decision sat within noise of its
-threshold) stays unanswered, as it was. The linear bearings' displacements and forces
-are recorded along the integration (:mod:`nlgrd.timedomain.bearing_record`), so a
-time-answered row has the same bearing columns as a periodic one, each with its
-uncertainty.
+threshold) stays unanswered, unless that record settled on a stable orbit (above). The
+linear bearings' displacements and forces are recorded along the integration
+(:mod:`nlgrd.timedomain.bearing_record`), so a time-answered row has the same bearing
+columns as a periodic one, each with its uncertainty.
 """
 
 from __future__ import annotations
@@ -35,6 +46,7 @@ from nlgrd.nonlinear.results.metrics import METRIC_NAMES
 from nlgrd.nonlinear.results.response_kinds import QUASI_PERIODIC, uncertainty_column
 from nlgrd.nonlinear.results.sweep_results import SweepResult
 from nlgrd.nonlinear.tracing.harmonic_convergence import OUTPUT_RTOL
+from nlgrd.timedomain.settled_orbits import polish, with_orbits
 from nlgrd.timedomain.time_answer import TimeAnswer, time_answer
 
 __all__ = ["answer_gaps", "answer_sweep", "base_harmonics", "with_time_answers", "with_torus_answers"]
@@ -65,6 +77,7 @@ def answer_gaps(
     result: SweepResult,
     *,
     progress: Callable[[int, int], None] | None = None,
+    unfinished: dict[int, TimeAnswer] | None = None,
     **options,
 ) -> tuple[SweepResult, dict[int, TimeAnswer]]:
     """Time answers at the points of ``result`` without a stable periodic response.
@@ -78,6 +91,9 @@ def answer_gaps(
         The sweep (its harmonics of ω/``base`` on the link coordinates of ``model``).
     progress : callable, optional
         ``progress(done, total)`` after each point answered.
+    unfinished : dict, optional
+        Filled with the answers whose transient outlasts the record, by row (not
+        written: the settled orbit they may show is :func:`with_time_answers`'s).
     **options
         Options of :func:`~nlgrd.timedomain.time_answer.time_answer` (``max_periods``, ...).
 
@@ -99,6 +115,8 @@ def answer_gaps(
         a = time_answer(model, float(result.omega[i]), harmonics=z, **options)
         if a.transient_over:  # else not answered: the transient outlasts the cap
             answers[int(i)] = a
+        elif unfinished is not None:
+            unfinished[int(i)] = a
         if progress is not None:
             progress(n + 1, rows.size)
     if not answers:
@@ -159,15 +177,31 @@ def _link_frame(links: pd.DataFrame, answers: dict[int, TimeAnswer]) -> pd.DataF
     return out
 
 
+def _settled_orbits(model: LinkModel, res: SweepResult, answers: dict, rtol: float) -> dict:
+    """The polished stable orbits (:func:`nlgrd.timedomain.settled_orbits.polish`) of the
+    answers whose record settled on one, by row."""
+    H_check = None if res.H_check is None else int(res.H_check)
+    found = {}
+    for i, a in answers.items():
+        d = str(res.direction[i])
+        one = polish(model, float(res.omega[i]), a.tail, int(res.H), d, H_check=H_check, rtol=rtol)
+        if one is not None:
+            found[i] = one
+    return found
+
+
 def with_time_answers(
     result,
     model: LinkModel,
     *,
     progress: Callable[[int, int], None] | None = None,
+    orbit_rtol: float = OUTPUT_RTOL,
     **options,
 ):
     """A sweep's result (one mesh, a link model, or the bare points) with its gaps answered
-    in the time domain (:func:`answer_gaps`).
+    in the time domain (:func:`answer_gaps`); on a link sweep a record (answered, or its
+    transient outlasting it) that settled on a stable period-1 orbit is that orbit
+    (:mod:`nlgrd.timedomain.settled_orbits`).
 
     Parameters
     ----------
@@ -177,6 +211,8 @@ def with_time_answers(
         Its model as a link model.
     progress : callable, optional
         ``progress(done, total)`` after each point answered.
+    orbit_rtol : float
+        The sweep's tolerance on a polished orbit's truncation estimate [-].
     **options
         Options of :func:`~nlgrd.timedomain.time_answer.time_answer`.
 
@@ -191,8 +227,11 @@ def with_time_answers(
         bearings, unc = _bearing_response(result, answers)
         return dc.replace(result, mesh=res, bearings=bearings, bearing_uncertainty=unc)
     if isinstance(result, LinkSweepResult):
-        res, answers = answer_gaps(model, result.result, progress=progress, **options)
-        return LinkSweepResult(res, _link_frame(result.links, answers), result.bearings)
+        unfinished: dict[int, TimeAnswer] = {}
+        res, answers = answer_gaps(model, result.result, progress=progress, unfinished=unfinished, **options)
+        orbits = _settled_orbits(model, res, {**answers, **unfinished}, orbit_rtol)
+        timed = {i: a for i, a in answers.items() if i not in orbits}
+        return with_orbits(LinkSweepResult(res, _link_frame(result.links, timed), result.bearings), orbits)
     return answer_gaps(model, result, progress=progress, **options)[0]
 
 
@@ -447,4 +486,4 @@ def answer_sweep(
         from nlgrd.nonlinear.models.link_model import build_link_model
 
         model = build_link_model(system)
-    return with_time_answers(result, model, progress=progress, **options)
+    return with_time_answers(result, model, progress=progress, orbit_rtol=rtol, **options)

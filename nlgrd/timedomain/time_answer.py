@@ -84,6 +84,8 @@ LYAPUNOV_BAND = 2.0
 NEAR_BOUND = 0.4
 #: Fewest periods of a record [-].
 MIN_PERIODS = 4 * BATCHES
+#: Periods at the record's end a :class:`TimeAnswer` keeps (``tail``) [-].
+TAIL = 4
 
 
 @dataclass(frozen=True)
@@ -129,6 +131,9 @@ class TimeAnswer:
         RMS of their alternating parts, the mean force's magnitude) and
         ``displacement_mean [m]`` and ``force_amplitude [N]`` (the base harmonic of the
         synchronous average, the larger of y and z) of a geared sweep's.
+    tail : ndarray (p, d, steps)
+        The link coordinates over the record's last :data:`TAIL` periods (whether the
+        motion settled on a periodic orbit: :mod:`nlgrd.timedomain.settled_orbits`) [m].
     """
 
     omega: float
@@ -144,6 +149,7 @@ class TimeAnswer:
     state: tuple = field(repr=False, default=())
     transient_over: bool = True
     bearings: dict = field(default_factory=dict)
+    tail: NDArray = field(repr=False, default_factory=lambda: np.empty((0, 0, 0)))
 
 
 def _rms(mean: NDArray, msq: NDArray) -> Estimate:
@@ -623,4 +629,5 @@ def time_answer(
         (s[:N].copy(), s[N : 2 * N].copy(), s[2 * N : 3 * N].copy()),
         v.cuts_ok,
         v.bearings,
+        np.array(rec.y_sums[-TAIL:]),
     )
