@@ -41,6 +41,7 @@ FIRST = (
     "test_shaft_orders",
     "test_geared_time_domain",
     "test_orbit_search",
+    "test_moved_verdicts",
 )
 
 #: Modules that keep the default BLAS threads (see :func:`one_blas_thread`):
