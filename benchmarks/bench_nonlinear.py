@@ -88,6 +88,7 @@ from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep
 from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
+from nlgrd.nonlinear.stability.tangent import tangent_pieces
 from nlgrd.rotor.system import refined
 from nlgrd.timedomain.geared import time_response
 
@@ -602,7 +603,7 @@ def floquet_side_by_side(model, result, cfg) -> None:
         if not ok:
             continue
         # the contact intervals of these harmonics, cached as after the sweep's last Newton step
-        rec["loss"].append(nl_floquet._tangent_pieces(nl, z, 1)[0].size > 2)
+        rec["loss"].append(tangent_pieces(nl, z, 1)[0].size > 2)
         t0 = time.perf_counter()
         mats = model.receptance.state_space(float(w), top)
         t1 = time.perf_counter()

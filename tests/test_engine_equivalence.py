@@ -589,7 +589,8 @@ def _against_full_state(lk, res) -> tuple[float, int, int]:
     equal verdicts; and how many points had a constant tangent (on the basis) and how many
     a varying one (on the full state)."""
     from nlgrd.nonlinear.results.sweep_results import STABLE_RTOL
-    from nlgrd.nonlinear.stability.floquet import _time_invariant, floquet_multipliers
+    from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+    from nlgrd.nonlinear.stability.tangent import time_invariant
 
     rec, laws = lk.receptance, lk.reduced.nonlinearities
     worst, constant, varying = 0.0, 0, 0
@@ -601,7 +602,7 @@ def _against_full_state(lk, res) -> tuple[float, int, int]:
         top = float(np.max(np.abs(mu)))
         worst = max(worst, abs(top - float(res.floquet_max[i])))
         assert (top < 1 + STABLE_RTOL) == bool(res.stable[i])
-        if _time_invariant(laws, z, rec.n_coords):
+        if time_invariant(laws, z, rec.n_coords):
             constant += 1
         else:
             varying += 1

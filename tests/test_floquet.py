@@ -42,6 +42,7 @@ from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep
 from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
+from nlgrd.nonlinear.stability.tangent import tangent_pieces
 from nlgrd.rotor.rigid_body import rigid_body_modes
 
 TWO_SHAFT = Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml"
@@ -88,7 +89,7 @@ def test_verdicts_and_max_modulus_equal_the_reference_monodromy(swept):
             new.append(np.max(np.abs(mu)))
             again = fl.floquet_multipliers(LinearStateSpace(*mats, cache=shared), nl, z, w)
             reuse.append(np.max(np.abs(again)))
-            lti.append(fl._tangent_pieces(nl, z, 1)[0].size == 2)
+            lti.append(tangent_pieces(nl, z, 1)[0].size == 2)
             if lti[-1]:
                 np.testing.assert_array_equal(mu, np.ones(1))
     old, new, reuse, lti = map(np.array, (old, new, reuse, lti))
@@ -123,7 +124,7 @@ def test_dense_method_gives_every_multiplier_of_the_reference(swept):
     nl = model.reduced.nonlinearities
     kinds = {}
     for w, z in pts:
-        kinds.setdefault(fl._tangent_pieces(nl, z, 1)[0].size > 2, (w, z))
+        kinds.setdefault(tangent_pieces(nl, z, 1)[0].size > 2, (w, z))
     assert len(kinds) == 2
     with threadpool_limits(limits=1):
         for w, z in kinds.values():
@@ -157,7 +158,7 @@ def test_certificate_refuses_circulatory_stiffness(swept):
     1e-8 relative (a small random skew part, 1e-9 of the largest stiffness)."""
     model, pts = _points(swept)
     nl = model.reduced.nonlinearities
-    w, z = next((w, z) for w, z in pts if fl._tangent_pieces(nl, z, 1)[0].size == 2)
+    w, z = next((w, z) for w, z in pts if tangent_pieces(nl, z, 1)[0].size == 2)
     ss = model.reduced.linear_state_space(w)
     rng = np.random.default_rng(1)
     S = rng.standard_normal(ss.K.shape)
@@ -387,7 +388,7 @@ def test_truncated_basis_analysis_is_kept_per_orbit(swept):
     other law objects, is analysed afresh; every result equals the full state's own."""
     model, pts = _points(swept)
     nl = tuple(model.reduced.nonlinearities)
-    w, z = next((w, z) for w, z in pts if fl._tangent_pieces(nl, z, 1)[0].size > 2)
+    w, z = next((w, z) for w, z in pts if tangent_pieces(nl, z, 1)[0].size > 2)
     mats = model.receptance.state_space(w, model.max_mesh_frequency)
     built = []
 

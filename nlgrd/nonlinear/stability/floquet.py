@@ -64,12 +64,7 @@ from nlgrd.nonlinear.reduction.linear_algebra import (
     psd_to_tolerance,
 )
 from nlgrd.nonlinear.stability.magnus_steps import interaction_piece, set_distance
-from nlgrd.nonlinear.stability.tangent import (  # noqa: F401  (importable from here)
-    _smooth_pieces,
-    _state_sequence,
-    _tangent_pieces,
-    _time_invariant,
-)
+from nlgrd.nonlinear.stability.tangent import smooth_pieces, state_sequence, tangent_pieces, time_invariant
 from nlgrd.rotor.rigid_body import CONSTRAINT_RTOL
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -538,7 +533,7 @@ def floquet_analysis(
 def _checked(state_space, nonlinearities, Y: NDArray, omega: float, deflate: bool, method: str):
     """:func:`floquet_analysis` on a truncated basis: the basis, twice its cut-off or the full state."""
     full, n = state_space.full, state_space.W.shape[1]
-    if _time_invariant(nonlinearities, Y, n):
+    if time_invariant(nonlinearities, Y, n):
         res = _analysis(state_space, nonlinearities, Y, omega, deflate, method)
         if state_space.keeps(float(np.max(np.abs(res.multipliers))), TRUNCATION_ATOL):
             return res
@@ -556,18 +551,18 @@ def _analysis(state_space, nonlinearities, Y: NDArray, omega: float, deflate: bo
     """:func:`floquet_analysis` on ``state_space`` as it is (not its ``full`` one); a
     Magnus product at ``at`` steps per piece alone when given (no refinement)."""
     if method != "expm":
-        pieces = _smooth_pieces(nonlinearities, Y, state_space.W.shape[1])
+        pieces = smooth_pieces(nonlinearities, Y, state_space.W.shape[1])
         if pieces is not None:
             dominant = method == "auto" and 2 * state_space.M.shape[0] > DENSE_STATE_LIMIT
             ss = state_space.deflated if deflate else state_space
             return _magnus(ss, pieces, omega, dominant, (Y.shape[1] - 1) // 2, at)
     if method == "expm":
         ss = state_space.deflated if deflate else state_space
-        breaks, Kt = _tangent_pieces(nonlinearities, Y, ss.W.shape[1])
+        breaks, Kt = tangent_pieces(nonlinearities, Y, ss.W.shape[1])
         return FloquetResult(_expm_reference(ss, breaks, Kt, omega), Kt.shape[0])
-    breaks, Kt = _tangent_pieces(nonlinearities, Y, state_space.W.shape[1])
+    breaks, Kt = tangent_pieces(nonlinearities, Y, state_space.W.shape[1])
     period = (breaks[-1] - breaks[0]) / omega
-    states, seq = _state_sequence(breaks, Kt)
+    states, seq = state_sequence(breaks, Kt)
     dominant = method == "auto" and 2 * state_space.M.shape[0] > DENSE_STATE_LIMIT
     if dominant and len(states) == 1:
         r = _neutral_count(state_space, states[0], deflate)
@@ -685,7 +680,7 @@ def monodromy(
     """
     ss = state_space.deflated
     Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
-    states, seq = _state_sequence(*_tangent_pieces(nonlinearities, Y, ss.W.shape[1]))
+    states, seq = state_sequence(*tangent_pieces(nonlinearities, Y, ss.W.shape[1]))
     times = np.array([dth for _, dth in seq]) / omega
     return _product(_exponentials(_prepared(ss), states, seq, times)[0])
 

@@ -16,7 +16,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from nlgrd.nonlinear.results.sweep_results import instability_kind
-from nlgrd.nonlinear.stability.floquet import _tangent_pieces, expm_monodromy
+from nlgrd.nonlinear.stability.floquet import expm_monodromy
+from nlgrd.nonlinear.stability.tangent import tangent_pieces
 
 
 @dataclass(frozen=True)
@@ -73,7 +74,7 @@ def monodromy_from_zero(
     Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
     if getattr(state_space, "full", None) is not None:  # a truncated basis: the whole model's
         state_space = state_space.full()
-    breaks, Kt = _tangent_pieces(nonlinearities, Y, state_space.W.shape[1])
+    breaks, Kt = tangent_pieces(nonlinearities, Y, state_space.W.shape[1])
     return expm_monodromy(state_space, breaks, Kt, omega)
 
 

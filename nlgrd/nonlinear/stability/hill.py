@@ -11,7 +11,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from nlgrd.nonlinear.stability.floquet import _tangent_pieces, floquet_multipliers
+from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.nonlinear.stability.tangent import tangent_pieces
 
 if TYPE_CHECKING:  # pragma: no cover
     from nlgrd.nonlinear.hb.harmonic_balance import HarmonicSolution, ReducedModel
@@ -39,7 +40,7 @@ def tangent_spectrum(nonlinearities: Sequence, harmonics: ArrayLike, n: int, n_m
         T_m at index n_max + m [N/m].
     """
     Y = np.atleast_2d(np.asarray(harmonics, dtype=float))
-    breaks, Kt = _tangent_pieces(nonlinearities, Y, n)
+    breaks, Kt = tangent_pieces(nonlinearities, Y, n)
     m = np.arange(-n_max, n_max + 1)
     t1, t2 = breaks[:-1], breaks[1:]
     w = np.empty((m.size, t1.size), dtype=complex)
