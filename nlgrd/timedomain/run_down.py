@@ -1,13 +1,14 @@
 """Time integration of the full geared FE model under a speed ramp: a rig's slow run-up or
 run-down, the independent judge of which branch a slow sweep follows through a jump.
 
-The equations are those of :func:`nlgrd.timedomain.geared.time_response` (the harmonic
-balance's: M q'' + D(Ω) q' + K(Ω) q = F0 - w W, W = k f(δ - e(θ)) + c_m (δ' - e')), with
-the mesh frequency ω(t) = ω_0 - r t ramped linearly and the mesh phase its integral,
-θ(t) = ω_0 t - r t²/2, so the LSTE e(θ(t)) and its rate e' = ω(t) de/dθ follow the speed
-as they do on a rig whose motor is slowed down.
+The equations are those of the link model of one gear mesh (:func:`nlgrd.analyses.model`;
+its harmonic balance's: M q'' + D(Ω) q' + K(Ω) q = F0 - w W, W = k f(δ - e(θ)) +
+c_m (δ' - e'), δ = wᵀq the mesh link's coordinate), with the base (mesh) frequency
+ω(t) = ω_0 - r t ramped linearly and the phase its integral, θ(t) = ω_0 t - r t²/2, so the
+LSTE e(θ(t)) and its rate e' = ω(t) de/dθ follow the speed as they do on a rig whose motor
+is slowed down.
 
-Method: the HHT-α recurrence of :func:`nlgrd.timedomain.geared.integrate_fe` with a
+Method: the HHT-α recurrence of :class:`nlgrd.timedomain.links.LinkIntegrator` with a
 fixed step Δt = 2π / (ω_0 steps_per_period) throughout (finer per mesh cycle as the speed
 falls). The forcing c_m e' enters along w exactly as the mesh force does with the
 opposite sign, so the step sees one scalar force along w, G = g(δ - e) - c_m e', and the
@@ -19,7 +20,7 @@ block map was built and rebuilt whenever the speed has moved by ``speed_rtol``.
 
 The ramp starts from the periodic steady state at ω_0 (integrated first at constant speed
 from ``state0``, e.g. a harmonic-balance orbit from
-:func:`nlgrd.timedomain.geared.start_from_harmonics`), and each mesh cycle (θ from 2πk to
+:func:`nlgrd.timedomain.links.start_from_harmonics`), and each mesh cycle (θ from 2πk to
 2π(k+1)) is summarised: mean and RMS of the alternating DTE, the largest mesh force, the
 contact-loss fraction.
 """
@@ -33,12 +34,13 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.models.geared import GearedModel
+from nlgrd.nonlinear.links.contract import GearMeshLink
+from nlgrd.nonlinear.models.link_model import LinkModel
 from nlgrd.threads import single_blas_thread
-from nlgrd.timedomain.geared import time_response
 from nlgrd.timedomain.integrator import hht_step
-from nlgrd.timedomain.links import backlash_force
+from nlgrd.timedomain.links import backlash_force, link_time_response
 from nlgrd.timedomain.period_map import PeriodMap
+from nlgrd.units import column
 
 
 @dataclass(frozen=True)
@@ -65,6 +67,8 @@ class RampResult:
         Reference (pinion) speed per mesh frequency, Ω/ω [-].
     static_load : float
         W_0 [N].
+    link : str
+        The gear mesh's link name, the owner of its columns (``mesh0.dte_rms [um]``).
     """
 
     omega: NDArray
@@ -77,6 +81,7 @@ class RampResult:
     dt: float
     speed_per_mesh_frequency: float
     static_load: float
+    link: str = "mesh0"
 
     @property
     def rpm(self) -> NDArray:
@@ -123,16 +128,18 @@ class RampResult:
         return float(self.omega[hit[0]]) if hit.size else None
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per mesh cycle, units in the column names."""
+        """One row per mesh cycle, units in the column names (docs/conventions.md, "Column
+        names": the mesh's outputs ``<link>.<quantity> [unit]``)."""
+        mesh = self.link
         return pd.DataFrame(
             {
                 "time [s]": self.time,
-                "pinion_speed [rpm]": self.rpm,
+                "shaft_speed [rpm]": self.rpm,
                 "mesh_frequency [Hz]": self.omega / (2 * np.pi),
-                "dte_mean [um]": self.dte_mean * 1e6,
-                "dte_rms [um]": self.dte_rms * 1e6,
-                "elastic_force_max [N]": self.force_max,
-                "contact_loss_fraction [-]": self.contact_loss_fraction,
+                column("dte_mean", "um", mesh): self.dte_mean * 1e6,
+                column("dte_rms", "um", mesh): self.dte_rms * 1e6,
+                column("elastic_force_max", "N", mesh): self.force_max,
+                column("contact_loss_fraction", "-", mesh): self.contact_loss_fraction,
             }
         )
 
@@ -174,15 +181,29 @@ class _CycleStats:
         np.maximum.at(self.fmax, cycle, g)
 
 
-def _block_map(lm, w, F0, speed: float, dt: float, alpha: float, block: int):
-    """The HHT step and the :class:`PeriodMap` of ``block`` steps at reference speed ``speed``."""
-    step = hht_step(lm.M, lm.damping(speed), lm.stiffness(speed), dt, alpha)
+def _mesh_link(model: LinkModel) -> GearMeshLink:
+    """The one gear mesh of ``model``; a ramp of other links is not built (one line)."""
+    links = tuple(model.links)
+    if len(links) != 1 or not isinstance(links[0], GearMeshLink) or model.system.unbalance:
+        raise ModelError(
+            "gear_pairs",
+            "a speed ramp is built for one gear mesh, the model's only link and only excitation "
+            f"besides static loads; this model has links {[lk.name for lk in links]}"
+            + (" and unbalance" if model.system.unbalance else ""),
+        )
+    return links[0]
+
+
+def _block_map(lm, c_link, w, F0, speed: float, dt: float, alpha: float, block: int):
+    """The HHT step and the :class:`PeriodMap` of ``block`` steps at reference speed ``speed``
+    (the velocity matrix with the mesh's viscous damping ``c_link``)."""
+    step = hht_step(lm.M, lm.damping(speed) + c_link, lm.stiffness(speed), dt, alpha)
     return step, PeriodMap(step, alpha, w[:, None], np.tile(F0, (block, 1)))
 
 
 @single_blas_thread
 def run_down(
-    model: GearedModel,
+    model: LinkModel,
     omega_start: float,
     omega_stop: float,
     rate: float,
@@ -198,8 +219,9 @@ def run_down(
 
     Parameters
     ----------
-    model : GearedModel
-        The model (:func:`nlgrd.nonlinear.models.geared.build_geared_model`), no hysteretic damping.
+    model : LinkModel
+        The model (:func:`nlgrd.analyses.model`): one gear mesh, its only link and only
+        excitation besides static loads; no hysteretic damping.
     omega_start, omega_stop : float
         Mesh frequency at the start and the end of the ramp [rad/s], ``omega_stop`` <
         ``omega_start`` (a run-down).
@@ -214,7 +236,7 @@ def run_down(
         HHT-α parameter in [-1/3, 0] [-].
     tol : float
         Steady-state tolerance of the settling run at ``omega_start``
-        (:func:`nlgrd.timedomain.geared.integrate_fe`) [-].
+        (:func:`nlgrd.timedomain.links.link_time_response`) [-].
     block : int
         Steps per block map [-].
     speed_rtol : float
@@ -228,13 +250,17 @@ def run_down(
     Raises
     ------
     ModelError
-        ``rate`` not positive or ``omega_stop`` not below ``omega_start``.
+        ``rate`` not positive or ``omega_stop`` not below ``omega_start``; a model that is
+        not one gear mesh (:func:`ramp_from`).
     """
     if not rate > 0:
         raise ModelError("rate", f"a run-down needs a positive rate, got {rate}")
     if not 0 < omega_stop < omega_start:
         raise ModelError("omega_stop", f"must lie in (0, omega_start = {omega_start}), got {omega_stop}")
-    settled = time_response(model, omega_start, steps_per_period=steps_per_period, tol=tol, state0=state0)
+    _mesh_link(model)
+    settled = link_time_response(
+        model, omega_start, steps_per_period=steps_per_period, tol=tol, state0=state0, max_periods=4000
+    )
     duration = (omega_start - omega_stop) / rate
     return ramp_from(
         model, settled.state, omega_start, rate, duration, steps_per_period, alpha, block, speed_rtol
@@ -243,7 +269,7 @@ def run_down(
 
 @single_blas_thread
 def ramp_from(
-    model: GearedModel,
+    model: LinkModel,
     state: tuple,
     omega_start: float,
     rate: float,
@@ -258,8 +284,8 @@ def ramp_from(
 
     Parameters
     ----------
-    model : GearedModel
-        The model.
+    model : LinkModel
+        The model: one gear mesh (:func:`run_down`).
     state : tuple (q, q', q'')
         State at θ = 0 [m, m/s, m/s²].
     omega_start : float
@@ -275,13 +301,15 @@ def ramp_from(
     -------
     RampResult
     """
-    lm = model.receptance.model
+    link = _mesh_link(model)
+    rec = model.receptance
+    lm = rec.model
     if lm.hysteretic_parts:
         raise ModelError(
             "loss_factor", "hysteretic shaft damping has no time-domain form; use viscous damping"
         )
-    mesh, rec = model.mesh, model.receptance
-    w = np.asarray(rec.W[:, 0], dtype=float)
+    mesh = link.mesh
+    w = np.asarray(rec.P[:, 0], dtype=float)
     F0 = np.asarray(rec.static_force, dtype=float).reshape(-1)
     b, c_m = mesh.half_backlash, mesh.damping
     w0 = float(omega_start)
@@ -297,8 +325,9 @@ def ramp_from(
     theta_end = w0 * n_blocks * block * dt
     stats = _CycleStats(int(theta_end / (2 * np.pi)) + 2)
 
-    speed_built = rec.speed(w0)
-    step, pmap = _block_map(lm, w, F0, speed_built, dt, alpha, block)
+    speed_of = rec.plan.speed
+    speed_built = speed_of(w0)
+    step, pmap = _block_map(lm, rec.C_link, w, F0, speed_built, dt, alpha, block)
     u = np.asarray(state[0], dtype=float)
 
     def forcing(t):
@@ -319,9 +348,9 @@ def ramp_from(
     for nb in range(n_blocks):
         t_next = dt * (nb * block + 1 + np.arange(block))  # the ends of the block's steps
         om_mid = w0 - rate * dt * (nb + 0.5) * block
-        if abs(rec.speed(om_mid) - speed_built) > speed_rtol * speed_built:
-            speed_built = rec.speed(om_mid)
-            step, pmap = _block_map(lm, w, F0, speed_built, dt, alpha, block)
+        if abs(speed_of(om_mid) - speed_built) > speed_rtol * speed_built:
+            speed_built = speed_of(om_mid)
+            step, pmap = _block_map(lm, rec.C_link, w, F0, speed_built, dt, alpha, block)
         apcw = step.ap * float(pmap.S[0, 0])
         _, _, e_n, k_n, f_n = forcing(t_next)
         e_l, k_l, f_l = e_n.tolist(), k_n.tolist(), f_n.tolist()
@@ -355,6 +384,7 @@ def ramp_from(
         contact_loss_fraction=loss[idx] / n,
         rate=float(rate),
         dt=dt,
-        speed_per_mesh_frequency=rec.speed_per_mesh_frequency,
+        speed_per_mesh_frequency=rec.plan.speed_per_base,
         static_load=float(mesh.static_load),
+        link=link.name,
     )
