@@ -387,3 +387,36 @@ def campbell(
                         }
                     )
     return CampbellResult(speeds, F, Z, W, Kd, orders, crit)
+
+
+def gear_pair_mode(system: RotorSystem, speed: float = 0.0, n_modes: int = 40) -> tuple[float, float]:
+    """Natural frequency [Hz] of the gear-pair mode and its mesh strain-energy fraction.
+
+    The mode of the linear system (mesh at k_h) whose share of strain energy in the mesh
+    spring, k_h |wᵀφ|² / φᴴ K φ, is largest: where the mesh frequency meets it, the main
+    resonance of the gear dynamics lies.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        With at least one gear pair (the first mesh is used).
+    speed : float
+        Reference shaft speed Ω of the modal analysis [rad/s].
+    n_modes : int
+        Number of modes computed.
+
+    Returns
+    -------
+    frequency : float
+        Undamped natural frequency of the gear-pair mode [Hz].
+    fraction : float
+        Its share of strain energy in the mesh spring [-].
+    """
+    lm = assemble(system)
+    res = modal_analysis(lm, speed=speed, n_modes=n_modes, damped=False)
+    link = lm.meshes[0]
+    phi = res.shapes
+    strain = np.real(np.einsum("ij,ij->j", np.conj(phi), lm.stiffness(speed) @ phi))
+    frac = link.stiffness * np.abs(link.w @ phi) ** 2 / strain
+    j = int(np.argmax(frac))
+    return float(res.natural_frequencies[j]), float(frac[j])

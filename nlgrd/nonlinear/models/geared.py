@@ -26,8 +26,9 @@ from nlgrd.errors import ModelError
 from nlgrd.nonlinear.fourier.harmonics import real_to_complex
 from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh
-from nlgrd.nonlinear.laws.mesh_law import gear_mesh_force, mesh_law
+from nlgrd.nonlinear.laws.mesh_law import gear_mesh_force
 from nlgrd.nonlinear.models.link_model import check_stability_damping
+from nlgrd.nonlinear.models.sdof import sdof_model  # noqa: F401  (moved; importers follow at the deletion)
 from nlgrd.nonlinear.reduction.receptance import MeshReceptance
 from nlgrd.nonlinear.reduction.state_space import FloquetCache, LinearStateSpace
 from nlgrd.nonlinear.results.bearing_loads import (
@@ -49,6 +50,7 @@ from nlgrd.nonlinear.tracing.harmonic_convergence import (
     next_harmonics,
 )
 from nlgrd.nonlinear.tracing.sweep import sweep
+from nlgrd.rotor.modal import gear_pair_mode  # noqa: F401  (moved; importers follow at the deletion)
 from nlgrd.rotor.system import RotorSystem
 
 
@@ -486,93 +488,3 @@ def _ladder(model: GearedModel) -> tuple[int, ...]:
             f"choosing H needs a model built for H >= {LADDER[1]} (ladder {LADDER}); it has H = {model.H}",
         )
     return ladder
-
-
-def sdof_model(system: RotorSystem):
-    """The single-DOF gear pair of ``system``'s mesh (Özgüven & Houser 1988; the paper's DYTE).
-
-    m_eq from the disks at the gear nodes, k_h, c_m, b, W_0 and the LSTE of the gear pair
-    (mean removed): the model the paper compares NLGRD with. Returns
-    :class:`nlgrd.nonlinear.models.sdof.SDOFGearPair`.
-
-    Parameters
-    ----------
-    system : RotorSystem
-        With exactly one gear pair.
-
-    Returns
-    -------
-    SDOFGearPair
-        m_eq [kg], k_h [N/m], b [m], W_0 [N], c_m [N s/m] and 30 LSTE harmonics [m]; with a
-        varying mesh stiffness its ρ(θ) and the effective unloaded error of
-        :func:`~nlgrd.nonlinear.laws.mesh_law.mesh_law`.
-
-    Raises
-    ------
-    ModelError
-        Not exactly one gear pair, or a varying mesh stiffness with errors that differ from
-        tooth to tooth (the single-DOF model is mesh-periodic).
-    """
-    from nlgrd.nonlinear.models.sdof import SDOFGearPair
-
-    if len(system.gear_pairs) != 1:
-        raise ModelError("gear_pairs", "the single-DOF model needs exactly one gear pair")
-    gp = system.gear_pairs[0]
-    ex = gp.excitation(30)
-    lste = np.empty(2 * len(ex.a) + 1)
-    lste[0] = ex.e0
-    lste[1::2], lste[2::2] = ex.a, ex.b
-    rho = np.ones(1)
-    if gp.stiffness_harmonics() is not None:
-        if gp.error_period != 1:
-            raise ModelError(
-                "stiffness_file" if gp.stiffness_file is not None else "stiffness_variation",
-                "the single-DOF model is mesh-periodic: a varying mesh stiffness with errors that "
-                f"repeat every {gp.error_period} mesh cycles needs the FE model (shaft_order_sweep)",
-            )
-        lste, rho = mesh_law(gp, 30)  # the effective unloaded error with k_h ρ(θ)
-    return SDOFGearPair(
-        mass=gp.equivalent_mass(system),
-        mesh_stiffness=gp.stiffness(),
-        half_backlash=gp.half_backlash,
-        static_load=gp.static_load,
-        lste=lste,
-        damping=gp.damping_coefficient(system),
-        stiffness_variation=rho,
-    )
-
-
-def gear_pair_mode(system: RotorSystem, speed: float = 0.0, n_modes: int = 40) -> tuple[float, float]:
-    """Natural frequency [Hz] of the gear-pair mode and its mesh strain-energy fraction.
-
-    The mode of the linear system (mesh at k_h) whose share of strain energy in the mesh
-    spring, k_h |wᵀφ|² / φᴴ K φ, is largest: where the mesh frequency meets it, the main
-    resonance of the gear dynamics lies.
-
-    Parameters
-    ----------
-    system : RotorSystem
-        With at least one gear pair (the first mesh is used).
-    speed : float
-        Reference shaft speed Ω of the modal analysis [rad/s].
-    n_modes : int
-        Number of modes computed.
-
-    Returns
-    -------
-    frequency : float
-        Undamped natural frequency of the gear-pair mode [Hz].
-    fraction : float
-        Its share of strain energy in the mesh spring [-].
-    """
-    from nlgrd.rotor.assembly import assemble
-    from nlgrd.rotor.modal import modal_analysis
-
-    lm = assemble(system)
-    res = modal_analysis(lm, speed=speed, n_modes=n_modes, damped=False)
-    link = lm.meshes[0]
-    phi = res.shapes
-    strain = np.real(np.einsum("ij,ij->j", np.conj(phi), lm.stiffness(speed) @ phi))
-    frac = link.stiffness * np.abs(link.w @ phi) ** 2 / strain
-    j = int(np.argmax(frac))
-    return float(res.natural_frequencies[j]), float(frac[j])

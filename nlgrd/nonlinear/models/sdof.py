@@ -25,8 +25,10 @@ from nlgrd.nonlinear.fourier.harmonics import real_to_complex, resize_harmonics
 from nlgrd.nonlinear.fourier.periods import spread
 from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh, ParametricMesh
+from nlgrd.nonlinear.laws.mesh_law import mesh_law
 from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
 from nlgrd.nonlinear.results.metrics import PointMetrics
+from nlgrd.rotor.system import RotorSystem
 
 
 @dataclass(frozen=True)
@@ -201,3 +203,55 @@ class SDOFGearPair:
         out[0] = Y[0].real
         out[1::2], out[2::2] = Y[1:].real, -Y[1:].imag
         return out
+
+
+def sdof_model(system: RotorSystem):
+    """The single-DOF gear pair of ``system``'s mesh (Özgüven & Houser 1988; the paper's DYTE).
+
+    m_eq from the disks at the gear nodes, k_h, c_m, b, W_0 and the LSTE of the gear pair
+    (mean removed): the model the paper compares NLGRD with. Returns
+    :class:`nlgrd.nonlinear.models.sdof.SDOFGearPair`.
+
+    Parameters
+    ----------
+    system : RotorSystem
+        With exactly one gear pair.
+
+    Returns
+    -------
+    SDOFGearPair
+        m_eq [kg], k_h [N/m], b [m], W_0 [N], c_m [N s/m] and 30 LSTE harmonics [m]; with a
+        varying mesh stiffness its ρ(θ) and the effective unloaded error of
+        :func:`~nlgrd.nonlinear.laws.mesh_law.mesh_law`.
+
+    Raises
+    ------
+    ModelError
+        Not exactly one gear pair, or a varying mesh stiffness with errors that differ from
+        tooth to tooth (the single-DOF model is mesh-periodic).
+    """
+    if len(system.gear_pairs) != 1:
+        raise ModelError("gear_pairs", "the single-DOF model needs exactly one gear pair")
+    gp = system.gear_pairs[0]
+    ex = gp.excitation(30)
+    lste = np.empty(2 * len(ex.a) + 1)
+    lste[0] = ex.e0
+    lste[1::2], lste[2::2] = ex.a, ex.b
+    rho = np.ones(1)
+    if gp.stiffness_harmonics() is not None:
+        if gp.error_period != 1:
+            raise ModelError(
+                "stiffness_file" if gp.stiffness_file is not None else "stiffness_variation",
+                "the single-DOF model is mesh-periodic: a varying mesh stiffness with errors that "
+                f"repeat every {gp.error_period} mesh cycles needs the FE model (shaft_order_sweep)",
+            )
+        lste, rho = mesh_law(gp, 30)  # the effective unloaded error with k_h ρ(θ)
+    return SDOFGearPair(
+        mass=gp.equivalent_mass(system),
+        mesh_stiffness=gp.stiffness(),
+        half_backlash=gp.half_backlash,
+        static_load=gp.static_load,
+        lste=lste,
+        damping=gp.damping_coefficient(system),
+        stiffness_variation=rho,
+    )
