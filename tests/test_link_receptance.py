@@ -21,6 +21,7 @@ import pytest
 import scipy.linalg as sla
 
 from nlgrd.io.model_file import load_model
+from nlgrd.nonlinear.fourier.harmonics import real_to_complex
 from nlgrd.nonlinear.models.link_model import build_link_model
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -128,3 +129,103 @@ def test_default_reduction_of_the_case_studies_equals_dense_solves(path):
         kap = rec.terms(om, 25)[0][1:]
         ref = dense_kappa(rec, om, 25)
         assert np.max(np.abs(kap - ref) / np.abs(ref)) < 1e-7, f
+
+
+# ------------------------------------------------------- bearing variants and recovery
+
+FILES = {"two_shaft": TWO_SHAFT, "kubo": ROOT / "data" / "case_studies" / "kubo.toml"}
+#: Mesh frequencies [Hz]: below, near and above the gear-pair mode (two_shaft 3662 Hz,
+#: kubo 4915 Hz).
+POINTS_HZ = {"two_shaft": (1500.0, 3600.0, 5200.0), "kubo": (2000.0, 3400.0, 4500.0)}
+
+
+def variant_system(name: str, variant: str):
+    """The model ``name`` modified in memory: ``cross`` every bearing cross-coupled
+    (k_yz = 0.2 k_yy = -k_zy, c_yz = 0.1 c_yy = -c_zy); ``tabulated`` one more bearing,
+    tabulated against speed (100 -> 3000 rad/s: k_yy 0.5 -> 2 k, k_zz 0.6 -> 1.5 k, k_yz
+    0 -> 0.3 k) at a node without one; ``loss`` a loss factor 0.01 in every material."""
+    import tomllib
+
+    from nlgrd.io.model_file import model_from_file_data
+
+    path = FILES[name]
+    data = tomllib.loads(path.read_text())
+    if variant == "cross":
+        for b in data["bearings"]:
+            k, c = b.get("kyy", 0.0), b.get("cyy", 0.0)
+            b.update(kyz=0.2 * k, kzy=-0.2 * k, cyz=0.1 * c, czy=-0.1 * c)
+    elif variant == "tabulated":
+        first = data["bearings"][0]
+        k = first["kyy"]
+        extra = {
+            "shaft": 0,
+            "node": 3 if name == "two_shaft" else 0,
+            "cyy": first["cyy"],
+            "czz": first["czz"],
+        }
+        extra.update(speeds=[100.0, 3000.0], kyy=[0.5 * k, 2 * k], kzz=[0.6 * k, 1.5 * k], kyz=[0.0, 0.3 * k])
+        data["bearings"].append(extra)
+    elif variant == "loss":
+        for m in data["materials"].values():
+            m["loss_factor"] = 0.01
+    return model_from_file_data(data, str(path))
+
+
+@pytest.mark.parametrize("variant", ["cross", "tabulated", "loss"])
+@pytest.mark.parametrize("name", list(FILES))
+def test_bearing_variants_equal_dense_solves(name, variant):
+    """Cross-coupled, speed-tabulated bearings and hysteretic damping: the default
+    reduction's κ_k (k = 1..5) against dense solves of the model's own dynamic stiffness at
+    the speed (bearing tables interpolated there, the loss factor's i η K sign(k)) to 1e-9
+    relative (rounding of two factorisations of matrices with condition up to ~1e6)."""
+    rec = build_link_model(variant_system(name, variant)).receptance
+    worst = 0.0
+    for f in POINTS_HZ[name]:
+        om = 2 * np.pi * f
+        kap, ref = rec.terms(om, 5)[0][1:], dense_kappa(rec, om, 5)
+        worst = max(worst, float(np.max(np.abs(kap - ref) / np.abs(ref))))
+    assert worst < 1e-9, worst
+
+
+@pytest.mark.parametrize(
+    "name, method",
+    [
+        ("two_shaft", "auto"),
+        ("two_shaft", "direct"),
+        ("kubo", "direct"),
+        ("kubo", "banded"),
+        pytest.param(
+            "kubo",
+            "poles",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="the pole-residue recovery (LinkReceptance.recover, 'poles') of kubo's bearing "
+                "DOFs (bearings 3.5e12 N/m: harmonics ~1e-11 m) is 3.6e-6 of the alternating "
+                "harmonics off a dense solve at 2000 Hz; its κ_k is right to 2e-9 (above)",
+            ),
+        ),
+    ],
+)
+def test_recovered_bearing_harmonics_equal_dense_solves(name, method):
+    """Every bearing node's displacement harmonics k = 1..5 recovered from the same (Y, G)
+    (random: recovery is linear in them) against q_k = Z_k⁻¹ (f_k - P G_k) by dense solves
+    of the whole model, to 1e-9 of their largest at three frequencies."""
+    system = load_model(FILES[name])
+    rec = build_link_model(system, method=method).receptance
+    dofs = np.unique([system.dofs.index(b.shaft, b.node, u) for b in system.bearings for u in ("uy", "uz")])
+    H, rng = 5, np.random.default_rng(3)
+    worst = 0.0
+    for f in POINTS_HZ[name]:
+        om = 2 * np.pi * f
+        Y, G = 1e-6 * rng.standard_normal((1, 2 * H + 1)), 1e2 * rng.standard_normal((1, 2 * H + 1))
+        q = rec.recover(om, H, Y, G, dofs)
+        Gc = real_to_complex(G[0])
+        fk = rec.forces(om, H)
+        speed = rec.plan.speed(om)
+        ref = np.empty((H, dofs.size), dtype=complex)
+        for k in range(1, H + 1):
+            Z = rec.model.dynamic_stiffness(k * om, speed).toarray() + 1j * k * om * rec.C_link.toarray()
+            ref[k - 1] = sla.solve(Z, fk[k] - rec.P[:, 0] * Gc[k])[dofs]
+        got = real_to_complex(q).T[1:]
+        worst = max(worst, float(np.max(np.abs(got - ref)) / np.max(np.abs(ref))))
+    assert worst < 1e-9, worst
