@@ -311,6 +311,20 @@ def test_frame_and_plots():
     assert all("[" in c and "]" in c for c in frame.columns)
     assert "lste [um]" in frame.columns
     assert frame["lste [um]"].to_numpy() == pytest.approx(r.lste * 1e6, rel=1e-14)
+    # the column schema (docs/conventions.md): snake_case quantities, tooth pair j the owner
+    # of its columns, lengths in µm
+    from nlgrd.units import parse_column
+
+    assert all(" " not in parse_column(c)[1] for c in frame.columns)
+    assert {
+        "pinion_rotation [rad]",
+        "unloaded_ste [um]",
+        "mesh_stiffness [N/m]",
+        "teeth_in_contact [-]",
+    } <= set(frame.columns)
+    j = r.pair_loads.shape[1] - 1  # NaN where the pair is out of mesh, in both
+    np.testing.assert_allclose(frame[f"pair{j}.position [um]"], r.pair_positions[:, j] * 1e6, rtol=1e-14)
+    np.testing.assert_allclose(frame[f"pair{j}.load [N]"], r.pair_loads[:, j], rtol=1e-14)
     for kind in ("lste", "stiffness", "load_sharing"):
         ax = r.plot(kind=kind)
         assert ax is not None and len(ax.lines) > 0

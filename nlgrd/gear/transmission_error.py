@@ -242,20 +242,23 @@ class LSTEResult:
 
     # ---------------------------------------------------------------- output
     def to_frame(self):
-        """Tidy :class:`pandas.DataFrame`, one row per sample, units in the column names."""
+        """Tidy :class:`pandas.DataFrame`, one row per sample, units in the column names
+        (docs/conventions.md, "Column names": tooth pair j's columns ``pair<j>.<quantity>``)."""
         import pandas as pd
+
+        from nlgrd.units import column, um
 
         data = {
             "phase [cycles]": self.phase,
-            "pinion rotation [rad]": self.pinion_rotation,
-            "lste [um]": self.lste * 1e6,
-            "unloaded ste [um]": self.unloaded_ste * 1e6,
-            "mesh stiffness [N/m]": self.mesh_stiffness,
-            "teeth in contact [-]": self.teeth_in_contact,
+            "pinion_rotation [rad]": self.pinion_rotation,
+            "lste [um]": um(self.lste),
+            "unloaded_ste [um]": um(self.unloaded_ste),
+            "mesh_stiffness [N/m]": self.mesh_stiffness,
+            "teeth_in_contact [-]": self.teeth_in_contact,
         }
         for j in range(self.pair_loads.shape[1]):
-            data[f"pair {j} position [m]"] = self.pair_positions[:, j]
-            data[f"pair {j} load [N]"] = self.pair_loads[:, j]
+            data[column("position", "um", f"pair{j}")] = um(self.pair_positions[:, j])
+            data[column("load", "N", f"pair{j}")] = self.pair_loads[:, j]
         return pd.DataFrame(data)
 
     def plot(self, ax=None, kind: Literal["lste", "stiffness", "load_sharing"] = "lste", **kwargs):

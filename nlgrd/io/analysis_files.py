@@ -149,7 +149,7 @@ def _lste_from_file(mesh, out: Outputs, csv: Path, png: Path) -> tuple[str, floa
         pd.DataFrame(
             {
                 "phase [cycles]": phase,
-                "pinion rotation [rad]": 2 * np.pi * phase / mesh.geometry.teeth_pinion,
+                "pinion_rotation [rad]": 2 * np.pi * phase / mesh.geometry.teeth_pinion,
                 "lste [um]": lste * 1e6,
             }
         ),
