@@ -196,9 +196,9 @@ def torus_link_columns(
 
 class LinkTorus:
     """What :func:`~nlgrd.nonlinear.tracing.torus_sweep.torus_sweep` and
-    :func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori` need of a link model (as
-    :class:`~nlgrd.nonlinear.tracing.torus_outputs.GearedTorus` of one mesh): the torus
-    model, the periodic model, the outputs and the convergence estimate. The sweep's own
+    :func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori` need of a link model, one
+    mesh too: the torus model, the periodic model, the outputs and the convergence
+    estimate. The sweep's own
     metrics (``TORUS_OUTPUTS``) are those of the law its periodic points report
     (``model.reduced.metrics``: the first gear mesh; NaN without one); the convergence
     estimate compares every link's checked outputs (its ``converged_outputs``, those the
@@ -231,6 +231,12 @@ class LinkTorus:
         self._scales = np.zeros(len(self._checked)) if scales is None else np.asarray(scales, dtype=float)
         if self._scales.size != len(self._checked):
             self._scales = np.zeros(len(self._checked))
+
+    def prepare(self, max_frequency: float) -> None:
+        """The model's receptance built for excitations up to ``max_frequency`` [rad/s]
+        (:meth:`~nlgrd.nonlinear.reduction.link_reduction.LinkReceptance.prepare`: a modal
+        basis; nothing on a dense one)."""
+        self.model.receptance.prepare(max_frequency)
 
     def omegas(self, rpm: NDArray) -> NDArray:
         """Base frequencies [rad/s] of reference shaft speeds ``rpm`` [rpm]."""
