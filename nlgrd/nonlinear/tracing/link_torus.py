@@ -29,6 +29,7 @@ from nlgrd.nonlinear.tracing.torus_outputs import (
     CHECKED,
     TORUS_OUTPUTS,
     bearing_force_harmonics,
+    dynamic_matrices,
     kappa_and_slope,
     torus_back_contact,
     torus_bearing_statistics,
@@ -46,13 +47,9 @@ FLOOR = 1e-2
 def _receptances(model, freqs: NDArray, omega: float) -> list[NDArray]:
     """Z(Ω)⁻¹ P (n, d) at each frequency, by a sparse LU of the full model."""
     rec = model.receptance
-    speed = rec.plan.speed(omega)
     P = rec.P.astype(complex)
-    out = []
-    for f in freqs:
-        Z = (rec.model.dynamic_stiffness(float(f), speed) + 1j * float(f) * rec.C_link).tocsc()
-        out.append(spla.splu(Z).solve(P))
-    return out
+    matrices = dynamic_matrices(rec.model, freqs, rec.plan.speed(omega), rec.C_link)
+    return [spla.splu(Z).solve(P) for Z in matrices]
 
 
 def link_torus_model(model) -> qp.TorusModel:
@@ -130,7 +127,11 @@ def torus_link_bearings(model, sol: qp.TorusSolution, n_samples: tuple[int, int]
 
 
 def torus_link_columns(
-    model, sol: qp.TorusSolution, n_samples: tuple[int, int] = SAMPLES, bearings: dict | None = None
+    model,
+    sol: qp.TorusSolution,
+    n_samples: tuple[int, int] = SAMPLES,
+    bearings: dict | None = None,
+    with_bearings: bool = True,
 ) -> dict:
     """Every link's outputs over a torus, in the columns of a link sweep
     (``<link>.<quantity> [unit]``, :func:`nlgrd.nonlinear.results.link_results.output_names`):
@@ -151,6 +152,9 @@ def torus_link_columns(
         Samples along θ₁ and θ₂ [-].
     bearings : dict, optional
         :func:`torus_link_bearings` of ``sol``, if computed already.
+    with_bearings : bool
+        Also the linear bearings' columns (False: the links' only, as the convergence
+        estimate compares them; no recovery at every frequency).
 
     Returns
     -------
@@ -185,7 +189,7 @@ def torus_link_columns(
             out[f"{n}.displacement_max [m]"] = float(np.max(r))
         else:
             out.update({f"{n}.{q}": np.nan for q in link.metrics(np.zeros((link.n_coords, 3)), 1.0)})
-    if model.system.bearings:
+    if with_bearings and model.system.bearings:
         b = torus_link_bearings(model, sol, n_samples) if bearings is None else bearings
         for j, name in enumerate(bearing_names(model.system)):
             for q in BEARING_OUTPUTS:
@@ -257,7 +261,7 @@ class LinkTorus:
         return torus_outputs(sol, self._mesh, coord=self._mesh.coord)
 
     def _values(self, sol: qp.TorusSolution) -> NDArray:
-        cols = torus_link_columns(self.model, sol)
+        cols = torus_link_columns(self.model, sol, with_bearings=False)  # the links' checked outputs
         return np.array([cols[c] for c in self._checked] + [sol.secondary])
 
     def change(
