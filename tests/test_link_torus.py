@@ -259,3 +259,27 @@ def test_nlgrd_sweep_command_answers_link_tori(kubo_far, tmp_path, capsys):
     at = frame.iloc[[0, 2]]
     np.testing.assert_allclose(at["mesh0.force_max [N]"], ref["ti_force_max [N]"], rtol=0.01)
     np.testing.assert_allclose(at["secondary_frequency [Hz]"], ref["ti_secondary_frequency [Hz]"], rtol=0.005)
+
+
+def test_dynamic_matrices_are_the_sparse_sum(tmp_path):
+    """:func:`nlgrd.nonlinear.tracing.torus_outputs.dynamic_matrices` (the joined pattern
+    built once, values replaced per frequency) against the sparse sum it replaces,
+    Z(Ω) + i Ω C_link, at five frequencies of either sign: the same non-zeros to the bit
+    (one addition per entry either way) and the same solves, on Kubo (one mesh) and on the
+    rub-ring model of benchmarks/torus_link_reference.py (two links)."""
+    import scipy.sparse.linalg as spla
+
+    from nlgrd.nonlinear.tracing.torus_outputs import dynamic_matrices
+
+    for path in (KUBO, _link_reference_script().model_file(tmp_path)):
+        rec = build_link_model(nlgrd.load(str(path))).receptance
+        freqs = np.array([-3.3, -0.7, 0.4, 1.3, 5.2]) * 2 * np.pi * 5000
+        speed = 1234.5
+        P = rec.P.astype(complex)
+        for f, Z in zip(freqs, dynamic_matrices(rec.model, freqs, speed, rec.C_link), strict=True):
+            ref = (rec.model.dynamic_stiffness(float(f), speed) + 1j * float(f) * rec.C_link).tocsc()
+            ref.sort_indices()
+            assert Z.nnz == ref.nnz
+            assert np.array_equal(Z.indices, ref.indices) and np.array_equal(Z.indptr, ref.indptr)
+            assert np.array_equal(Z.data, ref.data)
+            assert np.array_equal(spla.splu(Z).solve(P), spla.splu(ref).solve(P))

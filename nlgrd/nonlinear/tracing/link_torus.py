@@ -132,6 +132,7 @@ def torus_link_columns(
     n_samples: tuple[int, int] = SAMPLES,
     bearings: dict | None = None,
     with_bearings: bool = True,
+    known: dict | None = None,
 ) -> dict:
     """Every link's outputs over a torus, in the columns of a link sweep
     (``<link>.<quantity> [unit]``, :func:`nlgrd.nonlinear.results.link_results.output_names`):
@@ -155,6 +156,9 @@ def torus_link_columns(
     with_bearings : bool
         Also the linear bearings' columns (False: the links' only, as the convergence
         estimate compares them; no recovery at every frequency).
+    known : dict of int to ndarray, optional
+        :func:`~nlgrd.nonlinear.tracing.torus_outputs.torus_outputs` of ``sol`` on these
+        ``n_samples`` by a mesh's first coordinate, if computed already.
 
     Returns
     -------
@@ -168,7 +172,8 @@ def torus_link_columns(
     for link, sl in zip(model.links, model.receptance.slices, strict=True):
         n = link.name
         if hasattr(link, "mesh"):
-            o = torus_outputs(sol, link.mesh, n_samples, coord=sl.start)
+            o = (known or {}).get(sl.start)
+            o = torus_outputs(sol, link.mesh, n_samples, coord=sl.start) if o is None else o
             for q, key in (
                 ("dte_mean [m]", "dte_mean"),
                 ("dte_rms [m]", "dte_rms"),
@@ -260,8 +265,10 @@ class LinkTorus:
             return out
         return torus_outputs(sol, self._mesh, coord=self._mesh.coord)
 
-    def _values(self, sol: qp.TorusSolution) -> NDArray:
-        cols = torus_link_columns(self.model, sol, with_bearings=False)  # the links' checked outputs
+    def _values(self, sol: qp.TorusSolution, outputs: NDArray) -> NDArray:
+        """The checked link outputs and ω₂ of ``sol`` (``outputs``: its :meth:`outputs`)."""
+        known = None if self._mesh is None else {int(self._mesh.coord): outputs}
+        cols = torus_link_columns(self.model, sol, SAMPLES, with_bearings=False, known=known)
         return np.array([cols[c] for c in self._checked] + [sol.secondary])
 
     def change(
@@ -273,8 +280,9 @@ class LinkTorus:
         of its value at ``fine`` and :data:`FLOOR` x its physical scale (an output zero at
         both changes by 0) [-]."""
         idx = [list(TORUS_OUTPUTS).index(c) for c in CHECKED]
-        ch = self.outputs(fine)[idx] / outputs[idx] - 1
-        a, b = self._values(sol), self._values(fine)
+        fine_outputs = self.outputs(fine)
+        ch = fine_outputs[idx] / outputs[idx] - 1
+        a, b = self._values(sol, outputs), self._values(fine, fine_outputs)
         scale = np.append(FLOOR * self._scales, 0.0)
         den = np.maximum(np.abs(b), scale)
         diff = np.abs(b - a)
