@@ -9,7 +9,11 @@ speed of ω₁, with the mesh damping, without k_h: the matrix of the periodic h
 balance's direct receptance). Its outputs are sampled on the torus (time averages of the
 quasi-periodic motion). :class:`GearedTorus` bundles them for
 :mod:`nlgrd.nonlinear.tracing.torus_sweep`; :mod:`nlgrd.nonlinear.tracing.link_torus` is the
-same for a model with any links.
+same for a model with any links, one mesh too, and the one the library uses (issue 33:
+:class:`GearedTorus`, :func:`geared_torus_model`, :func:`torus_bearing_forces` and
+:func:`torus_bearing_outputs` are the former one-mesh path, kept until the old engine goes).
+The outputs (:func:`torus_outputs`, :func:`torus_back_contact`, the bearing statistics)
+and κ(Ω) with its slope (:func:`kappa_and_slope`, :func:`dynamic_matrices`) serve both.
 """
 
 from __future__ import annotations
