@@ -4,7 +4,9 @@ process.
 
 Kahraman & Blankenship's rig (data/case_studies/kahraman_blankenship.toml) at Neimark-Sacker
 points of its fast report, each tried as a sweep tries it (``converged_tori``'s settings:
-H₁ 13, H₂ 4, 25 iterations, two start sizes, no check), the periodic orbit solved afresh:
+H₁ 13, H₂ 4, 25 iterations, two start sizes, no check) on its link model (one mesh, the
+torus every sweep tries: :class:`~nlgrd.nonlinear.tracing.link_torus.LinkTorus`), the
+periodic orbit solved afresh:
 "before" with the stall stop off and dR/dω₂ by central differences of κ (the former solve),
 "after" as the code runs now. Printed per point: CPU time, Newton iterations, sparse LUs of
 the full model (κ frequencies) and whether a torus converged (with its ω₂ and RMS DTE, the
@@ -25,9 +27,9 @@ import numpy as np
 
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.hb import quasi_periodic as qp
-from nlgrd.nonlinear.models.geared import build_geared_model
+from nlgrd.nonlinear.models.link_model import build_link_model
 from nlgrd.nonlinear.tracing import torus_sweep as ts
-from nlgrd.nonlinear.tracing.torus_outputs import GearedTorus
+from nlgrd.nonlinear.tracing.link_torus import LinkTorus
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Neimark-Sacker points of the fast report (60 points, 800-6000 Hz) where the periodic
@@ -35,8 +37,8 @@ ROOT = Path(__file__).resolve().parent.parent
 POINTS_HZ = (2386.4, 3620.3, 4942.4, 5118.6, 5559.3, 1593.2, 5471.2)
 
 
-def _target(model, before: bool, count: dict) -> GearedTorus:
-    target = GearedTorus(model)
+def _target(model, before: bool, count: dict) -> LinkTorus:
+    target = LinkTorus(model)
     tm = target.torus_model
     plain, slope = tm.kappa_at, tm.kappa_slope_at
 
@@ -92,7 +94,7 @@ def one(model, w: float, before: bool) -> dict:
 
 def main(points_hz=POINTS_HZ) -> None:
     system = load_model(ROOT / "data" / "case_studies" / "kahraman_blankenship.toml")
-    model = build_geared_model(system, 2 * np.pi * max(points_hz) * 1.0001, H=13)
+    model = build_link_model(system)  # one mesh: the link torus every sweep tries
     head = f"{'f [Hz]':>8} | {'before: CPU s, its, LUs':>26} | {'after: CPU s, its, LUs':>26}"
     print(head + " | torus (ω₂ [Hz], RMS DTE [um])")
     for f in points_hz:

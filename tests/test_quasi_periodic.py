@@ -159,19 +159,21 @@ def test_autonomous_torus_matches_exact_flow(ratio):
 
 def test_kubo_torus_against_stored_time_integration():
     """Kubo's FE rig (Table 1 damping) at 13 750 and 13 850 rpm, up sweep, H = 13: the
-    periodic orbit is Neimark-Sacker unstable (|μ| 1.018 and 1.049). Reference: the HHT-α
-    integration of the full FE model by benchmarks/torus_kubo_reference.py (3000 periods of
-    transient, then 500 blocks of 6 periods; its CSV holds every column), not a harmonic
-    balance. Tolerances: the issue's 1 % (RMS DTE, largest mesh force) and 0.5 % (ω₂);
-    measured 1.3e-5 and 2.9e-4, -3.0e-4 and -1.8e-3, 2.0e-3 and 2.2e-3."""
+    periodic orbit is Neimark-Sacker unstable (|μ| 1.018 and 1.049). The torus of its link
+    model (one mesh: :class:`nlgrd.nonlinear.tracing.link_torus.LinkTorus`, the default of
+    ``torus_sweep``). Reference: the HHT-α integration of the full FE model by
+    benchmarks/torus_kubo_reference.py (3000 periods of transient, then 500 blocks of 6
+    periods; its CSV holds every column), not a harmonic balance. Tolerances: the issue's
+    1 % (RMS DTE, largest mesh force) and 0.5 % (ω₂); measured 1.4e-5 and 2.9e-4, -2.9e-4
+    and -1.8e-3, 2.0e-3 and 2.2e-3."""
     from pathlib import Path  # noqa: PLC0415
 
     from nlgrd.io.model_file import load_model  # noqa: PLC0415
-    from nlgrd.nonlinear.models.geared import build_geared_model  # noqa: PLC0415
+    from nlgrd.nonlinear.models.link_model import build_link_model  # noqa: PLC0415
     from nlgrd.nonlinear.tracing.torus_sweep import torus_sweep  # noqa: PLC0415
 
     kubo = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
-    model = build_geared_model(load_model(kubo), 2 * np.pi * 14500 / 60 * 25 * 1.0001, H=13)
+    model = build_link_model(load_model(kubo))
     res = torus_sweep(model, rpm=[13750.0, 13850.0], H=13, H2=4, check=False)
     assert res.converged.all()
     frame = res.to_frame()
@@ -196,27 +198,31 @@ def test_kubo_torus_against_stored_time_integration():
 
 def test_bearing_recovery_of_a_periodic_orbit_matches_the_sweep():
     """A periodic orbit written as a torus (its k₂ > 0 part zero): the bearing forces of
-    :func:`torus_bearing_forces` (Z(Ω)⁻¹ w h(Ω)⁻¹ Y per frequency) against the sweep's
-    (:func:`nlgrd.nonlinear.results.bearing_loads.bearing_harmonics`, the periodic recovery).
-    Measured 4e-6: the sampled maximum (1024 samples) against the sweep's refined one."""
+    :func:`nlgrd.nonlinear.tracing.link_torus.torus_link_bearings` (Z(Ω)⁻¹ P κ(Ω) Y per
+    frequency beyond the k₂ = 0 row) against the link sweep's
+    (:func:`nlgrd.nonlinear.results.bearing_loads.link_bearing_outputs`, the periodic
+    recovery). Measured 4e-6: the sampled maximum (1024 samples) against the sweep's
+    refined one."""
     from pathlib import Path  # noqa: PLC0415
 
     from nlgrd.io.model_file import load_model  # noqa: PLC0415
     from nlgrd.nonlinear.fourier.harmonics import real_to_complex  # noqa: PLC0415
-    from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep  # noqa: PLC0415
-    from nlgrd.nonlinear.tracing.torus_outputs import torus_bearing_forces  # noqa: PLC0415
+    from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep  # noqa: PLC0415
+    from nlgrd.nonlinear.results.bearing_loads import bearing_names  # noqa: PLC0415
+    from nlgrd.nonlinear.tracing.link_torus import torus_link_bearings  # noqa: PLC0415
 
     kubo = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
     system = load_model(kubo)
-    model = build_geared_model(system, 2 * np.pi * 14500 / 60 * 25 * 1.0001, H=13)
-    sw = geared_sweep(system, rpm=[13600.0], H=13, model=model, directions="up", period=1, stability=False)
+    model = build_link_model(system)
+    w = 2 * np.pi * 13600.0 / 60 * 25
+    sw = link_sweep(model, [w], H=13, directions="up", period=1, stability=False)
     frame = sw.to_frame()
     grid = tg.TorusGrid(13, 2, 60, 12)
     Y = np.zeros((1, grid.n_terms), dtype=complex)
-    Y[0, :14] = real_to_complex(sw.mesh.harmonics[0][0])
-    sol = qp.TorusSolution(float(sw.mesh.omega[0]), 1000.0, Y, grid, True, 0.0, 0, 0.0)
-    mine = torus_bearing_forces(model, sol, (1024, 12))
-    cols = [f"{name} force_max [N]" for name in sw.bearing_names]
+    Y[0, :14] = real_to_complex(sw.result.harmonics[0][0])
+    sol = qp.TorusSolution(float(sw.result.omega[0]), 1000.0, Y, grid, True, 0.0, 0, 0.0)
+    mine = torus_link_bearings(model, sol, (1024, 12))["force_max"]
+    cols = [f"{name}.force_max [N]" for name in bearing_names(system)]
     ref = frame[cols].iloc[0].to_numpy(dtype=float)
     assert ref[0] > 1000
     np.testing.assert_allclose(mine, ref, rtol=1e-4, atol=1e-9 * ref.max())

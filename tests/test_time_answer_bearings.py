@@ -9,8 +9,9 @@ and time_answer's bearing statistics), on Kahraman & Blankenship's rig
   over the period, are the velocities of the stepped state (same tolerance).
 - At a STABLE periodic point (3500 Hz, below the band where the orbit is lost) a time
   answer started on the harmonic-balance orbit settles on that orbit, so its bearing
-  outputs must be the harmonic balance's row (recovered from the solved harmonics by
-  ``bearing_response``, an independent path: receptances, not integration). The HB is
+  outputs must be the harmonic balance's (the link sweep's orbit, its bearings recovered
+  from the solved harmonics by ``link_bearing_outputs`` and the mean displacement from
+  the recovered mean: an independent path, receptances, not integration). The HB is
   solved at H = 20, its bearing outputs within 2e-4 of H = 10 (measured). The start
   leaves a slow transient (the discrete orbit differs from the HB's), which biases a
   record maximum: 80 periods are run first and the answer continues from their end. The
@@ -32,7 +33,6 @@ import nlgrd
 from nlgrd.nonlinear.models.link_model import build_link_model
 from nlgrd.timedomain.bearing_record import BearingRecord
 from nlgrd.timedomain.links import LinkIntegrator
-from nlgrd.timedomain.sweep_answers import base_harmonics
 from nlgrd.timedomain.time_answer import time_answer
 
 KB = "data/case_studies/kahraman_blankenship.toml"
@@ -74,17 +74,33 @@ def test_bearing_record_is_the_full_dof_recurrence(kb):
         s = s_end
 
 
+def _hb_bearings(model, omega: float, H: int) -> tuple[dict, object]:
+    """The link sweep's orbit at ``omega`` (H harmonics) and its bearings' outputs by the
+    receptances (:func:`~nlgrd.nonlinear.results.bearing_loads.link_bearing_outputs`), with
+    each bearing's mean radial displacement |(ȳ, z̄)| from the recovered mean (SI)."""
+    from nlgrd.nonlinear.models.link_model import link_sweep
+    from nlgrd.nonlinear.results.bearing_loads import bearing_names, bearing_node_dofs, link_bearing_outputs
+
+    res = link_sweep(model, [omega], H=H, directions="up", period=1).result
+    z = res.harmonics[0]
+    w = float(res.omega[0])
+    out = dict(link_bearing_outputs(model, z, w))
+    G = model.reduced.at(w, H).nonlinear_forces(z.ravel(), jacobian=False)[0].reshape(z.shape)
+    q = model.receptance.recover(w, H, z, G, bearing_node_dofs(model.system))
+    for j, name in enumerate(bearing_names(model.system)):
+        out[f"{name}.displacement_mean [m]"] = float(np.hypot(q[2 * j, 0], q[2 * j + 1, 0]))
+    return out, res
+
+
 def test_time_answer_bearings_equal_the_harmonic_balance_at_a_stable_point(kb):
     system, model = kb
-    # the mesh-coordinate sweep: its bearing table has displacement_mean, which the link
-    # sweep's has not (its force_amplitude: tests/test_result_schema.py)
-    from nlgrd.nonlinear.models.geared import geared_sweep
+    from nlgrd.nonlinear.results.bearing_loads import bearing_names
 
-    hb = {H: geared_sweep(system, 2 * np.pi * np.array([3500.0]), H=H, directions="up") for H in (10, 20)}
-    res = hb[20]
-    assert not res.mesh.no_stable[0]  # stable: the time answer has an orbit to settle on
-    z = base_harmonics(res.mesh.harmonics[0], int(res.mesh.base))
-    w = float(res.mesh.omega[0])
+    hb = {H: _hb_bearings(model, 2 * np.pi * 3500.0, H) for H in (10, 20)}
+    ref_out, res = hb[20]
+    assert not res.no_stable[0]  # stable: the time answer has an orbit to settle on
+    z = res.harmonics[0]
+    w = float(res.omega[0])
     ta = {}
     for sp in (128, 256):  # 80 periods to let the start's slow transient decay, 80 recorded
         warm = time_answer(
@@ -92,10 +108,10 @@ def test_time_answer_bearings_equal_the_harmonic_balance_at_a_stable_point(kb):
         )
         ta[sp] = time_answer(model, w, state0=warm.state, periods=80, max_periods=80, steps_per_period=sp)
     worst = 0.0
-    for j, name in enumerate(res.bearing_names):
-        for key, field in FIELDS.items():
-            ref = float(getattr(res.bearings, field)[0, j])
-            trunc = abs(ref - float(getattr(hb[10].bearings, field)[0, j]))
+    for name in bearing_names(system):
+        for key in FIELDS:
+            ref = ref_out[f"{name}.{key}"]
+            trunc = abs(ref - hb[10][0][f"{name}.{key}"])
             fine, coarse = ta[256].bearings[f"{name}.{key}"], ta[128].bearings[f"{name}.{key}"]
             bound = abs(coarse.value - fine.value) + 2 * fine.uncertainty + trunc
             assert abs(fine.value - ref) <= bound, (name, key, fine, coarse, ref)

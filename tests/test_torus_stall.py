@@ -1,7 +1,8 @@
 """A failed torus try made cheap without changing a torus that converges (issue 35 item 2,
 issue 34 item 4): the stall stop of :func:`nlgrd.nonlinear.hb.quasi_periodic.solve_torus`
 and κ(Ω) with its Ω-derivative from one factorisation per frequency
-(:func:`nlgrd.nonlinear.tracing.torus_outputs.kappa_and_slope`).
+(:func:`nlgrd.nonlinear.tracing.torus_outputs.kappa_and_slope`), on the link torus of the
+one-mesh models (:class:`nlgrd.nonlinear.tracing.link_torus.LinkTorus`).
 
 References: Kahraman & Blankenship's rig at 3620 Hz (data/case_studies/
 kahraman_blankenship.toml), a Neimark-Sacker point of its fast report where the motion is
@@ -19,9 +20,9 @@ import pytest
 
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.hb import quasi_periodic as qp
-from nlgrd.nonlinear.models.geared import build_geared_model
+from nlgrd.nonlinear.models.link_model import build_link_model
 from nlgrd.nonlinear.tracing import torus_sweep as ts
-from nlgrd.nonlinear.tracing.torus_outputs import GearedTorus
+from nlgrd.nonlinear.tracing.link_torus import LinkTorus
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -66,7 +67,7 @@ def test_a_try_without_a_torus_stops_when_newton_stalls(monkeypatch):
     <= 0.1) and factorises Z once per frequency and iteration: 2 943 LUs."""
     system = load_model(ROOT / "data" / "case_studies" / "kahraman_blankenship.toml")
     w = 2 * np.pi * 3620.3
-    target = GearedTorus(build_geared_model(system, w * 1.0001, H=13))
+    target = LinkTorus(build_link_model(system))
     count = _counting(target)
     calls, _ = _recording(monkeypatch)
     res = ts.torus_sweep(
@@ -96,8 +97,8 @@ def test_a_try_without_a_torus_stops_when_newton_stalls(monkeypatch):
 def kubo():
     """Kubo's model and the torus solve at 13 750 rpm started from its critical mode."""
     system = load_model(ROOT / "data" / "case_studies" / "kubo.toml")
-    model = build_geared_model(system, 2 * np.pi * 14500 / 60 * 25 * 1.0001, H=13)
-    target = GearedTorus(model)
+    model = build_link_model(system)
+    target = LinkTorus(model)
     with pytest.MonkeyPatch.context() as mp:
         calls, original = _recording(mp)
         res = ts.torus_sweep(model, rpm=[13750.0], H=13, check=False, target=target)

@@ -1,5 +1,5 @@
 """A sweep's gaps answered: :func:`answer_sweep` is the rule every sweep follows. On a
-sweep of one mesh a point whose orbit lost stability to a complex pair is first answered
+sweep (one mesh or any links) a point whose orbit lost stability to a complex pair is first answered
 by the torus harmonic balance where it converges within the sweep's tolerance
 (:func:`with_torus_answers`: "quasi-periodic", its stability not computed); then in the
 time domain (:func:`with_time_answers`): every point where the harmonic balance
@@ -332,19 +332,20 @@ def with_torus_answers(
     :func:`nlgrd.nonlinear.tracing.link_torus.torus_link_columns`) and
     ``secondary_frequency`` the torus's, ``harmonic_error`` its convergence estimate; the
     torus's stability is not computed (``verdict`` "not computed", ``stable`` not written).
-    The other points are left as they were. One mesh and a link model take the same path
-    (:func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori`), each with its torus
-    model and outputs (:class:`~nlgrd.nonlinear.tracing.torus_outputs.GearedTorus`,
-    :class:`~nlgrd.nonlinear.tracing.link_torus.LinkTorus`).
+    The other points are left as they were. One mesh and a link model take one path: the
+    link torus (:class:`~nlgrd.nonlinear.tracing.link_torus.LinkTorus`) of the sweep's link
+    model, one mesh too (built from ``system``: its one coordinate is the mesh's, the
+    one-mesh sweep's harmonics), through
+    :func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori`.
 
     Parameters
     ----------
     result : GearedSweepResult or LinkSweepResult
         The sweep.
     system : RotorSystem, optional
-        Its model (a sweep of one mesh: the torus model is built from it).
+        Its model (its link model is built from it when ``model`` is None).
     model : LinkModel, optional
-        The link model a link sweep was made on (built from ``system`` when None).
+        The link model the sweep was made on, or of its system.
     rtol : float
         The sweep's tolerance on its outputs [-].
     progress : callable, optional
@@ -357,54 +358,68 @@ def with_torus_answers(
     Raises
     ------
     ModelError
-        A link sweep without ``model`` or ``system``.
+        A link sweep without ``model`` or ``system``; a one-mesh sweep whose link model's
+        base is not the mesh frequency (its gear errors repeat over several mesh periods).
     """
-    from nlgrd.nonlinear.tracing.torus_outputs import GearedTorus
-    from nlgrd.nonlinear.tracing.torus_sweep import TORUS_LADDER, TORUS_MAX_H
-
     if isinstance(result, LinkSweepResult):
         return _link_torus_answers(result, system, model, rtol, progress)
     system = system if system is not None else getattr(model, "system", None)
     if not isinstance(result, GearedSweepResult) or system is None:
         return result
-    from nlgrd.nonlinear.models.geared import build_geared_model
-
     mesh = result.mesh
     if not _ns_points(mesh).any():
         return result
-    H = int(mesh.H)
-    top = min(max(H, TORUS_MAX_H), H + max(TORUS_LADDER))
-    geared = build_geared_model(system, float(np.max(mesh.omega)) * 1.0001, H=top + 4)
-    found = _tori(mesh, geared, GearedTorus(geared), rtol, 1, progress)
+    model = _torus_link_model(system, model)
+    if int(model.top_order) != 1:
+        raise ModelError(
+            "result",
+            f"the link model's base is the mesh frequency / {int(model.top_order)}: "
+            "answer the tori of its link sweep (nlgrd.sweep), not of a one-mesh sweep",
+        )
+    found = _link_tori(mesh, model, rtol, progress)
     if not found:
         return result
     fields = list(BearingResponse.__dataclass_fields__)
     bearings = {f: np.array(getattr(result.bearings, f), dtype=float, copy=True) for f in fields}
     for i, a in found.items():
         for f in fields:
-            bearings[f][i] = _digits(a.bearings[f])
+            if f in a.bearings:
+                bearings[f][i] = _digits(a.bearings[f])
     return dc.replace(result, mesh=_with_tori(mesh, found, 0), bearings=BearingResponse(**bearings))
 
 
-def _link_torus_answers(result: LinkSweepResult, system, model: LinkModel | None, rtol: float, progress=None):
-    """:func:`with_torus_answers` of a link sweep."""
+def _torus_link_model(system, model: LinkModel | None) -> LinkModel:
+    """``model``, or the link model of ``system`` when None."""
+    if model is not None:
+        return model
+    if system is None:
+        raise ModelError("model", "the torus answers of a sweep need its link model or system")
+    from nlgrd.nonlinear.models.link_model import build_link_model
+
+    return build_link_model(system)
+
+
+def _link_tori(res: SweepResult, model: LinkModel, rtol: float, progress=None) -> dict:
+    """The accepted link tori (:class:`~nlgrd.nonlinear.tracing.link_torus.LinkTorus`) at
+    the Neimark-Sacker rows of ``res`` (:func:`_tori`), its receptance prepared for the
+    top rung's check."""
     from nlgrd.nonlinear.tracing.link_torus import LinkTorus
     from nlgrd.nonlinear.tracing.torus_sweep import TORUS_LADDER, TORUS_MAX_H
 
-    res = result.result
-    if not _ns_points(res).any():
-        return result
-    if model is None:
-        if system is None:
-            raise ModelError("model", "the torus answers of a link sweep need its link model or system")
-        from nlgrd.nonlinear.models.link_model import build_link_model
-
-        model = build_link_model(system)
     step = int(model.top_order)
     H = int(res.H)
     top = min(max(H, step * TORUS_MAX_H), H + step * max(TORUS_LADDER)) + 4 * step
     model.receptance.prepare(top * float(np.max(np.abs(res.omega))) * 1.0001)
-    found = _tori(res, model, LinkTorus(model), rtol, step, progress)
+    return _tori(res, model, LinkTorus(model), rtol, step, progress)
+
+
+def _link_torus_answers(result: LinkSweepResult, system, model: LinkModel | None, rtol: float, progress=None):
+    """:func:`with_torus_answers` of a link sweep."""
+    res = result.result
+    if not _ns_points(res).any():
+        return result
+    model = _torus_link_model(system, model)
+    found = _link_tori(res, model, rtol, progress)
     if not found:
         return result
     mesh = getattr(model.reduced.metrics, "mesh", None)

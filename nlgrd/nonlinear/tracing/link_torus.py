@@ -29,6 +29,7 @@ from nlgrd.nonlinear.tracing.torus_outputs import (
     CHECKED,
     TORUS_OUTPUTS,
     bearing_force_harmonics,
+    dynamic_matrices,
     kappa_and_slope,
     torus_back_contact,
     torus_bearing_statistics,
@@ -46,13 +47,9 @@ FLOOR = 1e-2
 def _receptances(model, freqs: NDArray, omega: float) -> list[NDArray]:
     """Z(Ω)⁻¹ P (n, d) at each frequency, by a sparse LU of the full model."""
     rec = model.receptance
-    speed = rec.plan.speed(omega)
     P = rec.P.astype(complex)
-    out = []
-    for f in freqs:
-        Z = (rec.model.dynamic_stiffness(float(f), speed) + 1j * float(f) * rec.C_link).tocsc()
-        out.append(spla.splu(Z).solve(P))
-    return out
+    matrices = dynamic_matrices(rec.model, freqs, rec.plan.speed(omega), rec.C_link)
+    return [spla.splu(Z).solve(P) for Z in matrices]
 
 
 def link_torus_model(model) -> qp.TorusModel:
@@ -130,7 +127,12 @@ def torus_link_bearings(model, sol: qp.TorusSolution, n_samples: tuple[int, int]
 
 
 def torus_link_columns(
-    model, sol: qp.TorusSolution, n_samples: tuple[int, int] = SAMPLES, bearings: dict | None = None
+    model,
+    sol: qp.TorusSolution,
+    n_samples: tuple[int, int] = SAMPLES,
+    bearings: dict | None = None,
+    with_bearings: bool = True,
+    known: dict | None = None,
 ) -> dict:
     """Every link's outputs over a torus, in the columns of a link sweep
     (``<link>.<quantity> [unit]``, :func:`nlgrd.nonlinear.results.link_results.output_names`):
@@ -151,6 +153,12 @@ def torus_link_columns(
         Samples along θ₁ and θ₂ [-].
     bearings : dict, optional
         :func:`torus_link_bearings` of ``sol``, if computed already.
+    with_bearings : bool
+        Also the linear bearings' columns (False: the links' only, as the convergence
+        estimate compares them; no recovery at every frequency).
+    known : dict of int to ndarray, optional
+        :func:`~nlgrd.nonlinear.tracing.torus_outputs.torus_outputs` of ``sol`` on these
+        ``n_samples`` by a mesh's first coordinate, if computed already.
 
     Returns
     -------
@@ -164,7 +172,8 @@ def torus_link_columns(
     for link, sl in zip(model.links, model.receptance.slices, strict=True):
         n = link.name
         if hasattr(link, "mesh"):
-            o = torus_outputs(sol, link.mesh, n_samples, coord=sl.start)
+            o = (known or {}).get(sl.start)
+            o = torus_outputs(sol, link.mesh, n_samples, coord=sl.start) if o is None else o
             for q, key in (
                 ("dte_mean [m]", "dte_mean"),
                 ("dte_rms [m]", "dte_rms"),
@@ -185,7 +194,7 @@ def torus_link_columns(
             out[f"{n}.displacement_max [m]"] = float(np.max(r))
         else:
             out.update({f"{n}.{q}": np.nan for q in link.metrics(np.zeros((link.n_coords, 3)), 1.0)})
-    if model.system.bearings:
+    if with_bearings and model.system.bearings:
         b = torus_link_bearings(model, sol, n_samples) if bearings is None else bearings
         for j, name in enumerate(bearing_names(model.system)):
             for q in BEARING_OUTPUTS:
@@ -196,9 +205,9 @@ def torus_link_columns(
 
 class LinkTorus:
     """What :func:`~nlgrd.nonlinear.tracing.torus_sweep.torus_sweep` and
-    :func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori` need of a link model (as
-    :class:`~nlgrd.nonlinear.tracing.torus_outputs.GearedTorus` of one mesh): the torus
-    model, the periodic model, the outputs and the convergence estimate. The sweep's own
+    :func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori` need of a link model, one
+    mesh too: the torus model, the periodic model, the outputs and the convergence
+    estimate. The sweep's own
     metrics (``TORUS_OUTPUTS``) are those of the law its periodic points report
     (``model.reduced.metrics``: the first gear mesh; NaN without one); the convergence
     estimate compares every link's checked outputs (its ``converged_outputs``, those the
@@ -232,6 +241,12 @@ class LinkTorus:
         if self._scales.size != len(self._checked):
             self._scales = np.zeros(len(self._checked))
 
+    def prepare(self, max_frequency: float) -> None:
+        """The model's receptance built for excitations up to ``max_frequency`` [rad/s]
+        (:meth:`~nlgrd.nonlinear.reduction.link_reduction.LinkReceptance.prepare`: a modal
+        basis; nothing on a dense one)."""
+        self.model.receptance.prepare(max_frequency)
+
     def omegas(self, rpm: NDArray) -> NDArray:
         """Base frequencies [rad/s] of reference shaft speeds ``rpm`` [rpm]."""
         plan = self.model.receptance.plan
@@ -250,8 +265,10 @@ class LinkTorus:
             return out
         return torus_outputs(sol, self._mesh, coord=self._mesh.coord)
 
-    def _values(self, sol: qp.TorusSolution) -> NDArray:
-        cols = torus_link_columns(self.model, sol)
+    def _values(self, sol: qp.TorusSolution, outputs: NDArray) -> NDArray:
+        """The checked link outputs and ω₂ of ``sol`` (``outputs``: its :meth:`outputs`)."""
+        known = None if self._mesh is None else {int(self._mesh.coord): outputs}
+        cols = torus_link_columns(self.model, sol, SAMPLES, with_bearings=False, known=known)
         return np.array([cols[c] for c in self._checked] + [sol.secondary])
 
     def change(
@@ -263,8 +280,9 @@ class LinkTorus:
         of its value at ``fine`` and :data:`FLOOR` x its physical scale (an output zero at
         both changes by 0) [-]."""
         idx = [list(TORUS_OUTPUTS).index(c) for c in CHECKED]
-        ch = self.outputs(fine)[idx] / outputs[idx] - 1
-        a, b = self._values(sol), self._values(fine)
+        fine_outputs = self.outputs(fine)
+        ch = fine_outputs[idx] / outputs[idx] - 1
+        a, b = self._values(sol, outputs), self._values(fine, fine_outputs)
         scale = np.append(FLOOR * self._scales, 0.0)
         den = np.maximum(np.abs(b), scale)
         diff = np.abs(b - a)

@@ -59,8 +59,9 @@ def search_and_follow(model_of, omegas, at, periods, H, unit, known, words, view
         ``known(orbit, omega, followed)``: whether the sweep (or a branch already followed) has it.
     words : str
         How a known orbit is described in the reported line.
-    view : GearedView or LinkView
-        Each orbit's and branch's columns (:mod:`nlgrd.nonlinear.models.model_views`).
+    view : LinkView
+        Each orbit's and branch's columns (:mod:`nlgrd.nonlinear.models.model_views`); only
+        its ``row``, ``text``, ``frame`` and ``columns`` are used.
     every : bool
         The ``--period N`` search: follow unstable orbits too, period-N orbits only (one of a
         shorter minimal period is dropped: ``model_of`` gives the period-N model alone).
@@ -172,8 +173,8 @@ def period_response(model_of, fine_of, omegas, at, nu: int, H: int, unit, direct
         Frequency [rad/s] to text in the range's unit; ``unit.omega`` the inverse.
     directions : {"both", "up", "down"}
         Sweep directions of the response.
-    view : GearedView or LinkView
-        Each orbit's and branch's columns.
+    view : LinkView
+        Each orbit's and branch's columns (as :func:`search_and_follow`).
     report : callable, optional
         Takes each progress line (None: silent).
 

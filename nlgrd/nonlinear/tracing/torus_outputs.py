@@ -9,7 +9,11 @@ speed of ω₁, with the mesh damping, without k_h: the matrix of the periodic h
 balance's direct receptance). Its outputs are sampled on the torus (time averages of the
 quasi-periodic motion). :class:`GearedTorus` bundles them for
 :mod:`nlgrd.nonlinear.tracing.torus_sweep`; :mod:`nlgrd.nonlinear.tracing.link_torus` is the
-same for a model with any links.
+same for a model with any links, one mesh too, and the one the library uses (issue 33:
+:class:`GearedTorus`, :func:`geared_torus_model`, :func:`torus_bearing_forces` and
+:func:`torus_bearing_outputs` are the former one-mesh path, kept until the old engine goes).
+The outputs (:func:`torus_outputs`, :func:`torus_back_contact`, the bearing statistics)
+and κ(Ω) with its slope (:func:`kappa_and_slope`, :func:`dynamic_matrices`) serve both.
 """
 
 from __future__ import annotations
@@ -81,6 +85,55 @@ def geared_torus_model(model) -> qp.TorusModel:
     return qp.TorusModel(kappa_at, red.kappa, red.force, red.nonlinearities, kappa_slope_at=kappa_slope_at)
 
 
+def dynamic_matrices(linear, freqs: NDArray, speed: float, extra: sp.spmatrix | None = None):
+    """Z(Ω) + i Ω ``extra`` at each frequency, one CSC matrix whose values are replaced
+    in place (no sparse sum per frequency): the pattern of ``linear`` and ``extra``
+    joined once, the values added entry by entry (the numbers of the sparse sum).
+
+    Parameters
+    ----------
+    linear : LinearModel
+        Its ``dynamic_stiffness_data`` on its ``pattern_entries``.
+    freqs : ndarray (m,)
+        Ω [rad/s].
+    speed : float
+        Reference shaft speed [rad/s].
+    extra : sparse matrix (n, n), optional
+        Added as i Ω times it [N s/m].
+
+    Yields
+    ------
+    scipy.sparse.csc_matrix (n, n) complex
+        The same object each time, valid until the next.
+    """
+    if not len(freqs):
+        return
+    Z = linear.dynamic_stiffness(float(freqs[0]), speed)
+    if extra is None:
+        for f in freqs:
+            Z.data = linear.dynamic_stiffness_data(float(f), speed)
+            yield Z
+        return
+    n = Z.shape[0]
+    rows, cols = linear.pattern_entries
+    E = sp.coo_matrix(extra)
+    E.sum_duplicates()
+    kz = np.asarray(cols, dtype=np.int64) * n + np.asarray(rows, dtype=np.int64)
+    ke = E.col.astype(np.int64) * n + E.row.astype(np.int64)
+    keys = np.union1d(kz, ke)  # column-major: CSC order
+    pz, pe = np.searchsorted(keys, kz), np.searchsorted(keys, ke)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(keys // n, minlength=n))])
+    data = np.zeros(keys.size, dtype=complex)
+    Z = sp.csc_matrix((data, (keys % n).astype(np.int32), indptr), shape=(n, n))
+    for f in freqs:
+        f = float(f)
+        data = np.zeros(keys.size, dtype=complex)
+        data[pz] = linear.dynamic_stiffness_data(f, speed)
+        data[pe] += 1j * f * E.data
+        Z.data = data
+        yield Z
+
+
 def kappa_and_slope(linear, W: NDArray, freqs: NDArray, speed: float, extra: sp.spmatrix | None = None):
     """κ(Ω) = (Wᵀ Z(Ω)⁻¹ W)⁻¹ and dκ/dΩ at a fixed speed, one sparse LU of Z per frequency:
     dκ = -κ (dh) κ, dh = -(Z⁻ᵀ W)ᵀ Z'(Ω) (Z⁻¹ W), Z' on the model's pattern
@@ -110,14 +163,10 @@ def kappa_and_slope(linear, W: NDArray, freqs: NDArray, speed: float, extra: sp.
     kap = np.empty((len(freqs), nc, nc), dtype=complex)
     slope = np.empty_like(kap)
     rows, cols = linear.pattern_entries
-    Z = linear.dynamic_stiffness(float(freqs[0]), speed) if len(freqs) and extra is None else None
-    for i, f in enumerate(freqs):
+    matrices = dynamic_matrices(linear, freqs, speed, extra)
+    for i, (f, Z) in enumerate(zip(freqs, matrices, strict=True)):
         f = float(f)
-        if extra is None:  # the same matrix, its values replaced: no sparse construction
-            Z.data = linear.dynamic_stiffness_data(f, speed)
-            lu = spla.splu(Z)
-        else:
-            lu = spla.splu((linear.dynamic_stiffness(f, speed) + 1j * f * extra).tocsc())
+        lu = spla.splu(Z)
         u = lu.solve(Wc)
         kap[i] = np.linalg.inv(W.T @ u)
         v = lu.solve(Wc, trans="T")

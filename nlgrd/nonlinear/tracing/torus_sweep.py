@@ -6,9 +6,9 @@ frequency ω₁ and a secondary frequency ω₂ ≈ θ ω₁ / 2π. This module 
 two-frequency harmonic balance of :mod:`nlgrd.nonlinear.hb.quasi_periodic` (continuation
 in speed, starts from the critical Floquet mode, the ladder of H₁) and reports per point
 its outputs and their change from (H₁, H₂) to (H₁ + 4, H₂ + 2). What is solved and
-reported comes from a target: :class:`~nlgrd.nonlinear.tracing.torus_outputs.GearedTorus`
-(one mesh, the mesh coordinate) or :class:`~nlgrd.nonlinear.tracing.link_torus.LinkTorus`
-(all link coordinates of a link model); the sweep asks nothing else of the model.
+reported comes from a target: :class:`~nlgrd.nonlinear.tracing.link_torus.LinkTorus` (all
+link coordinates of a link model, one mesh too: the default); the sweep asks nothing else
+of the model.
 """
 
 from __future__ import annotations
@@ -26,7 +26,8 @@ from nlgrd.nonlinear.hb import quasi_periodic as qp
 from nlgrd.nonlinear.hb import torus_grid as tg
 from nlgrd.nonlinear.hb.solvers import solve
 from nlgrd.nonlinear.stability.floquet_mode import dominant_floquet_mode
-from nlgrd.nonlinear.tracing.torus_outputs import CHECKED, TORUS_OUTPUTS, GearedTorus
+from nlgrd.nonlinear.tracing.link_torus import LinkTorus
+from nlgrd.nonlinear.tracing.torus_outputs import CHECKED, TORUS_OUTPUTS
 from nlgrd.units import hz
 
 #: Largest relative speed step continued from the previous torus; beyond it the torus is
@@ -38,14 +39,14 @@ START_SIZES = (0.02, 0.1, 0.005, 0.3)
 
 @dataclass(frozen=True)
 class TorusResult:
-    """Tori of a geared model over speed, one row per speed.
+    """Tori of a model over speed, one row per speed.
 
     Attributes
     ----------
     omega : ndarray (n,)
-        Mesh frequency ω₁ [rad/s].
+        Base frequency ω₁ (one mesh: the mesh frequency) [rad/s].
     rpm : ndarray (n,)
-        Pinion speed [rpm].
+        Reference shaft speed [rpm].
     converged : ndarray of bool (n,)
         A torus was found (False where the periodic orbit is stable or Newton failed).
     outputs : ndarray (n, len(TORUS_OUTPUTS))
@@ -207,7 +208,7 @@ def torus_sweep(
     target=None,
     check_step: int = 1,
 ) -> TorusResult:
-    """Tori of a geared model at the given speeds, in their order (natural continuation).
+    """Tori of a model at the given speeds, in their order (natural continuation).
 
     At the first speed (and after any speed without a torus) the periodic orbit is solved
     (from ``periodic`` when given, e.g. a sweep's stored harmonics of the points it marked
@@ -219,14 +220,15 @@ def torus_sweep(
 
     Parameters
     ----------
-    model : GearedModel
-        From :func:`nlgrd.nonlinear.models.geared.build_geared_model` (period 1, built for ``H`` + 4).
+    model : LinkModel
+        From :func:`nlgrd.nonlinear.models.link_model.build_link_model` (period 1), one mesh
+        too; another model with its ``target``.
     omegas : array_like, optional
-        Mesh frequencies [rad/s]; or
+        Base frequencies [rad/s]; or
     rpm : array_like, optional
-        pinion speeds [rpm].
+        reference shaft speeds [rpm].
     H : int
-        Harmonics of the mesh frequency H₁ (the periodic sweep's H) [-].
+        Harmonics of the base frequency H₁ (the periodic sweep's H) [-].
     H2 : int
         Harmonics of the secondary frequency H₂ [-].
     periodic : ndarray (n, 1, 2H+1), optional
@@ -241,9 +243,8 @@ def torus_sweep(
         The starts tried from the periodic orbit (default :data:`START_SIZES`) [-].
     progress : callable (done, total), optional
         Called after each speed.
-    target : GearedTorus or LinkTorus, optional
-        What is solved and reported (default ``GearedTorus(model)``; a link model's:
-        :class:`nlgrd.nonlinear.tracing.link_torus.LinkTorus`).
+    target : LinkTorus, optional
+        What is solved and reported (default ``LinkTorus(model)``).
     check_step : int
         The check is at (H + 4 ``check_step``, H2 + 2): a link model's ``top_order`` [-].
 
@@ -261,13 +262,15 @@ def torus_sweep(
 
     if (omegas is None) == (rpm is None):
         raise ModelError("rpm", "give exactly one of omegas [rad/s] and rpm")
-    target = GearedTorus(model) if target is None else target
+    target = LinkTorus(model) if target is None else target
     omegas = np.atleast_1d(np.asarray(target.omegas(rpm) if omegas is None else omegas, dtype=float))
+    n = omegas.size
     tm = target.torus_model
     grid = tg.TorusGrid(H, H2, *tg.default_grid(H, H2))
     Hc = H + 4 * int(check_step)
+    if hasattr(target, "prepare") and n:  # a modal basis up to the check's top harmonic
+        target.prepare((Hc if check else H) * float(np.max(np.abs(omegas))) * 1.0001)
     fine = tg.TorusGrid(Hc, H2 + 2, *tg.default_grid(Hc, H2 + 2)) if check else None
-    n = omegas.size
     out = np.full((n, len(TORUS_OUTPUTS)), np.nan)
     change = np.full((n, len(CHECKED)), np.nan)
     mult = np.full(n, np.nan + 0j)
@@ -424,8 +427,8 @@ def converged_tori(
 
     Parameters
     ----------
-    model : GearedModel or LinkModel
-        Built for at least the top rung + 4 harmonics (period 1).
+    model : LinkModel
+        Period 1; its receptance prepared for the top rung + 4 ``step`` harmonics.
     omegas : ndarray (n,)
         Base frequencies, in the sweep's order [rad/s].
     periodic : ndarray (n, n_c, 2H+1)
@@ -438,8 +441,8 @@ def converged_tori(
         Harmonics of the secondary frequency [-].
     progress : callable (done, total), optional
         Called after each point of each rung (``total`` the points of the rung).
-    target : GearedTorus or LinkTorus, optional
-        What is solved and reported (:func:`torus_sweep`; default ``GearedTorus(model)``).
+    target : LinkTorus, optional
+        What is solved and reported (:func:`torus_sweep`; default ``LinkTorus(model)``).
     step : int
         The rungs of :data:`TORUS_LADDER` are H + ``step`` x rung and the check
         H₁ + 4 ``step`` (a link model's ``top_order``: its mesh at base harmonic ``step``)
@@ -456,7 +459,7 @@ def converged_tori(
     answers: list = [None] * n
     spent = np.zeros(n)
     pending = np.arange(n)
-    target = GearedTorus(model) if target is None else target
+    target = LinkTorus(model) if target is None else target
     step = int(step)
     rungs = [H + step * r for r in TORUS_LADDER if H + step * r <= max(H, step * TORUS_MAX_H)]
     z_all = np.asarray(periodic, dtype=float)
@@ -506,9 +509,9 @@ def tori_of_sweep(model, result, direction: str = "down", *, H2: int = 4, check:
 
     Parameters
     ----------
-    model : GearedModel
-        The model the sweep was made on.
-    result : GearedSweepResult or SweepResult
+    model : LinkModel
+        The model the sweep was made on (one mesh: its link model).
+    result : LinkSweepResult, GearedSweepResult or SweepResult
         The sweep (its mesh result holds the harmonics and the multipliers).
     direction : {"up", "down"}
         Which direction's points.
@@ -527,7 +530,7 @@ def tori_of_sweep(model, result, direction: str = "down", *, H2: int = 4, check:
     ModelError
         When the sweep's harmonics are not of the mesh frequency itself (``base`` > 1).
     """
-    mesh = getattr(result, "mesh", result)
+    mesh = result.result if hasattr(result, "links") else getattr(result, "mesh", result)
     if mesh.base != 1:
         raise ModelError("result", f"harmonics of ω/{mesh.base}: take the period-1 sweep (period=1)")
     keep = np.nonzero((mesh.direction == direction) & np.isfinite(mesh.secondary_frequency))[0]
