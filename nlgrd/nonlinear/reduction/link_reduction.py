@@ -208,10 +208,13 @@ class LinkReceptance:
         self._poles = BoundedCache(256)
         self.stability = TruncatedStability(self.model, self.P, self.K_link, self.C_link, top_order)
         self._banded = BoundedCache(8)  # the banded solvers, per tuple of output DOFs
-        # their solves of all harmonics per (ω, H, output DOFs), and the DOFs recovered last
-        # (the next frequencies' solves return them: the recovery needs no solve of its own)
-        self._band_sols, self._band_out = BoundedCache(64), ()
+        # solves per (ω, H, DOFs out), 4096 for the recovery; out: the bearings' (u_y, u_z), then recovered
+        self._band_sols, self._band_out, self._recovery = BoundedCache(64), (), BoundedCache(4096)
         self.method = self._auto_method(poles_apply) if method == "auto" else method
+        if self.method == "banded" and self.n_coords:
+            out = tuple(int(i) for b in system.bearings for i in system.dofs.node_dofs(b.shaft, b.node)[1:3])
+            same = np.array_equal(self._band_solver(out).keep, self._band_solver(()).keep)
+            self._band_out = out if same else ()  # only where the links' solve reaches them
         self.pole_check: dict[int, float] = {}
         if method == "modal" and max_frequency is None:
             raise ModelError("max_frequency", "the modal method needs the highest excitation frequency")
@@ -233,7 +236,7 @@ class LinkReceptance:
             return "direct"
         if not self.n_coords:  # no link: nothing to reduce onto
             return "poles" if poles_apply else "direct"
-        solver = self._band_solver()
+        solver = self._band_solver(())
         if poles_apply and (solver.keep.size <= POLES_LIMIT or self.n_coords > 1):
             return "poles"
         if solver.banded:
@@ -395,11 +398,11 @@ class LinkReceptance:
 
         return self._factors.get(("k", k, float(omega)), make)
 
-    def _band_solver(self, dofs=()) -> DirectSolver:
+    def _band_solver(self, dofs=None) -> DirectSolver:
         """The ``"banded"`` solver (:mod:`nlgrd.nonlinear.reduction.direct_receptance`) on the
         components of Z's graph holding a link, a forced DOF (all DOFs when the harmonic
-        forces' DOFs are not given) or one of ``dofs``, Z_k⁻¹ returned at ``dofs``."""
-        dofs = tuple(int(i) for i in dofs)
+        forces' DOFs are not given) or one of ``dofs`` (default: the sweep's), Z_k⁻¹ returned there."""
+        dofs = tuple(int(i) for i in (self._band_out if dofs is None else dofs))
 
         def make():
             m = self.model
@@ -442,6 +445,7 @@ class LinkReceptance:
         sol = self._band_solver(dofs).solve_forced(np.arange(1, H + 1), omega, derivative, rhs, drhs)
         if not derivative or self.n_coords == 1:
             self._band_sols.put(key, sol)
+            self._recovery.put(key, sol)  # Z_k⁻¹ P, Z_k⁻¹ f_k at the DOFs out, for recover
         return sol
 
     def _pole_form(self, k: int) -> LinkPoleForm | None:
@@ -696,8 +700,8 @@ class LinkReceptance:
         V = self.basis
         if self.method == "banded" and H:
             self._band_out = key = tuple(int(i) for i in dofs)
-            sol = self._band_solve(omega, H, key)  # Z⁻¹ (f - P G) = Z⁻¹ f - (Z⁻¹ P) G
-            if sol.Ug is None:  # f = P φ: Z⁻¹ P (φ - G)
+            sol = self._recovery.peek((float(omega), int(H), key)) or self._band_solve(omega, H, key)
+            if sol.Ug is None:  # Z⁻¹ (f - P G), f = P φ: Z⁻¹ P (φ - G); else Z⁻¹ f - (Z⁻¹ P) G
                 phi = self._force_parts(omega, H)[1]
                 out[1:] = np.einsum("kij,kj->ki", sol.U, phi[1:] - G[1:])
             else:

@@ -209,20 +209,26 @@ class TruncatedStability:
                 )
 
             def full():
-                return self._full.get(key, lambda: self.full_state(speed))
+                return self._full.get(key, lambda: self.full_state(speed, shared=True))
 
             dropped = self.dropped(cutoff, speed, omega)
             return self._on_basis(self.basis(cutoff), speed, larger, full, dropped)
 
         return self._spaces.get(key, make)
 
-    def full_state(self, speed: float) -> LinearStateSpace:
+    def full_state(self, speed: float, shared: bool = False) -> LinearStateSpace:
         """The full (dense) state space at reference speed ``speed`` [rad/s].
 
         Parameters
         ----------
         speed : float
             Reference shaft speed [rad/s].
+        shared : bool
+            Give it the model's store of Floquet work (the check of a truncated basis):
+            what does not depend on the speed (M⁻¹K, M⁻¹W, the null spaces of K and of
+            K + W K_t Wᵀ, keyed by content) is computed once per model, and a frequency
+            the sweep comes back to reuses its multipliers within ``REVISIT_RTOL``
+            (:func:`nlgrd.nonlinear.stability.floquet.floquet_multipliers`).
 
         Returns
         -------
@@ -230,7 +236,7 @@ class TruncatedStability:
         """
         m = self.model
         mats = (m.M, m.damping(speed) + self.C_link, m.stiffness(speed))
-        return LinearStateSpace(*(A.toarray() for A in mats), self.P)
+        return LinearStateSpace(*(A.toarray() for A in mats), self.P, cache=self._floquet if shared else None)
 
     def _on_basis(
         self,
