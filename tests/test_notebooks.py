@@ -86,6 +86,8 @@ NAMES = ("01_kubo_dynamic_factor", "02_kahraman_blankenship_dte", "03_flexibilit
 TIMEOUT = 300
 RTOL = 1e-4
 RPM, HZ = "pinion_speed [rpm]", "mesh_frequency [Hz]"
+#: The mesh's name in a link table (``nlgrd.sweep``: 03's tables; docs/conventions.md "Column names").
+MESH = "mesh0"
 
 SYNTHETIC = {
     "kubo": (
@@ -155,6 +157,7 @@ TORUS = "quasi-periodic"
 ANSWER_KINDS = (TORUS, *TIME_KINDS)
 #: Value columns of the sweep tables.
 VALUE_COLUMNS = ("dslr [-]", "dte_rms [um]", "force_max [N]", "contact_loss_fraction [-]")
+VALUE_COLUMNS += tuple(f"{MESH}.{c}" for c in VALUE_COLUMNS)  # a link table's
 
 
 def periodic(frame: pd.DataFrame) -> pd.DataFrame:
@@ -755,6 +758,7 @@ def test_flexibility_linear_study_and_bearing_forces(outputs, kubo):
 
 #: Columns that carry a response value in a sweep table.
 RESPONSE_COLUMNS = ("dslr [-]", "dte_rms [um]", "force_max [N]")
+RESPONSE_COLUMNS += tuple(f"{MESH}.{c}" for c in RESPONSE_COLUMNS)  # a link table's
 #: The default output tolerance of the harmonic estimate (nlgrd.nonlinear.tracing.harmonic_convergence).
 HARMONIC_RTOL = 5e-3
 
