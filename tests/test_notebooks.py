@@ -85,7 +85,11 @@ NAMES = ("01_kubo_dynamic_factor", "02_kahraman_blankenship_dte", "03_flexibilit
 #: Per-cell execution timeout of the test runs [s].
 TIMEOUT = 300
 RTOL = 1e-4
-RPM, HZ = "pinion_speed [rpm]", "mesh_frequency [Hz]"
+RPM, HZ = "pinion_speed [rpm]", "mesh_frequency [Hz]"  # 02's tables (the one-mesh engine's names)
+#: 01's and 03's tables (``nlgrd.sweep``, the link engine; docs/conventions.md "Column names"):
+#: the pinion's speed, the mesh frequency as the base, the mesh's outputs ``mesh0.<quantity>``.
+LINK_RPM, LINK_HZ, MESH = "shaft_speed [rpm]", "base_frequency [Hz]", "mesh0"
+DSLR, DTE_RMS, SUB = f"{MESH}.dslr [-]", f"{MESH}.dte_rms [um]", "subharmonic_amplitude [um]"
 
 SYNTHETIC = {
     "kubo": (
@@ -155,6 +159,7 @@ TORUS = "quasi-periodic"
 ANSWER_KINDS = (TORUS, *TIME_KINDS)
 #: Value columns of the sweep tables.
 VALUE_COLUMNS = ("dslr [-]", "dte_rms [um]", "force_max [N]", "contact_loss_fraction [-]")
+VALUE_COLUMNS += tuple(f"{MESH}.{c}" for c in VALUE_COLUMNS)  # a link table's
 
 
 def periodic(frame: pd.DataFrame) -> pd.DataFrame:
@@ -392,11 +397,11 @@ def test_kubo_main_resonance_jumps(outputs, kubo):
     """Up jump 8-15 % below the resonance (FE and SDOF), hysteresis between the jumps only."""
     _, res, _ = kubo
     out = outputs(NAMES[0])
-    fe = directions_of(periodic(read(out, "dslr_fe.csv")), RPM, "dte_rms [um]")
+    fe = directions_of(periodic(read(out, "dslr_fe.csv")), LINK_RPM, DTE_RMS)
     up, down = resonance_jumps(fe["up"], fe["down"], res)
     assert 0.85 * res < up.omega < 0.92 * res
     assert down.omega < up.omega - 0.2 * res  # a wide band of two solutions
-    sd = directions_of(read(out, "dslr_sdof_hb.csv"), RPM, "dte_rms [um]")
+    sd = directions_of(read(out, "dslr_sdof_hb.csv"), LINK_RPM, DTE_RMS)
     sd_up, sd_down = resonance_jumps(sd["up"], sd["down"], res)
     assert 0.85 * res < sd_up.omega < 0.92 * res
     assert sd_down.omega < sd_up.omega - 0.2 * res
@@ -418,9 +423,9 @@ def test_kubo_dslr_peak_is_bent_below_the_resonance(outputs, kubo):
     _, res, _ = kubo
     out = outputs(NAMES[0])
     fe = periodic(read(out, "dslr_fe.csv"))
-    dte = directions_of(fe, RPM, "dte_rms [um]")
+    dte = directions_of(fe, LINK_RPM, DTE_RMS)
     up_jump, _ = resonance_jumps(dte["up"], dte["down"], res)
-    dslr = directions_of(fe, RPM, "dslr [-]")
+    dslr = directions_of(fe, LINK_RPM, DSLR)
     x_pk, y_pk = local_peak(*dslr["up"], 0.7 * res, 1.3 * res)
     assert up_jump.omega <= x_pk <= res
     assert y_pk > 2.0
@@ -450,7 +455,7 @@ def test_kubo_superharmonic_and_harmonics(outputs, kubo):
     main resonance one harmonic is enough (the paper, §4.1)."""
     _, res, _ = kubo
     out = outputs(NAMES[0])
-    hc = directions_of(periodic(read(out, "dslr_fe.csv")), RPM, "dslr [-]")
+    hc = directions_of(periodic(read(out, "dslr_fe.csv")), LINK_RPM, DSLR)
     x5, y5 = local_peak(*hc["up"], 0.4 * res, 0.6 * res)
     assert abs(x5 / (res / 2) - 1) < 0.05
     y1 = landmark(out, "1/2 superharmonic peak, H = 1 (FE up)")
@@ -467,10 +472,10 @@ def test_kubo_time_integration_agrees_with_harmonic_balance(outputs):
     """The same SDOF equations by time integration (started on the HB solutions)."""
     out = outputs(NAMES[0])
     td = read(out, "dslr_sdof_td.csv")
-    hb = read(out, "dslr_sdof_hb.csv").set_index(["direction", HZ])["dslr [-]"]
+    hb = read(out, "dslr_sdof_hb.csv").set_index(["direction", LINK_HZ])[DSLR]
     assert len(td) >= 3 and td["converged"].all()
     for _, r in td.iterrows():
-        assert r["dslr [-]"] == pytest.approx(hb[(r["direction"], r[HZ])], rel=0.01)
+        assert r[DSLR] == pytest.approx(hb[(r["direction"], r[LINK_HZ])], rel=0.01)
     assert set(td["direction"]) == {"up", "down"}  # the down point is on the contact-loss branch
 
 
@@ -488,7 +493,7 @@ def test_kubo_every_speed_is_answered_and_the_bifurcations_listed(outputs):
     against time integration in tests/test_beyond_period_one.py.)"""
     out = outputs(NAMES[0])
     fe = read(out, "dslr_fe.csv")
-    check_answered(fe, read(out, "response_counts_fe.csv"), "dslr [-]")
+    check_answered(fe, read(out, "response_counts_fe.csv"), DSLR)
     assert fe["response"].isin(TIME_KINDS).sum() >= 1  # the fast run answers some in the time domain
     kinds = {"periodic", "period 2", "quasi-periodic", "no stable mesh-periodic response"}
     ok = fe["converged"].astype(bool)
@@ -496,14 +501,10 @@ def test_kubo_every_speed_is_answered_and_the_bifurcations_listed(outputs):
     assert fe.loc[ok & ~unsettled, HB_RESPONSE].isin(kinds).all()
     assert (fe.loc[fe["direction"] == "down", HB_RESPONSE] != "periodic").sum() >= 1  # multipliers > 1 there
     two = fe[fe["response"] == "period 2"]
-    assert (
-        (two["period"] == 2).all()
-        and (two["subharmonic_amp [um]"] > 0).all()
-        and two["dslr [-]"].notna().all()
-    )
+    assert (two["period"] == 2).all() and (two[SUB] > 0).all() and two[DSLR].notna().all()
     quasi = fe[fe[HB_RESPONSE] == "quasi-periodic"]
     f2 = quasi["secondary_frequency [Hz]"]
-    assert (f2 > 0).all() and (f2 <= quasi[HZ] / 2 * (1 + 1e-9)).all()
+    assert (f2 > 0).all() and (f2 <= quasi[LINK_HZ] / 2 * (1 + 1e-9)).all()
     assert quasi["response"].isin([*ANSWER_KINDS, NOT_FOUND]).all()  # never a periodic value
     expected = []
     for d in ("up", "down"):
@@ -755,6 +756,7 @@ def test_flexibility_linear_study_and_bearing_forces(outputs, kubo):
 
 #: Columns that carry a response value in a sweep table.
 RESPONSE_COLUMNS = ("dslr [-]", "dte_rms [um]", "force_max [N]")
+RESPONSE_COLUMNS += tuple(f"{MESH}.{c}" for c in RESPONSE_COLUMNS)  # a link table's
 #: The default output tolerance of the harmonic estimate (nlgrd.nonlinear.tracing.harmonic_convergence).
 HARMONIC_RTOL = 5e-3
 
@@ -786,7 +788,11 @@ def unphysical_rows(frame: pd.DataFrame, time_integration: bool = False) -> list
     for c in cols:  # a time answer's value comes with its standard uncertainty
         stem, _, unit = c.partition(" [")
         u = rows.get(f"{stem}_uncertainty [{unit}", pd.Series(np.nan, index=rows.index))
-        if (timed & rows[c].notna() & ~(u > 0)).any():
+        # a link table (``<owner>.<quantity>``) writes a dimensioned value at rounding level
+        # (<= ROUNDING_FLOOR of its row's largest of the unit) as 0 (nlgrd.units.floor_rounding):
+        # there an uncertainty of a record that settled (1e-9 of the value) is written 0, not missing
+        floored = "." in stem and unit != "-]"
+        if (timed & rows[c].notna() & ~((u > 0) | (floored & (u == 0)))).any():
             bad.append(f"time answer of {c} without its uncertainty")
     torus = rows["response"].eq(TORUS) if "response" in rows else pd.Series(False, index=rows.index)
     if torus.any():  # a torus answer: its ω₂ and its own convergence estimate, stability not computed
@@ -853,6 +859,14 @@ def test_scan_catches_unstable_and_unconverged_rows():
     timed = good.assign(stable=[True, False], response=["periodic", "time domain"])
     assert unphysical_rows(timed.assign(**{"dslr_uncertainty [-]": [np.nan, 0.01]})) == []
     assert unphysical_rows(timed) == ["time answer of dslr [-] without its uncertainty"]
+    link = timed.rename(columns={"dslr [-]": DSLR}).assign(**{DTE_RMS: [1.0, 10.7]})
+    floored = {"mesh0.dslr_uncertainty [-]": [np.nan, 9e-8], "mesh0.dte_rms_uncertainty [um]": [np.nan, 0.0]}
+    assert unphysical_rows(link.assign(**floored)) == []  # 0 um: below the rounding floor, written 0
+    zero = {**floored, "mesh0.dslr_uncertainty [-]": [np.nan, 0.0]}  # [-] is never floored
+    assert unphysical_rows(link.assign(**zero)) == [f"time answer of {DSLR} without its uncertainty"]
+    assert unphysical_rows(link.assign(**{"mesh0.dslr_uncertainty [-]": [np.nan, 9e-8]})) == [
+        f"time answer of {DTE_RMS} without its uncertainty"
+    ]
     assert unphysical_rows(good.drop(columns="stable")) == ["no stability column"]
     torus = good.assign(stable=[True, pd.NA], response=["periodic", TORUS])
     assert unphysical_rows(torus.assign(**{"secondary_frequency [Hz]": [np.nan, 1058.0]})) == []

@@ -29,6 +29,7 @@ import pandas as pd
 
 from nlgrd.nonlinear.models.geared import GearedSweepResult
 from nlgrd.nonlinear.models.link_model import LinkModel, build_link_model
+from nlgrd.nonlinear.results.link_results import LinkSweepResult
 from nlgrd.nonlinear.results.sweep_results import SweepResult
 from nlgrd.rotor.system import RotorSystem
 from nlgrd.timedomain.sweep_answers import OUTPUT_RTOL, with_time_answers, with_torus_answers
@@ -44,6 +45,9 @@ __all__ = [
     "response_counts",
 ]
 
+#: A report's sweep: one mesh's (the former engine) or a link model's (``nlgrd.sweep``).
+Sweep = GearedSweepResult | LinkSweepResult
+
 #: The ``response`` of a point without any answer.
 NOT_FOUND = "not found"
 #: Column of the harmonic balance's own kind of response (before the time answers).
@@ -52,20 +56,54 @@ HB_RESPONSE = "hb_response"
 KIND_ORDER = ("periodic", "period", "quasi-periodic", "time domain", "chaotic", NOT_FOUND)
 
 
-def gap_rows(result: GearedSweepResult | SweepResult) -> np.ndarray:
+def _points(result: Sweep | SweepResult) -> SweepResult:
+    """The harmonic-balance points of a sweep."""
+    if isinstance(result, GearedSweepResult):
+        return result.mesh
+    return result.result if isinstance(result, LinkSweepResult) else result
+
+
+def _with_points(result: Sweep, points: SweepResult) -> Sweep:
+    """``result`` with its harmonic-balance points replaced."""
+    if isinstance(result, GearedSweepResult):
+        return dc.replace(result, mesh=points)
+    return dc.replace(result, result=points)
+
+
+def _speed_kept(result: Sweep, answered: Sweep) -> Sweep:
+    """``answered`` with ``result``'s speed column settings (a link sweep's answers are built
+    anew, without them)."""
+    if isinstance(result, LinkSweepResult):
+        return dc.replace(answered, speed_per_base=result.speed_per_base, speed_unit=result.speed_unit)
+    return answered
+
+
+def _put_link_rows(links: pd.DataFrame, part: pd.DataFrame, rows: np.ndarray) -> pd.DataFrame:
+    """``links`` with ``part``'s values at ``rows`` (every column of ``part``: the
+    uncertainty columns a time answer adds too, NaN elsewhere)."""
+    out = links.copy()
+    for c in part.columns:
+        if c not in out:
+            out[c] = np.nan
+        col = out.columns.get_loc(c)
+        out.iloc[rows, col] = part.iloc[rows][c].to_numpy()
+    return out
+
+
+def gap_rows(result: Sweep | SweepResult) -> np.ndarray:
     """Rows the time domain is asked to answer: converged, no stable periodic response, not
     answered by a torus.
 
     Parameters
     ----------
-    result : GearedSweepResult or SweepResult
+    result : GearedSweepResult, LinkSweepResult or SweepResult
         The sweep.
 
     Returns
     -------
     ndarray of int
     """
-    res = result.mesh if isinstance(result, GearedSweepResult) else result
+    res = _points(result)
     gaps = np.asarray(res.converged, bool) & np.asarray(res.no_stable, bool)
     return np.nonzero(gaps & ~np.asarray(res.time_answered, bool))[0]  # a torus's answer stays
 
@@ -77,12 +115,10 @@ def _only_rows(res: SweepResult, rows: np.ndarray) -> SweepResult:
     return dc.replace(res, no_stable=np.asarray(res.no_stable, bool) & keep)
 
 
-def _answer_rows(
-    result: GearedSweepResult, system: RotorSystem, rows: np.ndarray, options: dict
-) -> GearedSweepResult:
+def _answer_rows(result: Sweep, system: RotorSystem, rows: np.ndarray, options: dict) -> Sweep:
     """A worker's task: the time answers at ``rows`` (module docstring), on the link model
     built here from ``system`` (a link model does not pickle; the build is deterministic)."""
-    part = dc.replace(result, mesh=_only_rows(result.mesh, rows))
+    part = _with_points(result, _only_rows(_points(result), rows))
     return with_time_answers(part, build_link_model(system), **options)
 
 
@@ -107,17 +143,27 @@ def _put_rows(out: dict, part: SweepResult, rows: np.ndarray, n: int) -> None:
             out[f.name] = a
 
 
-def _torus_rows(
-    result: GearedSweepResult, system: RotorSystem, rows: np.ndarray, rtol: float
-) -> GearedSweepResult:
+def _torus_rows(result: Sweep, system: RotorSystem, rows: np.ndarray, rtol: float) -> Sweep:
     """A worker's task: the torus answers of one direction (``rows``), followed along it as
     :func:`~nlgrd.timedomain.sweep_answers.with_torus_answers` follows each direction."""
-    return with_torus_answers(dc.replace(result, mesh=_only_rows(result.mesh, rows)), system, rtol=rtol)
+    return with_torus_answers(_with_points(result, _only_rows(_points(result), rows)), system, rtol=rtol)
+
+
+def _merged(result: Sweep, parts: list[tuple[Sweep, np.ndarray]]) -> Sweep:
+    """A link sweep with each worker's rows put back: its points' per-point fields and its
+    links' columns (:func:`_put_rows`, :func:`_put_link_rows`)."""
+    res, n = result.result, len(result.result)
+    merged = {f.name: getattr(res, f.name) for f in dc.fields(res)}
+    links = result.links
+    for part, rows in parts:
+        _put_rows(merged, part.result, rows, n)
+        links = _put_link_rows(links, part.links, rows)
+    return dc.replace(result, result=dc.replace(res, **merged), links=links)
 
 
 def torus_answers_in_parallel(
-    result: GearedSweepResult, system: RotorSystem, *, workers: int = 1, rtol: float = OUTPUT_RTOL
-) -> GearedSweepResult:
+    result: Sweep, system: RotorSystem, *, workers: int = 1, rtol: float = OUTPUT_RTOL
+) -> Sweep:
     """The sweep's Neimark-Sacker points answered by the torus harmonic balance
     (:func:`~nlgrd.timedomain.sweep_answers.with_torus_answers`), each direction on its own
     process: a direction's tori are followed from point to point along it and never from the
@@ -126,8 +172,8 @@ def torus_answers_in_parallel(
 
     Parameters
     ----------
-    result : GearedSweepResult
-        The one-mesh sweep.
+    result : GearedSweepResult or LinkSweepResult
+        The sweep: one mesh's, or a link model's (``nlgrd.sweep``).
     system : RotorSystem
         The rotor swept.
     workers : int
@@ -137,17 +183,22 @@ def torus_answers_in_parallel(
 
     Returns
     -------
-    GearedSweepResult
+    The same type as ``result``.
     """
-    res, n = result.mesh, len(result.mesh)
+    res = _points(result)
+    n = len(res)
     direction = np.asarray(res.direction).astype(str)
     groups = [np.nonzero(direction == d)[0] for d in dict.fromkeys(direction.tolist())]
     workers = max(1, min(int(workers), len(groups)))
     if workers == 1:
-        return with_torus_answers(result, system, rtol=rtol)
+        return _speed_kept(result, with_torus_answers(result, system, rtol=rtol))
+    context = multiprocessing.get_context("spawn")  # no fork of a threaded kernel
+    if isinstance(result, LinkSweepResult):
+        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+            futures = {pool.submit(_torus_rows, result, system, g, rtol): g for g in groups}
+            return _merged(result, [(fut.result(), futures[fut]) for fut in as_completed(futures)])
     merged = {f.name: getattr(res, f.name) for f in dc.fields(res)}
     bearings = {f.name: getattr(result.bearings, f.name) for f in dc.fields(result.bearings)}
-    context = multiprocessing.get_context("spawn")  # no fork of a threaded kernel
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         futures = {pool.submit(_torus_rows, result, system, g, rtol): g for g in groups}
         for fut in as_completed(futures):
@@ -159,7 +210,7 @@ def torus_answers_in_parallel(
 
 
 def answer_gaps_in_parallel(
-    result: GearedSweepResult,
+    result: Sweep,
     system: RotorSystem,
     *,
     model: LinkModel | None = None,
@@ -168,7 +219,7 @@ def answer_gaps_in_parallel(
     rtol: float = OUTPUT_RTOL,
     progress: Callable[[int, int], None] | None = None,
     **options,
-) -> GearedSweepResult:
+) -> Sweep:
     """The sweep with its gaps answered as every sweep answers them
     (:func:`~nlgrd.timedomain.sweep_answers.answer_sweep`), the time answers on ``workers``
     processes: first the Neimark-Sacker points by the torus harmonic balance where it
@@ -186,8 +237,8 @@ def answer_gaps_in_parallel(
 
     Parameters
     ----------
-    result : GearedSweepResult
-        The one-mesh sweep.
+    result : GearedSweepResult or LinkSweepResult
+        The sweep: one mesh's, or a link model's (``nlgrd.sweep``).
     system : RotorSystem
         The rotor swept.
     model : LinkModel, optional
@@ -207,7 +258,7 @@ def answer_gaps_in_parallel(
 
     Returns
     -------
-    GearedSweepResult
+    The same type as ``result``.
     """
     if torus:  # the torus first, along the sweep (each from its neighbour's): a process a direction
         result = torus_answers_in_parallel(result, system, workers=workers, rtol=rtol)
@@ -215,9 +266,19 @@ def answer_gaps_in_parallel(
     workers = max(1, min(int(workers), rows.size))
     if workers == 1 or rows.size == 0:
         model = build_link_model(system) if model is None else model
-        return with_time_answers(result, model, progress=progress, **options)
-    res, n = result.mesh, len(result.mesh)
+        return _speed_kept(result, with_time_answers(result, model, progress=progress, **options))
     tasks = [rows[i::workers] for i in range(workers)]
+    context = multiprocessing.get_context("spawn")  # no fork of a threaded kernel
+    if isinstance(result, LinkSweepResult):
+        parts = []
+        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+            futures = {pool.submit(_answer_rows, result, system, t, options): t for t in tasks}
+            for done, fut in enumerate(as_completed(futures), 1):
+                parts.append((fut.result(), futures[fut]))
+                if progress is not None:
+                    progress(done, len(tasks))
+        return _merged(result, parts)
+    res, n = result.mesh, len(result.mesh)
     merged = {f.name: getattr(res, f.name) for f in dc.fields(res)}
     nan = {
         f.name: np.full_like(np.asarray(getattr(result.bearings, f.name), float), np.nan)
@@ -225,7 +286,6 @@ def answer_gaps_in_parallel(
     }
     bearings = {f.name: getattr(result.bearings, f.name) for f in dc.fields(result.bearings)}
     unc = nan if result.bearing_uncertainty is None else dc.asdict(result.bearing_uncertainty)
-    context = multiprocessing.get_context("spawn")  # no fork of a threaded kernel
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         futures = {pool.submit(_answer_rows, result, system, t, options): t for t in tasks}
         for done, fut in enumerate(as_completed(futures), 1):
@@ -261,8 +321,11 @@ def answered_table(hb: pd.DataFrame, answered: pd.DataFrame, value: str = "dte_r
         did not converge) and the harmonic balance's ``response`` in :data:`HB_RESPONSE`,
         beside it.
     """
-    if len(hb) != len(answered) or not np.array_equal(
-        hb["mesh_frequency [Hz]"].to_numpy(float), answered["mesh_frequency [Hz]"].to_numpy(float)
+    freq = "base_frequency [Hz]" if "base_frequency [Hz]" in hb else "mesh_frequency [Hz]"
+    if (
+        len(hb) != len(answered)
+        or freq not in answered
+        or not np.array_equal(hb[freq].to_numpy(float), answered[freq].to_numpy(float))
     ):
         raise ValueError("answered_table: the two tables are not the same sweep's rows")
     out = answered.copy()

@@ -18,6 +18,37 @@ from nlgrd.studies.experimental import (
     directions_of,
 )
 
+#: A link table's (``nlgrd.sweep``) names of the data sets' abscissae: the reference shaft's
+#: speed (a one-mesh model's pinion) and the base frequency (its mesh frequency).
+LINK_ABSCISSAE = {"pinion_speed [rpm]": "shaft_speed [rpm]", "mesh_frequency [Hz]": "base_frequency [Hz]"}
+
+
+def frame_columns(data: ExperimentalSet, frame: pd.DataFrame) -> tuple[str, str]:
+    """The columns of ``frame`` a data set is compared with: its abscissa and its quantity,
+    as a one-mesh table names them or as a link table does (``shaft_speed [rpm]``,
+    ``base_frequency [Hz]``, the first mesh's ``<mesh>.<quantity> [unit]``;
+    docs/conventions.md, "Column names").
+
+    Parameters
+    ----------
+    data : ExperimentalSet
+        The measured data set.
+    frame : pandas.DataFrame
+        The sweep table.
+
+    Returns
+    -------
+    (str, str)
+        The abscissa's and the quantity's column (as the data set names them when the table
+        has neither form: :func:`directions_of` then names the missing one).
+    """
+    x, q = data.frame_x_column, data.frame_column
+    if x not in frame and LINK_ABSCISSAE.get(x) in frame:
+        x = LINK_ABSCISSAE[x]
+    if q not in frame:
+        q = next((c for c in frame.columns if c.endswith(f".{q}") and "_uncertainty" not in c), q)
+    return x, q
+
 
 def _model_curve(curves: dict, direction: str) -> tuple[NDArray, NDArray] | None:
     """Model curve for a measured direction: the same direction, or for "unknown" the
@@ -80,8 +111,9 @@ def compare(data: ExperimentalSet, frame: pd.DataFrame) -> pd.DataFrame:
     data : ExperimentalSet
         The measured data set.
     frame : pandas.DataFrame
-        The sweep table (``SweepResult.to_frame()`` or ``GearedSweepResult.to_frame()``),
-        with the data set's abscissa and quantity columns and ``direction``.
+        The sweep table (``SweepResult.to_frame()``, ``GearedSweepResult.to_frame()`` or a
+        link table's, ``nlgrd.sweep(...).to_frame()``), with the data set's abscissa and
+        quantity columns (:func:`frame_columns`) and ``direction``.
 
     Returns
     -------
@@ -94,7 +126,7 @@ def compare(data: ExperimentalSet, frame: pd.DataFrame) -> pd.DataFrame:
     ModelError
         When the table lacks a column the comparison needs.
     """
-    curves = directions_of(frame, data.frame_x_column, data.frame_column)
+    curves = directions_of(frame, *frame_columns(data, frame))
     xu, vu = X_UNITS[data.x_column], QUANTITIES[data.quantity][1]
     rows = []
     for d in data.directions():
