@@ -571,10 +571,10 @@ def test_kb_dte_main_resonance_and_superharmonics(outputs, kb_mode):
     fe = read(out, "dte_fe.csv")
     flagged = ~fe[HB_RESPONSE].isin(["periodic", "period 2"])
     assert (fe.loc[flagged & fe["converged"], "floquet_max [-]"] > 1).all()
-    assert fe.loc[~flagged, "dte_rms [um]"].notna().all()
+    assert fe.loc[~flagged, DTE_RMS].notna().all()
     # where flagged, a value only from the time domain
-    assert (fe.loc[flagged, "dte_rms [um]"].notna() == fe.loc[flagged, "response"].isin(ANSWER_KINDS)).all()
-    c = directions_of(periodic(fe), HZ, "dte_rms [um]")
+    assert (fe.loc[flagged, DTE_RMS].notna() == fe.loc[flagged, "response"].isin(ANSWER_KINDS)).all()
+    c = directions_of(periodic(fe), LINK_HZ, DTE_RMS)
     for d in ("up", "down"):
         x_pk, _ = local_peak(*c[d], 0.7 * f_gp, 1.1 * f_gp)
         assert 0.85 * f_gp < x_pk < 0.97 * f_gp, (d, x_pk)
@@ -596,20 +596,20 @@ def test_kb_parametric_stiffness_answers_every_point(outputs):
     point carries its secondary frequency |arg mu| f / (2 pi period), in (0, f/2]."""
     out = outputs(NAMES[1])
     par = read(out, "dte_rms_parametric.csv")
-    need = {HZ, "direction", "converged", "stable", "response", "period", "subharmonic_amp [um]"}
-    assert need | {"secondary_frequency [Hz]", "dte_rms [um]", "instability"} <= set(par.columns)
+    need = {LINK_HZ, "direction", "converged", "stable", "response", "period", SUB}
+    assert need | {"secondary_frequency [Hz]", DTE_RMS, "instability"} <= set(par.columns)
     assert set(par["direction"]) == {"up", "down"}
     conv = par["converged"].astype(bool)
     assert par.loc[conv, "response"].isin(ANSWERS).all(), set(par["response"])
     assert par.loc[~conv, "response"].isna().all()
     assert landmark(out, "parametric sweep points without a solution") == (~conv).sum()
     drawn = par["response"].isin(["periodic", "period 2"])
-    assert par.loc[drawn, "dte_rms [um]"].notna().all() and par.loc[~drawn, "dte_rms [um]"].isna().all()
+    assert par.loc[drawn, DTE_RMS].notna().all() and par.loc[~drawn, DTE_RMS].isna().all()
     assert (par.loc[drawn, "stable"] == True).all()  # noqa: E712
     qp = par[par["response"] == "quasi-periodic"]
     f2 = qp["secondary_frequency [Hz]"]
     # written to 8 significant digits: 1e-7 relative covers the rounding at the f/2 end
-    assert ((f2 > 0) & (f2 <= qp[HZ] / 2 * (1 + 1e-7))).all()
+    assert ((f2 > 0) & (f2 <= qp[LINK_HZ] / 2 * (1 + 1e-7))).all()
 
 
 @pytest.mark.notebook
@@ -629,9 +629,9 @@ def test_kb_period_two_where_period_one_flips(outputs, kb_mode):
     # A real period doubling grows the omega/2 harmonic to the size of the motion (measured 1.19 um
     # against 1.00 um of DTE RMS); 10 % of the DTE RMS is far above the 1e-6 relative at which
     # nlgrd.nonlinear.fourier.periods.period_of counts it as present, and far below what was measured.
-    assert (two["subharmonic_amp [um]"] > 0.1 * two["dte_rms [um]"]).all()
-    p1 = read(out, "period1_at_period2_points.csv").set_index(["direction", HZ])
-    for d, f in zip(two["direction"], two[HZ], strict=True):
+    assert (two[SUB] > 0.1 * two[DTE_RMS]).all()
+    p1 = read(out, "period1_at_period2_points.csv").set_index(["direction", LINK_HZ])
+    for d, f in zip(two["direction"], two[LINK_HZ], strict=True):
         r = p1.loc[(d, f)]
         absent = not bool(r["period-1 orbit converged"])
         mu_re = r["period-1 orbit dominant_multiplier_re [-]"]
@@ -640,8 +640,8 @@ def test_kb_period_two_where_period_one_flips(outputs, kb_mode):
     # 3/2 of the mesh frequency between the main peak bent up to 15 % below the gear-pair mode
     # (test_kb_dte_main_resonance_and_superharmonics) and the mode itself puts the band at
     # 0.57-0.67 f_gp; a grid step (88 Hz, 0.019 f_gp) on either side gives 0.55-0.69
-    assert (two[HZ] / f_gp).between(0.55, 0.69).all(), two[HZ].tolist()
-    assert landmark(out, "period-2 band low (parametric k)") == pytest.approx(two[HZ].min(), rel=1e-9)
+    assert (two[LINK_HZ] / f_gp).between(0.55, 0.69).all(), two[LINK_HZ].tolist()
+    assert landmark(out, "period-2 band low (parametric k)") == pytest.approx(two[LINK_HZ].min(), rel=1e-9)
 
 
 @pytest.mark.notebook
@@ -654,7 +654,7 @@ def test_kb_third_superharmonic_constant_against_parametric(outputs, kb_mode):
     out = outputs(NAMES[1])
     peaks = read(out, "peaks_parametric.csv")
     third = peaks[peaks["peak"] == "1/3 superharmonic"].set_index("direction")
-    step = np.diff(np.sort(read(out, "dte_fe.csv")[HZ].unique())).min()
+    step = np.diff(np.sort(read(out, "dte_fe.csv")[LINK_HZ].unique())).min()
     for label in ("constant", "parametric"):
         x = third.loc["up", f"{label} frequency [Hz]"]
         assert 0.25 * f_gp <= x <= 0.37 * f_gp, (label, x)
@@ -679,7 +679,7 @@ def test_kb_counts_are_the_runs_and_the_floor_restores_stable_points(outputs):
     table = read(out, "floor_counts.csv").set_index("model")
     for name, csv in (("as given", "dte_fe"), (table.index[1], "dte_fe_floor")):
         fe = read(out, f"{csv}.csv")
-        check_answered(fe, read(out, csv.replace("dte_", "response_counts_") + ".csv"), "dte_rms [um]")
+        check_answered(fe, read(out, csv.replace("dte_", "response_counts_") + ".csv"), DTE_RMS)
         conv = fe["converged"].astype(bool)
         ok = fe[HB_RESPONSE].isin(["periodic", "period 2"])
         row = table.loc[name]
