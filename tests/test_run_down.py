@@ -16,8 +16,9 @@ Model: Kubo's rig (data/case_studies/kubo.toml, 84 DOFs, gyroscopic terms presen
   6700-6420 rpm keeps clear of a narrow resonance of a high LSTE harmonic near 6380 rpm,
   which no ramp at this rate resolves (the ramp rounds its 6 % peak off).
 - A jump: at mesh damping ratio 0.02 the down sweep's high branch ends near 7900 rpm
-  (harmonic balance on a 25 rpm grid, :func:`nlgrd.nonlinear.models.geared.geared_sweep`, from
-  8400 rpm, below a short quasi-periodic band); the ramp, started on the HB orbit at 8400
+  (harmonic balance on a 25 rpm grid on the link engine,
+  :func:`nlgrd.nonlinear.models.link_model.link_sweep`, from 8400 rpm, below a short
+  quasi-periodic band); the ramp, started on the HB orbit at 8400
   rpm, must fall off it no earlier than the HB's last high-branch point and at most four
   grid steps later (a slow passage through a fold is delayed, never early), and halving
   the rate must move the jump by less than 0.5 % of its speed.
@@ -34,7 +35,8 @@ import pytest
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.fourier.harmonics import real_to_complex
-from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
+from nlgrd.nonlinear.models.geared import build_geared_model
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 from nlgrd.timedomain.geared import start_from_harmonics, time_response
 from nlgrd.timedomain.run_down import ramp_from, run_down
 
@@ -108,14 +110,16 @@ def test_slow_linear_ramp_follows_the_frequency_response(model):
 def test_ramp_jump_matches_the_fold_and_is_rate_converged():
     system, m = kubo(damping_ratio=0.02)
     rpm = np.arange(11000.0, 7600.0 - 1, -25.0)  # from above the resonance: on the high branch
-    hb = geared_sweep(system, rpm=rpm, H=9, directions="down", model=m)
-    order = np.argsort(-hb.mesh.omega)
-    x, y = m.pinion_rpm(hb.mesh.omega[order]), np.asarray(hb.mesh.metrics["dte_rms"])[order]
+    sw = link_sweep(build_link_model(system), m.mesh_frequency(rpm), H=9, directions="down")
+    hb = sw.result
+    order = np.argsort(-hb.omega)
+    x, y = m.pinion_rpm(hb.omega[order]), sw.links["mesh0.dte_rms [m]"].to_numpy()[order]
     below = np.nonzero(x <= 8400.0 + 1e-6)[0]
     k = below[0] + int(np.nonzero(y[below][1:] < 0.5 * y[below][:-1])[0][0])
     fold = x[k]  # the last high-branch point of the HB down sweep
     i0 = below[0]
-    s0 = start_from_harmonics(m, hb.mesh.omega[order][i0], hb.mesh.harmonics[order][i0])
+    assert int(hb.period[order][i0]) == 1  # mesh-periodic: its harmonics are of ω
+    s0 = start_from_harmonics(m, hb.omega[order][i0], hb.harmonics[order][i0])
     per_rpm = float(m.mesh_frequency(1.0))
     jumps = []
     for rate_rpm in (400.0, 200.0):
