@@ -16,7 +16,8 @@ Ritz values are exact eigenvalues of a matrix within ‖R‖ <= RITZ_RTOL ‖Φ�
 monodromy Φ, so to first order |Δμ| <= κ(μ) RITZ_RTOL ‖Φ‖_F, κ(μ) = ‖x‖‖y‖/|yᴴx| the
 condition number of the dominant multiplier (right and left eigenvectors of Φ, computed
 here by a dense solve; 1e-12 is added for the reference's own rounding); a revisited
-frequency (shared cache) adds REVISIT_RTOL ‖Φ‖₁. On this sweep κ = 23-260, bounds
+frequency (shared cache) adds REVISIT_RTOL ‖Φ‖₁. On this sweep (measured on the former
+mesh-coordinate engine's basis; now the link model's stability basis) κ = 23-260, bounds
 3e-6-4e-5 (all far from deciding a verdict: the least unstable point has max |μ| =
 1.0004); observed 2e-12 and 2e-11 (33 of the 72 contact-loss points reuse the other
 sweep direction's multipliers).

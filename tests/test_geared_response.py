@@ -260,7 +260,7 @@ def test_no_stable_response_confirmed_by_time_integration():
     om = np.array([13600.0, 13900.0]) * np.pi / 30 / model.receptance.plan.speed_per_base
     hb = link_sweep(model, om, H=5, directions="up", period=1)
     assert hb.result.stable[0] and hb.result.no_stable[1]
-    # the former reference's time sweep (nlgrd.timedomain.geared.time_sweep's defaults)
+    # the time sweep of the former mesh-coordinate reference (its defaults)
     td = link_time_sweep(model, om, "up", steps_per_period=256, tol=1e-4, max_periods=3000).to_frame()
     assert bool(td["converged"].iloc[0]) and not bool(td["converged"].iloc[1])
     hb_rms = hb.to_frame()["mesh0.dte_rms [um]"].iloc[0]

@@ -38,7 +38,7 @@ from nlgrd.timedomain.links import link_time_response, start_from_harmonics
 
 KB = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kahraman_blankenship.toml"
 
-#: The former reference's time sweep (nlgrd.timedomain.geared.time_sweep's defaults).
+#: The time sweep of the former mesh-coordinate reference (its defaults).
 TD = dict(steps_per_period=256, tol=1e-4, max_periods=3000)
 #: Where the DTE RMS is judged: its tolerance [-] and the periods integrated beyond 3000.
 JUDGED = {1321.7: (1.5e-2, 6000), 1304.3: (5e-3, 6000)}
