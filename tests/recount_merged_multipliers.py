@@ -1,5 +1,6 @@
 """Recount (issue 35 item 1): do the stability columns of every row of K&B's period-"auto"
-sweeps belong to the orbit the row answers?
+sweeps belong to the orbit the row answers? (The sweeps of the link engine: ``link_sweep``
+as ``nlgrd.sweep`` runs it.)
 
 For each converged row with a settled verdict, the Floquet multipliers of the row's own
 orbit (its stored harmonics) are recomputed on the model of the sweep's base (the
@@ -16,7 +17,9 @@ Fast (notebook 02's fast grid, 60 points per direction; the parametric windows a
 main sweep as given): 889 s at nice 15 on the shared 2-core machine (load 10-14),
 2026-12-06; result: 0 of 144 rows (the 2/3 window on the ω/2 base: 10 period-1 rows
 beside 2 period-2 rows, largest difference 5e-15; the main sweep on the ω/2 base, 120
-rows, 1.2e-3).
+rows, 1.2e-3). On the link engine: 697 s at nice 15 (load 6-9), 2026-12-07; 0 of 144
+rows (the 2/3 window 1.8e-15, the 1/4 window on the ω base 7.2e-3, the main sweep
+1.15e-3).
 """
 
 from __future__ import annotations
@@ -29,7 +32,8 @@ from pathlib import Path
 import numpy as np
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.models.geared import gear_pair_mode
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep, period_model
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -39,11 +43,12 @@ RTOL = 2e-2
 WINDOWS = ((0.25, 0.37), (0.60, 0.72))
 
 
-def recount(system, result, label: str) -> int:
-    """Rows of ``result`` whose floquet_max is not their own orbit's; printed, returned."""
-    m = result.mesh
+def recount(link_model, result, label: str) -> int:
+    """Rows of ``result`` (a :class:`LinkSweepResult` of ``link_model``) whose floquet_max
+    is not their own orbit's; printed, returned."""
+    m = result.result
     base = int(m.base)
-    model = build_geared_model(system, float(m.omega.max()), m.H_stored, period=base).reduced
+    model = (period_model(link_model, base) if base > 1 else link_model).reduced
     rows = [
         i
         for i in range(len(m))
@@ -86,10 +91,12 @@ def main(full: bool) -> int:
     t0, total = time.perf_counter(), 0
     for lo, hi in WINDOWS:
         seg = freqs[(freqs >= lo * f_gp) & (freqs <= hi * f_gp)]
-        r = geared_sweep(s_par, omegas=2 * np.pi * seg, directions="both", period="auto")
-        total += recount(s_par, r, f"parametric k, window {lo}-{hi} x f_gp")
-    r = geared_sweep(s, omegas=2 * np.pi * freqs, directions="both", period="auto")
-    total += recount(s, r, "constant k_h, as given (main sweep)")
+        lm = build_link_model(s_par)
+        r = link_sweep(lm, 2 * np.pi * seg, directions="both", period="auto")
+        total += recount(lm, r, f"parametric k, window {lo}-{hi} x f_gp")
+    lm = build_link_model(s)
+    r = link_sweep(lm, 2 * np.pi * freqs, directions="both", period="auto")
+    total += recount(lm, r, "constant k_h, as given (main sweep)")
     print(f"rows not of their own orbit: {total} ({time.perf_counter() - t0:.0f} s)")
     return total
 

@@ -16,7 +16,8 @@ Ritz values are exact eigenvalues of a matrix within ‖R‖ <= RITZ_RTOL ‖Φ�
 monodromy Φ, so to first order |Δμ| <= κ(μ) RITZ_RTOL ‖Φ‖_F, κ(μ) = ‖x‖‖y‖/|yᴴx| the
 condition number of the dominant multiplier (right and left eigenvectors of Φ, computed
 here by a dense solve; 1e-12 is added for the reference's own rounding); a revisited
-frequency (shared cache) adds REVISIT_RTOL ‖Φ‖₁. On this sweep κ = 23-260, bounds
+frequency (shared cache) adds REVISIT_RTOL ‖Φ‖₁. On this sweep (measured on the former
+mesh-coordinate engine's basis; now the link model's stability basis) κ = 23-260, bounds
 3e-6-4e-5 (all far from deciding a verdict: the least unstable point has max |μ| =
 1.0004); observed 2e-12 and 2e-11 (33 of the 72 contact-loss points reuse the other
 sweep direction's multipliers).
@@ -40,7 +41,8 @@ import nlgrd.nonlinear.reduction.state_space as hb_state_space
 import nlgrd.nonlinear.stability.floquet as fl
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.models.geared import gear_pair_mode
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
 from nlgrd.nonlinear.stability.tangent import tangent_pieces
 from nlgrd.rotor.rigid_body import rigid_body_modes
@@ -59,16 +61,28 @@ def swept():
         s = dc.replace(s, gear_pairs=(dc.replace(s.gear_pairs[0], damping_ratio=0.02),))
         f0 = float(round(gear_pair_mode(s)[0]))
         om = 2 * np.pi * np.linspace(0.7 * f0, 1.3 * f0, 110)
-        model = build_geared_model(s, float(om.max()), H=5)
-        res = geared_sweep(s, omegas=om, H=5, model=model, stability=False)
-    assert np.all(res.mesh.converged)
+        model = build_link_model(s)
+        res = link_sweep(model, om, H=5, stability=False, period=1).result
+    assert np.all(res.converged)
     return model, res
 
 
 def _points(swept):
     model, res = swept
-    m = res.mesh
-    return model, list(zip(m.omega, m.harmonics, strict=True))
+    return model, list(zip(res.omega, res.harmonics, strict=True))
+
+
+def _mats(model, w):
+    """(M, D, K, W) of the link model's stability basis at ``w`` (the sweep's, sized for
+    its top frequency), as plain matrices: every method below runs on the same ones."""
+    ss = model.reduced.linear_state_space(w)
+    return ss.M, ss.D, ss.K, ss.W
+
+
+def _state_space(model, w):
+    """The stability basis at ``w`` without its larger and full states (the methods are
+    compared on one state space)."""
+    return LinearStateSpace(*_mats(model, w))
 
 
 def test_verdicts_and_max_modulus_equal_the_reference_monodromy(swept):
@@ -82,7 +96,7 @@ def test_verdicts_and_max_modulus_equal_the_reference_monodromy(swept):
     old, new, reuse, lti = [], [], [], []
     with threadpool_limits(limits=1):
         for w, z in pts:
-            mats = model.receptance.state_space(w, model.max_mesh_frequency)
+            mats = _mats(model, w)
             ref = fl.floquet_multipliers(LinearStateSpace(*mats), nl, z, w, method="expm")
             old.append(np.max(np.abs(ref)))
             mu = fl.floquet_multipliers(LinearStateSpace(*mats), nl, z, w)
@@ -104,7 +118,7 @@ def test_verdicts_and_max_modulus_equal_the_reference_monodromy(swept):
     with threadpool_limits(limits=1):
         for i in np.nonzero(unstable)[0]:
             w, z = pts[i]
-            Phi = fl.monodromy(model.reduced.linear_state_space(w), nl, z, w)
+            Phi = fl.monodromy(_state_space(model, w), nl, z, w)
             lam, vl, vr = sla.eig(Phi, left=True, right=True)
             j = int(np.argmax(np.abs(lam)))
             kappa = np.linalg.norm(vl[:, j]) * np.linalg.norm(vr[:, j]) / abs(vl[:, j].conj() @ vr[:, j])
@@ -128,7 +142,7 @@ def test_dense_method_gives_every_multiplier_of_the_reference(swept):
     assert len(kinds) == 2
     with threadpool_limits(limits=1):
         for w, z in kinds.values():
-            ss = model.reduced.linear_state_space(w)
+            ss = _state_space(model, w)
             ref = np.sort(np.abs(fl.floquet_multipliers(ss, nl, z, w, method="expm")))
             got = np.sort(np.abs(fl.floquet_multipliers(ss, nl, z, w, method="dense")))
             assert got.size == ref.size == 2 * ss.deflated.M.shape[0]
@@ -141,9 +155,9 @@ def test_neutral_mode_is_an_exact_multiplier_of_every_state(swept):
     matrix in contact and in separation; it is not a free rigid-body mode (not deflated)."""
     model, pts = _points(swept)
     w, z = pts[0]
-    ss = model.reduced.linear_state_space(w)
+    ss = _state_space(model, w)
     assert ss.rigid_body_modes().shape[1] == 0
-    ok, Z = la.psd_null_space(ss.K + model.mesh.stiffness * ss.W @ ss.W.T)
+    ok, Z = la.psd_null_space(ss.K + model.links[0].mesh.stiffness * ss.W @ ss.W.T)
     assert ok and Z.shape[1] == 1
     phi = Z[:, 0]
     assert np.linalg.norm(ss.K @ phi) <= 1e-9 * np.linalg.norm(ss.K)
@@ -159,12 +173,12 @@ def test_certificate_refuses_circulatory_stiffness(swept):
     model, pts = _points(swept)
     nl = model.reduced.nonlinearities
     w, z = next((w, z) for w, z in pts if tangent_pieces(nl, z, 1)[0].size == 2)
-    ss = model.reduced.linear_state_space(w)
+    ss = _state_space(model, w)
     rng = np.random.default_rng(1)
     S = rng.standard_normal(ss.K.shape)
     Kc = ss.K + 1e-9 * np.max(np.abs(ss.K)) * (S - S.T)
     bent = LinearStateSpace(ss.M, ss.D, Kc, ss.W)
-    kt = np.full((1, 1), model.mesh.stiffness)
+    kt = np.full((1, 1), model.links[0].mesh.stiffness)
     assert fl._neutral_count(ss, kt, True) == 1
     assert fl._neutral_count(bent, kt, True) is None
     with threadpool_limits(limits=1):
@@ -186,7 +200,7 @@ def test_free_modes_agree_with_rigid_body_modes(swept):
     benchmark model (a damped free rotation: none), a grounded chain (none) and a free,
     undamped two-inertia gear pair (one)."""
     model, pts = _points(swept)
-    ss = model.reduced.linear_state_space(pts[0][0])
+    ss = _state_space(model, pts[0][0])
     cases = [(ss.K, ss.D, ss.W, ss.M)]
     k = 1e6 * np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
     cases.append((k, 1e-3 * k, np.array([[0.0], [1.0], [-1.0]]), np.diag([1.0, 2.0, 3.0])))
@@ -208,15 +222,16 @@ def test_free_basis_vector_of_kubo_rig_is_deflated():
     instability); deflated, none."""
     kubo = load_model(TWO_SHAFT.parent.parent / "case_studies" / "kubo.toml")
     om = 2 * np.pi * gear_pair_mode(kubo)[0]
-    model = build_geared_model(kubo, om, H=5)
-    ss = model.reduced.linear_state_space(om)
+    model = build_link_model(kubo)
+    model.receptance.prepare_stability(om)
+    ss = _state_space(model, om)
     assert rigid_body_modes((ss.K + ss.K.T) / 2, ss.M, constraints=(ss.K, ss.D, ss.W.T)).shape[1] == 1
     R = ss.rigid_body_modes()
     assert R.shape[1] == 1
     np.testing.assert_allclose(R.T @ ss.M @ R, np.eye(1), atol=1e-12)
     for A in (ss.K, ss.D, ss.W.T):
         assert np.linalg.norm(A @ R) <= 1e-8 * np.linalg.norm(A) * np.linalg.norm(R)
-    kh = model.mesh.stiffness
+    kh = model.links[0].mesh.stiffness
     near = [np.sum(np.abs(np.linalg.eigvals(_state_matrix(x, kh))) < 1e-2) for x in (ss, ss.deflated)]
     assert near == [2, 0]
 
@@ -305,7 +320,7 @@ def test_mesh_block_splits_off_only_what_the_model_decouples(swept):
     neighbours) to the block; one
     between GAP_RTOL and BLOCK_RTOL (neither rounding nor clearly physical) keeps all."""
     model, pts = _points(swept)
-    ss = model.reduced.linear_state_space(pts[0][0])
+    ss = _state_space(model, pts[0][0])
     block = la.mesh_block(ss.M, ss.D, ss.K, ss.W)
     side = np.nonzero(~block)[0]
     assert 0 < side.size < block.size // 4
@@ -333,14 +348,15 @@ def test_kubo_rig_verdicts_equal_the_reference_with_and_without_deflation():
     (109 of 122 in a 61-speed sweep)."""
     kubo = load_model(TWO_SHAFT.parent.parent / "case_studies" / "kubo.toml")
     with threadpool_limits(limits=1):
-        res = geared_sweep(kubo, rpm=np.linspace(4000, 16000, 20), H=5, stability=False)
-        model = build_geared_model(kubo, float(res.mesh.omega.max()), H=5)
+        model = build_link_model(kubo)
+        om = np.linspace(4000, 16000, 20) * np.pi / 30 / model.receptance.plan.speed_per_base
+        res = link_sweep(model, om, H=5, stability=False, period=1).result
         nl = model.reduced.nonlinearities
         verdicts = []
-        for w, z, ok in zip(res.mesh.omega, res.mesh.harmonics, res.mesh.converged, strict=True):
+        for w, z, ok in zip(res.omega, res.harmonics, res.converged, strict=True):
             if not ok:
                 continue
-            ss = model.reduced.linear_state_space(w)
+            ss = _state_space(model, w)
             got = [fl.floquet_multipliers(ss, nl, z, w)]
             got.append(fl.floquet_multipliers(ss, nl, z, w, method="expm"))
             got.append(fl.floquet_multipliers(ss, nl, z, w, method="expm", deflate=False))
@@ -359,8 +375,8 @@ def test_certificate_cache_sees_the_damping(swept):
     return the first one's for all (the answers are exact integers: equality is the check)."""
     model, pts = _points(swept)
     w, _ = pts[0]
-    ss = model.reduced.linear_state_space(w)
-    kt = np.full((1, 1), model.mesh.stiffness)
+    ss = _state_space(model, w)
+    kt = np.full((1, 1), model.links[0].mesh.stiffness)
     rng = np.random.default_rng(2)
     S = rng.standard_normal(ss.D.shape)
     v = np.linalg.eigh(ss.D + ss.D.T)[1][:, 0]  # the least damped direction
@@ -389,7 +405,7 @@ def test_truncated_basis_analysis_is_kept_per_orbit(swept):
     model, pts = _points(swept)
     nl = tuple(model.reduced.nonlinearities)
     w, z = next((w, z) for w, z in pts if tangent_pieces(nl, z, 1)[0].size > 2)
-    mats = model.receptance.state_space(w, model.max_mesh_frequency)
+    mats = _mats(model, w)
     built = []
 
     def full():

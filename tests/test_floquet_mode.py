@@ -25,7 +25,8 @@ from scipy.optimize import brentq
 
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.fourier.harmonics import evaluate
-from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode
+from nlgrd.nonlinear.models.geared import gear_pair_mode
+from nlgrd.nonlinear.models.link_model import build_link_model
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 from nlgrd.nonlinear.stability.floquet_mode import dominant_floquet_mode
 from nlgrd.nonlinear.tracing.sweep import sweep
@@ -87,7 +88,8 @@ def unstable_points():
     s = dc.replace(s, gear_pairs=(dc.replace(s.gear_pairs[0], damping_ratio=0.02),))
     f0 = float(round(gear_pair_mode(s)[0]))
     om = 2 * np.pi * np.linspace(0.7 * f0, 1.3 * f0, 40)
-    model = build_geared_model(s, float(om.max()), H=5)
+    model = build_link_model(s)  # the link engine's model (nlgrd.sweep's path)
+    model.receptance.prepare_stability(float(om.max()))
     red = model.reduced
     res = sweep(red, om, 5, "down", stability=False)
 
@@ -108,7 +110,7 @@ def test_dominant_eigenvector_is_carried_to_mu_v_by_the_variational_equation(uns
     kinds = set()
     for i in rows[:4]:
         w = float(res.omega[i])
-        ss = red.linear_state_space(w)
+        ss = red.linear_state_space(w).full()  # the variational equation of the whole model
         y = res.harmonics[i][mesh.coord]
         mode = dominant_floquet_mode(ss, red.nonlinearities, res.harmonics[i], w)
         kinds.add(mode.kind)
@@ -128,7 +130,7 @@ def test_a_wrong_monodromy_is_caught(unstable_points):
     red = model.reduced
     i = rows[0]
     w = float(res.omega[i])
-    ss = red.linear_state_space(w)
+    ss = red.linear_state_space(w).full()
     mode = dominant_floquet_mode(ss, red.nonlinearities, res.harmonics[i], w)
     lam, V = np.linalg.eig(mode.monodromy.T)
     j = int(np.argmax(np.abs(lam)))

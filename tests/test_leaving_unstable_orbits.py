@@ -2,9 +2,10 @@
 item 3): the arc-length search stops once it has run past the target frequency, and the
 point is reported as "no stable mesh-periodic response" on the unstable crossing it
 found, with its dominant multiplier, instead of failing (the 252-DOF benchmark model of
-benchmarks/bench_nonlinear.py, 2564 Hz up). The multiplier is checked against the
-reference monodromy (``method="expm"``) and the orbit against the harmonic-balance
-equations: the point is what it says it is.
+benchmarks/bench_nonlinear.py, 2564 Hz up), on the link engine (``nlgrd.sweep``'s path).
+The multiplier is checked against the reference monodromy (``method="expm"`` on the full
+state) and the orbit against the harmonic-balance equations: the point is what it says
+it is.
 """
 
 from __future__ import annotations
@@ -18,12 +19,12 @@ import pytest
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.fourier.harmonics import evaluate
 from nlgrd.nonlinear.hb.solvers import solve
-from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 from nlgrd.nonlinear.results.sweep_results import STABLE_RTOL
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 from nlgrd.nonlinear.tracing.arclength import jump_to_branch
 from nlgrd.rotor.system import refined
-from nlgrd.timedomain.geared import start_from_harmonics, time_response
+from nlgrd.timedomain.links import link_time_response, start_from_harmonics
 
 ROOT = Path(__file__).resolve().parent.parent
 TWO_SHAFT = ROOT / "data" / "models" / "two_shaft.toml"
@@ -38,24 +39,24 @@ def benchmark_model():
     g = dc.replace(system.gear_pairs[0], damping_ratio=0.1)
     system = dc.replace(system, gear_pairs=(g,))
     om = TWO_PI * np.linspace(1825.5, 5476.5, 500)
-    return system, build_geared_model(system, float(om.max()), H=5), om
+    return system, build_link_model(system), om
 
 
 def test_fold_without_a_stable_landing_is_reported_on_its_unstable_crossing(benchmark_model):
     system, model, om = benchmark_model
     sel = om[(om > TWO_PI * 2500) & (om < TWO_PI * 2600)]
-    res = geared_sweep(system, omegas=sel, H=5, model=model, directions="up").mesh
+    res = link_sweep(model, sel, H=5, directions="up", period=1).result
     i = int(np.argmin(np.abs(res.omega - TWO_PI * 2564.48)))
     assert res.branch_switch[i - 1] == 0 and res.stable[i - 1]  # the branch before the fold
     assert res.converged[i] and res.no_stable[i] and res.branch_switch[i]
     assert np.isnan(res.metrics["dte_rms"][i])  # never drawn as the response
     mu = complex(res.dominant_multiplier[i])
     assert abs(mu.imag) > 0.5 and abs(mu) > 1 + STABLE_RTOL
-    # the multiplier reported is that of the stored orbit, by the reference monodromy
+    # the multiplier reported is that of the stored orbit, by the reference monodromy on
+    # the full state (the sweep's stability basis is truncated, checked against it)
     w = float(res.omega[i])
-    ref = floquet_multipliers(
-        model.reduced.linear_state_space(w), model.reduced.nonlinearities, res.harmonics[i], w, method="expm"
-    )
+    full = model.reduced.linear_state_space(w).full()
+    ref = floquet_multipliers(full, model.reduced.nonlinearities, res.harmonics[i], w, method="expm")
     assert abs(np.max(np.abs(ref)) - abs(mu)) < 1e-8
     # and it is a harmonic-balance solution there
     again = solve(model.reduced.at(w, 5), res.harmonics[i], fallback=False)
@@ -77,15 +78,15 @@ def test_time_integration_started_on_a_stable_orbit_stays_on_it():
     started from the static deflection is far from it."""
     kubo = load_model(ROOT / "data" / "case_studies" / "kubo.toml")
     w = TWO_PI * 2000.0
-    model = build_geared_model(kubo, w, H=13)
-    hb = geared_sweep(kubo, omegas=np.array([w]), H=13, model=model, directions="up").mesh
+    model = build_link_model(kubo)
+    hb = link_sweep(model, np.array([w]), H=13, directions="up", period=1).result
     assert hb.converged[0] and hb.stable[0]
     z = hb.harmonics[0].reshape(-1)
 
     def first_period(state0):
-        tr = time_response(model, w, state0=state0, tol=0.0, max_periods=1, min_periods=1)
-        d = tr.history.delta
-        return np.max(np.abs(d - evaluate(z, w * tr.history.t))) / np.ptp(evaluate(z, w * tr.history.t))
+        tr = link_time_response(model, w, state0=state0, tol=0.0, max_periods=1, min_periods=1)
+        ref = evaluate(z, w * tr.t)
+        return np.max(np.abs(tr.y[0] - ref)) / np.ptp(ref)
 
-    on, rest = first_period(start_from_harmonics(model, w, z)), first_period(None)
+    on, rest = first_period(start_from_harmonics(model, w, 13, hb.harmonics[0])), first_period(None)
     assert on < 0.03 and rest > 10 * on

@@ -26,7 +26,6 @@ from threadpoolctl import threadpool_limits
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.models.geared import geared_sweep
 from nlgrd.rotor.assembly import LinearModel, assemble
 from nlgrd.rotor.modal import modal_analysis
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
@@ -244,10 +243,22 @@ def _perturb_system(system, rng, eps=1e-13):
 
 
 def _sweep_decisions(system, threads=None):
+    """The sweep of the link engine (``nlgrd.sweep``, without time answers) and its decisions."""
+    import types
+
+    import nlgrd
+
     rpm = np.linspace(6000, 12500, 53)
     with threadpool_limits(limits=threads):
-        res = geared_sweep(system, rpm=rpm, H=5, stability=True)
-    m = res.mesh
+        res = nlgrd.sweep(system, rpm=rpm, H=5, stability=True, time_domain=False)
+    r, links = res.result, res.links
+    m = types.SimpleNamespace(
+        converged=r.converged,
+        stable=r.stable,
+        branch_switch=r.branch_switch,
+        contact_loss_fraction=links["mesh0.contact_loss_fraction [-]"].to_numpy(),
+        dte_rms=links["mesh0.dte_rms [m]"].to_numpy(),
+    )
     return res, m
 
 

@@ -21,6 +21,7 @@ import pytest
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep
+from nlgrd.nonlinear.models.link_model import build_link_model, link_continuation, link_sweep
 from nlgrd.nonlinear.models.sdof import SDOFGearPair
 from nlgrd.nonlinear.reduction.modal_basis import ModeCapWarning, lowest_modes
 from nlgrd.nonlinear.reduction.receptance import MeshReceptance
@@ -109,15 +110,16 @@ def test_continuation_residual_is_the_sweep_residual_and_converged_is_computed()
 
 @pytest.mark.slow  # about 40 s: the inner loop (-m "not slow") leaves it to make test
 def test_modal_receptances_and_floquet_are_byte_identical_in_one_process():
-    """Two models built one after the other in one process (the iterative eigensolvers'
-    state differs between them) give byte-identical sweep outputs, floquet_max included."""
+    """Two link models on a modal basis built one after the other in one process (the
+    iterative eigensolvers' state differs between them) give byte-identical sweep outputs,
+    floquet_max included."""
     s = _two_shaft()
     f0 = gear_pair_mode(s)[0]
     om = 2 * np.pi * np.linspace(0.8 * f0, 1.2 * f0, 12)
     frames = []
     for _ in range(2):
-        m = build_geared_model(s, om.max(), H=3, receptance="modal")
-        frames.append(geared_sweep(s, omegas=om, H=3, model=m).to_frame())
+        m = build_link_model(s, method="modal", max_frequency=3 * float(om.max()))
+        frames.append(link_sweep(m, om, H=3).to_frame())
     a, b = (f.to_csv(index=False) for f in frames)
     assert a == b
     ok = frames[0]["converged"].to_numpy(bool)
@@ -206,10 +208,8 @@ def test_continuation_that_turns_back_is_not_complete():
     turning point (near 4273 Hz) and leaves the range below 3000 Hz; that is not a
     complete curve (it was flagged complete before). From 1000 to 1400 Hz (no fold)
     it is."""
-    from nlgrd.nonlinear.models.geared import geared_continuation
-
-    kubo = load_model(DATA / "case_studies" / "kubo.toml")
-    c = geared_continuation(kubo, 2 * np.pi * 3000, 2 * np.pi * 5000, 5)
-    assert not c.complete
+    model = build_link_model(load_model(DATA / "case_studies" / "kubo.toml"))  # the link engine
+    c = link_continuation(model, 2 * np.pi * 3000, 2 * np.pi * 5000, 5)
+    assert not c.curve.complete
     assert c.curve.omega.max() < 2 * np.pi * 4500 and c.curve.omega.min() < 2 * np.pi * 3000
-    assert geared_continuation(kubo, 2 * np.pi * 1000, 2 * np.pi * 1400, 5).complete
+    assert link_continuation(model, 2 * np.pi * 1000, 2 * np.pi * 1400, 5).curve.complete

@@ -8,13 +8,15 @@ the effective unloaded error e_p = e + W_0/k_h (1 - 1/ρ) (:func:`nlgrd.nonlinea
 
 Independent reference: the HHT-α integration of the full FE model with the same
 force law k_h ρ(θ_n) f(δ - e_p(θ_n)) at every step, swept up and down with each point
-continuing from the last (:func:`nlgrd.timedomain.geared.time_sweep`), 1024 steps per mesh
-period. Tolerance: RMS DTE and the largest mesh force within 1 % (the issue's). Measured:
-40 points, 25 of them with contact loss (to 71 % of the period), worst 0.33 % (the force
-maximum, sampled at the time steps), RMS within 8.5e-4. At 512 steps the integration is
-0.9 % off at 4600 Hz, where a higher mode is excited by a high harmonic; at 2048 steps it
-is within 0.05 % of the harmonic balance there, so the residual differences are the
-integration's.
+continuing from the last (:func:`nlgrd.timedomain.links.link_time_sweep`), 1024 steps per
+mesh period; the harmonic balance on the link engine (``nlgrd.sweep``'s path:
+``link_sweep``). Tolerance: RMS DTE and the largest mesh force within 1 % (the issue's).
+Measured: 40 points, 25 of them with contact loss (to 71 % of the period), worst 0.25 %
+(the force maximum, sampled at the time steps; 0.33 % on the former mesh-coordinate
+engine), RMS within 8.5e-4.
+At 512 steps the integration is 0.9 % off at 4600 Hz, where a higher mode is excited by a
+high harmonic; at 2048 steps it is within 0.05 % of the harmonic balance there, so the
+residual differences are the integration's.
 
 With the varying stiffness the down branch of the main resonance reaches 2450 Hz (the
 constant-k_h model's ends near 3300 Hz): the parametric pumping holds the separated
@@ -34,8 +36,8 @@ from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.fourier.harmonics import evaluate, sample
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh, ParametricMesh
 from nlgrd.nonlinear.laws.mesh_law import mesh_law
-from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
-from nlgrd.timedomain.geared import time_sweep
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep, period_model
+from nlgrd.timedomain.links import link_time_sweep
 
 KUBO = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
 TWO_PI = 2 * np.pi
@@ -77,12 +79,12 @@ def test_parametric_law_keeps_the_static_solution():
 
 def test_mesh_force_law_by_choice():
     k = 0.2587e9
-    assert type(build_geared_model(kubo(), 3e4, H=5).mesh) is BacklashMesh
-    m = build_geared_model(kubo(stiffness_variation=[1.0, 0.1, 0.0]), 3e4, H=5)
-    assert isinstance(m.mesh, ParametricMesh)
-    np.testing.assert_allclose(m.mesh.stiffness_time(np.array([0.0, np.pi])), [1.1 * k, 0.9 * k])
-    m2 = build_geared_model(kubo(stiffness_variation=[1.0, 0.1, 0.0]), 3e4, H=10, period=2)
-    np.testing.assert_allclose(m2.mesh.stiffness_variation, [1.0, 0, 0, 0.1, 0.0])
+    assert type(build_link_model(kubo()).links[0].mesh) is BacklashMesh
+    m = build_link_model(kubo(stiffness_variation=[1.0, 0.1, 0.0]))
+    assert isinstance(m.links[0].mesh, ParametricMesh)
+    np.testing.assert_allclose(m.links[0].mesh.stiffness_time(np.array([0.0, np.pi])), [1.1 * k, 0.9 * k])
+    m2 = period_model(m, 2)
+    np.testing.assert_allclose(m2.links[0].mesh.stiffness_variation, [1.0, 0, 0, 0.1, 0.0])
 
 
 @pytest.mark.parametrize(
@@ -117,21 +119,21 @@ def test_model_file_takes_the_stiffness_variation(tmp_path):
 def test_load_sharing_stiffness_against_time_integration():
     system = kubo(damping_ratio=0.02, stiffness_variation="load_sharing")
     omegas = TWO_PI * np.linspace(2150.0, 5000.0, 20)
-    model = build_geared_model(system, omegas.max(), H=25)
-    hb = geared_sweep(system, omegas, model=model, directions="both").to_frame()
-    td = time_sweep(model, omegas, "both", steps_per_period=1024, tol=1e-6).to_frame()
+    model = build_link_model(system)
+    hb = link_sweep(model, omegas, directions="both").to_frame()
+    td = link_time_sweep(model, omegas, "both", steps_per_period=1024, tol=1e-6).to_frame()
     assert hb["converged"].all() and hb["stable"].all() and td["converged"].all()
     assert list(hb["direction"]) == list(td["direction"])
-    np.testing.assert_allclose(hb["mesh_frequency [Hz]"], td["mesh_frequency [Hz]"])
+    np.testing.assert_allclose(hb["base_frequency [Hz]"], td["base_frequency [Hz]"])
     err = {
         c: np.abs(td[c].to_numpy(float) / hb[c].to_numpy(float) - 1)
-        for c in ("dte_rms [um]", "force_max [N]")
+        for c in ("mesh0.dte_rms [um]", "mesh0.force_max [N]")
     }
     worst = {c: float(e.max()) for c, e in err.items()}
     print("worst relative differences:", worst)
     assert max(worst.values()) < 0.01
-    loss = hb["contact_loss_fraction [-]"].to_numpy(float)
+    loss = hb["mesh0.contact_loss_fraction [-]"].to_numpy(float)
     assert np.sum(loss > 0.05) >= 20 and loss.max() > 0.6
     down = hb[hb["direction"] == "down"]
-    f, rms = down["mesh_frequency [Hz]"].to_numpy(float), down["dte_rms [um]"].to_numpy(float)
+    f, rms = down["base_frequency [Hz]"].to_numpy(float), down["mesh0.dte_rms [um]"].to_numpy(float)
     assert rms[np.argmin(abs(f - 2450))] > 5 * rms[np.argmin(abs(f - 2300))]  # held branch, jump

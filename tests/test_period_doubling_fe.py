@@ -1,7 +1,8 @@
 """Period-2 orbits of the geared FE model (issue 12, items 1-2): Kubo's rig at its Table 1
-damping (data/case_studies/kubo.toml), H = 13 per mesh period.
+damping (data/case_studies/kubo.toml), H = 13 per mesh period, on the link engine
+(``nlgrd.sweep``'s path: ``build_link_model``, ``period_model``).
 
-1. The period-ν model (``build_geared_model(..., period=2)``: receptances at the base ω/2
+1. The period-ν model (``period_model(model, 2)``: receptances at the base ω/2
    with the speed of the mesh frequency, the LSTE at the even harmonics) holds the period-1
    orbits: spread onto ω/2 they solve it, and its Floquet multipliers are the squares of
    the period-1 ones (the monodromy over 2T is the square of that over T).
@@ -28,12 +29,12 @@ import pytest
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.fourier.harmonics import analyse
 from nlgrd.nonlinear.fourier.periods import amplitudes, period_of, spread
-from nlgrd.nonlinear.models.geared import build_geared_model
+from nlgrd.nonlinear.models.link_model import build_link_model, period_model
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 from nlgrd.nonlinear.tracing.orbit_search import same_motion, search_orbits
 from nlgrd.nonlinear.tracing.subharmonic import branch_off
 from nlgrd.nonlinear.tracing.sweep import sweep
-from nlgrd.timedomain.geared import start_from_harmonics, time_response
+from nlgrd.timedomain.links import link_time_response, start_from_harmonics
 
 KUBO = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
 TWO_PI = 2 * np.pi
@@ -43,12 +44,20 @@ TWO_PI = 2 * np.pi
 def kubo_down():
     """Kubo's down sweep (H = 13) from 16 000 rpm to 3000 Hz, its period-1 and period-2 models."""
     kubo = load_model(KUBO)
-    top = TWO_PI * 16000 / 60 * kubo.gear_pairs[0].geometry.teeth_pinion
-    m1 = build_geared_model(kubo, top, H=13)
-    m2 = build_geared_model(kubo, top, H=26, period=2)
-    om = m1.mesh_frequency(np.linspace(2000.0, 16000.0, 85))
+    m1 = build_link_model(kubo)
+    m2 = period_model(m1, 2)
+
+    def mesh_frequency(rpm):
+        return np.asarray(rpm) * np.pi / 30 / m1.receptance.plan.speed_per_base
+
+    top = float(mesh_frequency(16000.0))
+    m1.receptance.prepare(13 * top)
+    m1.receptance.prepare_stability(top)
+    m2.receptance.prepare(26 * top / 2)
+    m2.receptance.prepare_stability(top / 2)
+    om = mesh_frequency(np.linspace(2000.0, 16000.0, 85))
     low = om[(om <= TWO_PI * 3400) & (om >= TWO_PI * 3000)][::-1]
-    grid = np.concatenate([m1.mesh_frequency(np.linspace(16000.0, 6900.0, 50)), low])
+    grid = np.concatenate([mesh_frequency(np.linspace(16000.0, 6900.0, 50)), low])
     p1 = sweep(m1.reduced, grid, 13, "down", jump="auto", leave_unstable=False)
     return m1, m2, p1
 
@@ -79,11 +88,11 @@ def test_period_two_orbit_against_converged_time_integration(kubo_down):
     s2 = branch_off(m2.reduced.at(w / 2, 26), p1.harmonics[i], 2)
     assert s2 is not None and period_of(s2.harmonics, 2) == 2
     hb = amplitudes(s2.harmonics)[0][:2]
-    start = start_from_harmonics(m2, w / 2, s2.harmonics)
+    start = start_from_harmonics(m2, w / 2, 26, s2.harmonics)
     td = []
     for steps in (8192, 16384):  # per cycle of two mesh periods
-        tr = time_response(m2, w / 2, state0=start, tol=1e-8, steps_per_period=steps, max_periods=800)
-        d = tr.history.delta
+        tr = link_time_response(m2, w / 2, state0=start, tol=1e-8, steps_per_period=steps, max_periods=800)
+        d = tr.y[0]
         assert tr.converged
         assert np.max(np.abs(d[: d.size // 2] - d[d.size // 2 :])) / np.ptp(d) > 1e-2  # period 2
         td.append(amplitudes(analyse(d, 2)))

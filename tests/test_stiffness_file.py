@@ -35,8 +35,8 @@ from nlgrd.errors import ModelError
 from nlgrd.gear.stiffness_file import read_stiffness_file
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.laws.mesh_law import mesh_law
-from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
-from nlgrd.timedomain.geared import time_response
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
+from nlgrd.timedomain.links import link_time_response
 
 ROOT = Path(__file__).resolve().parent.parent
 KUBO = ROOT / "data" / "case_studies" / "kubo.toml"
@@ -154,9 +154,10 @@ def test_load_sharing_samples_reproduce_load_sharing(load_sharing_file):
 
 
 def test_load_sharing_sweep_from_the_file(load_sharing_file):
-    """Kubo's rig at 2500-4000 Hz up and down, H = 9: the file's sweep is the load sharing's."""
+    """Kubo's rig at 2500-4000 Hz up and down, H = 9: the file's sweep is the load sharing's
+    (the link engine, ``nlgrd.sweep``'s path)."""
     omegas = TWO_PI * np.array([2500.0, 3000.0, 3500.0, 4000.0])
-    cols = ["dte_rms [um]", "force_max [N]", "floquet_max [-]"]
+    cols = ["mesh0.dte_rms [um]", "mesh0.force_max [N]", "floquet_max [-]"]
     frames = {}
     for name, mesh in {
         "load_sharing": {"stiffness_variation": "load_sharing"},
@@ -164,8 +165,7 @@ def test_load_sharing_sweep_from_the_file(load_sharing_file):
         "constant": {},
     }.items():
         system = kubo(**mesh)
-        model = build_geared_model(system, omegas.max(), H=9)
-        frames[name] = geared_sweep(system, omegas, H=9, model=model, directions="both").to_frame()
+        frames[name] = link_sweep(build_link_model(system), omegas, H=9, directions="both").to_frame()
     ls, f, const = (frames[k][cols].to_numpy(float) for k in ("load_sharing", "file", "constant"))
     assert (
         frames["file"]["converged"].all()
@@ -186,9 +186,9 @@ def test_time_domain_takes_the_same_law(tmp_path):
     om = TWO_PI * 3000.0
     runs = []
     for mesh in ({"stiffness_variation": SERIES}, {"stiffness_file": str(path)}):
-        model = build_geared_model(kubo(**mesh), om, H=5)
-        tr = time_response(model, om, steps_per_period=256, max_periods=8, min_periods=8)
-        runs.append(tr.history.delta)
+        model = build_link_model(kubo(**mesh))
+        tr = link_time_response(model, om, steps_per_period=256, max_periods=8, min_periods=8)
+        runs.append(tr.y[0])
     scale = np.ptp(runs[0])
     print(f"time domain, file against series: {np.max(np.abs(runs[1] - runs[0])) / scale:.1e} of the range")
     assert scale > 0

@@ -7,8 +7,8 @@ points and crosses 10 506 rpm on a stable orbit with back-side impacts, DSLR 26.
 RMS 190 um (the "spike" of the old golden curve, 10 x its neighbours). Time integration
 settles on that orbit when started on it, so it exists and attracts; but a slow
 time-domain up sweep from the 10 329 rpm orbit falls to the down sweep's branch (DTE RMS
-12.0 um) instead. The sweep (``jump="auto"``, the default of ``geared_sweep`` and the
-notebooks) lands on the stable solution nearest the departed orbit, the other
+12.0 um) instead. The sweep (``jump="auto"``, the default of ``nlgrd.sweep``,
+``link_sweep`` and the notebooks) lands on the stable solution nearest the departed orbit, the other
 directions' solutions at that speed included, and so does what the slow sweep does.
 
 Time integration: nlgrd.timedomain.sdof.time_sweep (the paper's DYTE, all LSTE harmonics), periodic
