@@ -13,9 +13,10 @@ Independent reference: the HHT-α integration of the full FE model over gear rev
 with the same LSTE (:func:`nlgrd.timedomain.links.link_time_response`, 1024 steps per mesh
 period, 25 600 per revolution), started on the harmonic-balance orbit and run 60
 revolutions, its last revolution's DTE spectrum by FFT. At 2600 Hz (a stable, full-contact
-point; H = 125 base harmonics, chosen against 175) the components above 5 % of the largest
-sideband agree within 1.4 % on the single-mesh engine (23 of 27 sidebands or shaft
-orders; 2 % the issue's). The worst is 6760 Hz, a sideband near a mode whose integration
+point; H = 125 base harmonics, chosen against 175; the slow test solves 175) the 26
+components above 5 % of the largest sideband (22 of them sidebands or shaft orders) agree
+within 1.15 % (measured on the link engine; 1.4 % on the single-mesh engine; 2 % the
+issue's). The worst is 6760 Hz, a sideband near a mode whose integration
 error still shows at this step (with 9 mesh harmonics: 4.9 % at 512 steps, 1.1 % at 1024,
 shrinking as the step squared).
 """
