@@ -131,3 +131,8 @@ def test_cli_sweeps_the_revolution_and_draws_the_spectra(tmp_path, capsys):
     assert (tmp_path / "s_spectrum.png").stat().st_size > 10_000
     assert main([*argv, "--period", "1"]) == 2
     assert "--period" in capsys.readouterr().err
+    # --hz is the base, the shaft frequency here: 1000 Hz turns the 100 mm pitch circle at
+    # 314 m/s, above the 300 m/s limit (as a mesh frequency it would be 12.6 m/s)
+    hz = ["sweep", str(model), "--hz", "900:1000:2", "--out", str(tmp_path / "h.csv")]
+    assert main(hz) == 2
+    assert "--hz" in capsys.readouterr().err

@@ -211,8 +211,8 @@ def build_parser() -> argparse.ArgumentParser:
         "default 9); exit status 1, nothing written, when none is found. The CSV has each point's "
         "period, its ω/ν content and, where a complex pair of Floquet multipliers left the unit "
         "circle (quasi-periodic), the secondary frequency. Gear errors repeating every N mesh "
-        "periods: auto or a multiple of N (the CSV's period then counts base periods, N mesh "
-        "periods each); the DTE and bearing-force spectra of the largest RMS DTE are drawn "
+        "periods: auto, or a multiple of N up to 6 (the CSV's period then counts base periods, "
+        "N mesh periods each); the DTE and bearing-force spectra of the largest RMS DTE are drawn "
         "(<out>_spectrum.png)",
     )
     sw.add_argument(

@@ -5,7 +5,7 @@ model (:func:`nlgrd.analyses.model`, one mesh too) behind the link view
 ``<link>.<quantity> [unit]`` (:func:`link_quantity` reads ``--quantity``). A gear pair
 whose errors repeat every N mesh periods (teeth that differ, runout) takes the same flow:
 its plan's base is the mesh frequency / N, H counts harmonics of that base, ``--period``
-counts mesh periods (a multiple of N), and the DTE and bearing-force spectra of the point
+counts mesh periods (auto, or a multiple of N up to 6), and the DTE and bearing-force spectra of the point
 with the largest RMS DTE are drawn (:func:`_spectra`)."""
 
 from __future__ import annotations
@@ -108,7 +108,7 @@ def cmd_sweep(args) -> int:
     png = output_file("--plot", args.plot, "sweep.png") if args.plot else out.with_suffix(".png")
     if png.resolve() == out.resolve():
         raise ModelError("--plot", f"the plot would overwrite the CSV {out}; give --out a .csv name")
-    from nlgrd.cli.orbits import default_search, parse_period, parse_search
+    from nlgrd.cli.orbits import MAX_PERIOD, default_search, parse_period, parse_search
 
     period, search = parse_period(args.period), None
     if args.search_at is not None:
@@ -125,10 +125,11 @@ def cmd_sweep(args) -> int:
     revolution = _revolution(system)
     if revolution > 1 and period != "auto":  # --period counts mesh periods: base periods here
         if period % revolution:
+            multiple = "" if revolution > MAX_PERIOD else f" or a multiple of {revolution}"
             raise ModelError(
                 "--period",
                 f"the gear errors repeat every {revolution} mesh periods (the base frequency is the "
-                f"mesh frequency / {revolution}): give auto or a multiple of {revolution}",
+                f"mesh frequency / {revolution}): give auto{multiple}",
                 args.model,
             )
         period //= revolution
@@ -144,7 +145,12 @@ def cmd_sweep(args) -> int:
         search = (search[0] if search is not None else default_search(values), (period,))
     grid = None if args.continuation else values  # the values as typed, written in the CSV
     nu = period if period != "auto" and period >= 3 else 1  # --period N: searched and followed
-    check_speed_range(system, float(max(values)), args.rpm is not None, option, repr(text))
+    top, in_rpm = float(max(values)), args.rpm is not None
+    if revolution > 1 and not in_rpm:  # the base is mesh / N: checked as the shaft speed it is
+        from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
+
+        top, in_rpm = top * 60 * FrequencyPlan.of_model(system).speed_per_base, True
+    check_speed_range(system, top, in_rpm, option, repr(text))
     pyplot()
     from types import SimpleNamespace
 
