@@ -35,7 +35,7 @@ from nlgrd.gear.modifications import GearErrors
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.links.contract import GearMeshLink
 from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
-from nlgrd.nonlinear.models.shaft_orders import link_spectra
+from nlgrd.nonlinear.models.shaft_orders import link_spectra, sideband_amplitudes
 from nlgrd.timedomain.links import link_time_response, start_from_harmonics
 
 TWO_SHAFT = Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml"
@@ -84,6 +84,7 @@ def test_shaft_order_sweep_chooses_h_and_reports_the_sidebands():
     assert fr.size == 5 * N and fr[0] == pytest.approx(2 * np.pi * 2600.0 / N)
     side = np.arange(1, fr.size + 1) % N != 0
     assert amp[side].max() > 0.05 * amp[~side].max()  # one tooth's error: sidebands
+    assert sideband_amplitudes(model, res.result, "mesh0", N)[0] == amp[side].max()
     rms = np.sqrt(np.sum(amp**2) / 2)  # Parseval: the RMS of the alternating DTE
     assert df["mesh0.dte_rms [um]"].iloc[0] == pytest.approx(1e6 * rms, rel=1e-9)
     assert force.shape == (fr.size, 4) and names == [b.name for b in system.bearings]
@@ -128,6 +129,7 @@ def test_cli_sweeps_the_revolution_and_draws_the_spectra(tmp_path, capsys):
     assert "H = 125 (chosen" in printed and "s_spectrum.png" in printed
     df = pd.read_csv(out)
     assert (df["period"] == 1).all() and df["mesh0.dte_rms [um]"].notna().all()
+    assert (df["mesh0.sideband_max [um]"] > 0.05 * df["mesh0.dte_rms [um]"]).all()  # one tooth's error
     assert (tmp_path / "s_spectrum.png").stat().st_size > 10_000
     assert main([*argv, "--period", "1"]) == 2
     assert "--period" in capsys.readouterr().err

@@ -180,8 +180,14 @@ def cmd_sweep(args) -> int:
         from nlgrd.nonlinear.models.model_views import search_beside
 
         found = search_beside(view, res, omegas, *search, unit, print)
-    extra = _spectra(model, res, quantity, unit, out) if revolution > 1 else None
-    _write_sweep(view, res, quantity, out, png, extra, found=found, unit=unit, title=_title(system, args))
+    extra, more = (
+        (_spectra(model, res, quantity, unit, out), _sidebands(model, res))
+        if revolution > 1
+        else (None, None)
+    )
+    _write_sweep(
+        view, res, quantity, out, png, extra, found=found, unit=unit, title=_title(system, args), more=more
+    )
     if extra is not None:
         print(f"wrote {extra[1]}")
     return _summary(args, view, res, unit, out, png, found is not None)
@@ -344,9 +350,14 @@ def _beside(out, name: str):
     return out.with_name(f"{out.stem}_{name}.csv")
 
 
-def _write_sweep(view, res, quantity, out, png, extra=None, found=None, unit=None, title=None) -> None:
-    """The sweep's CSV (the range's column as typed), its figure, and the orbit tables."""
+def _write_sweep(
+    view, res, quantity, out, png, extra=None, found=None, unit=None, title=None, more=None
+) -> None:
+    """The sweep's CSV (the range's column as typed, ``more`` columns appended), its figure,
+    and the orbit tables."""
     frame = view.table(res)
+    for name, values in (more or {}).items():
+        frame[name] = values
     if unit.grid is not None:
         snap_to_grid(frame, unit.column, unit.grid)
     for table in found if found is not None and unit.grid is not None else ():
@@ -363,6 +374,22 @@ def _write_sweep(view, res, quantity, out, png, extra=None, found=None, unit=Non
         if extra is not None:
             files.figure(*extra)
         files.commit()
+
+
+def _sidebands(model, res) -> dict:
+    """``<mesh>.sideband_max [um]``: the largest DTE line between the mesh harmonics
+    (:func:`~nlgrd.nonlinear.models.shaft_orders.sideband_amplitudes`), NaN where the table
+    has no values."""
+    import numpy as np
+
+    from nlgrd.nonlinear.links.contract import GearMeshLink
+    from nlgrd.nonlinear.models.shaft_orders import sideband_amplitudes
+
+    mesh = next(lk for lk in model.links if isinstance(lk, GearMeshLink))
+    r = res.result
+    a = sideband_amplitudes(model, r, mesh.name, mesh.order)
+    usable = np.isfinite(res.links[f"{mesh.name}.dte_rms [m]"].to_numpy(float))
+    return {f"{mesh.name}.sideband_max [um]": np.where(usable, 1e6 * a, np.nan)}
 
 
 def _spectra(model, res, quantity: str, unit, out):

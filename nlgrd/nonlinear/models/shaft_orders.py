@@ -254,3 +254,39 @@ def link_spectra(model, res, index: int, link: str) -> tuple[NDArray, NDArray, N
     else:
         force = np.zeros((j.size, 0))
     return j * w, np.hypot(d[1::2], d[2::2]), force, bearing_names(model.system)
+
+
+def sideband_amplitudes(model, res, link: str, every: int) -> NDArray:
+    """Per point of a link sweep, the largest DTE line of a mesh between its mesh
+    harmonics: the sidebands and shaft orders of errors that repeat every ``every`` base
+    harmonics (the mesh's order; NaN where the point has no harmonics).
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model swept.
+    res : nlgrd.nonlinear.results.sweep_results.SweepResult
+        The sweep (``LinkSweepResult.result``).
+    link : str
+        The mesh's name.
+    every : int
+        Base harmonics per mesh harmonic [-].
+
+    Returns
+    -------
+    ndarray
+        [m].
+    """
+    from nlgrd.nonlinear.models.link_model import period_model
+
+    nu = int(res.base)
+    m = model if nu == 1 else period_model(model, nu)
+    out = np.full(len(res), np.nan)
+    for i, z in enumerate(res.harmonics):
+        z = np.asarray(z, dtype=float)
+        if not np.all(np.isfinite(z)):
+            continue
+        d = m.link_harmonics(z, link)[0]
+        a = np.hypot(d[1::2], d[2::2])
+        out[i] = float(np.max(a[np.arange(1, a.size + 1) % (every * nu) != 0], initial=0.0))
+    return out
