@@ -1,7 +1,7 @@
 """Issue 33 item 7, "one sweep flow for every model": ``nlgrd sweep`` writes and summarises a
 sweep of one gear pair (its mesh coordinate) and of a link model (a bearing clearance) by
 one path (:mod:`nlgrd.cli.sweep`), and the period-ν models of the orbit search are built
-once (:class:`nlgrd.nonlinear.models.model_views.GearedView`).
+once (:class:`nlgrd.nonlinear.models.model_views.LinkView`).
 
 The numbers are checked elsewhere (tests/test_cli*.py, tests/test_capability_matrix.py);
 these are checks of the flow: the same summary on both, the speeds as typed."""
@@ -52,24 +52,20 @@ def test_one_summary_and_the_typed_speeds_on_every_model(name, tmp_path, capsys)
     )
 
 
-def test_period_models_are_built_once_and_never_smaller():
-    """GearedView.period_model: the view's own model for its period and H (no rebuild);
-    another period is built once (the same object on the second call, from the model's
-    cache) with at least as many harmonics per mesh period as the model (ν max(H, H_model)),
-    so a search beside a sweep whose H is below the model's does not solve on a smaller
-    basis than the sweep's own model."""
+def test_period_models_are_built_once():
+    """LinkView.period: the view's own model for period 1 (no rebuild); another period is
+    built once (the same object on the second call, from the model's cache), on the base
+    ω/ν with the mesh at ν times its harmonic (the shaft speed per base ν times the model's)."""
     from nlgrd import load
-    from nlgrd.nonlinear.models.geared import build_geared_model
-    from nlgrd.nonlinear.models.model_views import GearedView
+    from nlgrd.analyses import model as link_model
+    from nlgrd.nonlinear.models.model_views import LinkView
 
-    system = load(ROOT / "data" / "models" / "two_shaft.toml")
-    top = 2 * np.pi * 3200.0
-    model = build_geared_model(system, top, H=5)
-    view = GearedView(model)
-    assert view.period_model(1, 3) is model and view.period_model(1, 5) is model
-    two = view.period_model(2, 3)
-    assert two.H == 10 and view.period_model(2, 5) is two
-    assert view.period_model(2, 7).H == 14
+    model = link_model(load(ROOT / "data" / "models" / "two_shaft.toml"))
+    view = LinkView(model, None)
+    assert view.period(1) is model
+    two = view.period(2)
+    assert view.period(2) is two and two.period == 2 and two.links[0].order == 2 * model.links[0].order
+    assert two.receptance.plan.speed_per_base == 2 * model.receptance.plan.speed_per_base
 
 
 def test_an_orbit_is_on_the_sweep_to_the_scale_of_its_unit():

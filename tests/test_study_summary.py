@@ -2,16 +2,15 @@
 
 Two studies of one task each, run in this process (``run_task``, no Dask):
 
-- ``two_shaft.toml``, whose bearings have names: the single-mesh path, bearing columns
-  ``<name> force_max [N]``;
+- ``two_shaft.toml``, whose bearings have names: one mesh, on the link engine as every
+  model, bearing columns ``<name>.force_max [N]``;
 - the same model with a bearing clearance at the pinion's free-end bearing (written into
-  a temporary model file): the link path, columns ``<link>.<quantity> [unit]`` in SI
-  (the DTE in metres).
+  a temporary model file), columns ``<link>.<quantity> [unit]``.
 
 The hand sweep is the library's own call with the study's analysis; the summary must be
-the maximum over the sweep of the typed outputs (``SweepResult.dte_rms`` [m] times 1e6,
-``BearingResponse.force_max`` over every bearing; on the link model each link's
-``metrics`` recomputed from the harmonics), not of whatever columns match a pattern. The
+the maximum over the sweep of the typed outputs (each link's ``metrics`` recomputed from
+the harmonics, the DTE in metres times 1e6, every linear bearing's recovered force), not
+of whatever columns match a pattern. The
 same arithmetic in the same process (one BLAS thread both times): 1e-12.
 """
 
@@ -74,51 +73,17 @@ def close(a: float, b: float) -> bool:
     return math.isfinite(a) and math.isfinite(b) and abs(a - b) <= RTOL * abs(b)
 
 
-def test_named_bearings_summary_equals_the_hand_sweep(tmp_path):
-    """Bearings with names (two_shaft.toml): ``bearing_force_max`` is the largest bearing
-    force of the sweep (it was NaN: the summary looked for columns named ``bearing ...``),
-    ``dte_rms_peak [um]`` the largest RMS DTE in µm."""
-    from nlgrd.io.model_file import model_from_file_data
-    from nlgrd.nonlinear.models.geared import geared_sweep
-
-    summary, spec = one_task(tmp_path, TWO_SHAFT)
-    system = model_from_file_data(spec.model_data, spec.model_file)
-    assert all(b.name for b in system.bearings)
-    a = spec.analysis
-    res = single_blas_thread(geared_sweep)(
-        system,
-        rpm=np.linspace(a["start"], a["stop"], a["count"]),
-        H=a["harmonics"],
-        directions=a["direction"],
-        stability=a["stability"],
-        harmonic_rtol=a["tolerance"],
-    )
-    ok = np.asarray(res.mesh.converged, dtype=bool) & ~res.mesh.no_stable
-    assert ok.all()
-    dte = 1e6 * float(np.max(res.mesh.dte_rms[ok]))
-    bearing = float(np.max(res.bearings.force_max[ok]))
-    assert bearing > 100.0  # the bearings carry the mesh load (~2.3 kN over two bearings)
-    assert close(summary["dte_rms_peak [um]"], dte), (summary["dte_rms_peak [um]"], dte)
-    assert close(summary["bearing_force_max [N]"], bearing), (summary["bearing_force_max [N]"], bearing)
-    assert close(summary["mesh_force_peak [N]"], float(np.max(res.mesh.force_max[ok])))
-
-
-def test_link_model_summary_equals_the_hand_sweep(tmp_path):
-    """A link model (two_shaft.toml with a bearing clearance): ``dte_rms_peak [um]`` is the
-    mesh's largest RMS DTE in µm (it was in metres: 1e6 too small) and
-    ``bearing_force_max`` the largest of the clearance's contact force and the linear
-    bearings' forces (it was the clearance's only), each recomputed here from the harmonics
-    (the link's own ``metrics``; the bearings' recovery, checked against the single path in
+def hand_sweep(spec) -> tuple:
+    """The study's analysis run by hand on the link model of its model (what every study
+    runs, one mesh too), and per point the mesh's RMS DTE [m] and largest force [N] from
+    its own ``metrics``, every clearance's largest force and the linear bearings' largest
+    force recovered from the harmonics (the recovery checked against the FE model in
     tests/test_engine_equivalence.py)."""
     from nlgrd.io.model_file import model_from_file_data
     from nlgrd.nonlinear.links.contract import BearingClearance, GearMeshLink
-    from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep, needs_links
+    from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
     from nlgrd.nonlinear.results.bearing_loads import link_bearing_outputs
 
-    model_file = tmp_path / "two_shaft_clearance.toml"
-    model_file.write_text(TWO_SHAFT.read_text() + CLEARANCE)
-    assert needs_links(load_model(model_file))
-    summary, spec = one_task(tmp_path, model_file)
     system = model_from_file_data(spec.model_data, spec.model_file)
     a = spec.analysis
     model = build_link_model(system)
@@ -129,15 +94,47 @@ def test_link_model_summary_equals_the_hand_sweep(tmp_path):
     ).result
     assert np.asarray(res.converged, dtype=bool).all()
     (mesh,) = [lk for lk in model.links if isinstance(lk, GearMeshLink)]
-    (clear,) = [lk for lk in model.links if isinstance(lk, BearingClearance)]
+    clears = [lk for lk in model.links if isinstance(lk, BearingClearance)]
     dte, force, mesh_force, linear = [], [], [], []
     for z, w in zip(res.harmonics, res.omega, strict=True):
         m = mesh.metrics(model.link_harmonics(z, mesh.name), w)
         dte.append(m["dte_rms [m]"])
         mesh_force.append(m["force_max [N]"])
-        force.append(clear.metrics(model.link_harmonics(z, clear.name), w)["force_max [N]"])
-        bearings = link_bearing_outputs(model, z, w)  # the linear bearings (tests/test_engine_equivalence.py)
+        force += [c.metrics(model.link_harmonics(z, c.name), w)["force_max [N]"] for c in clears]
+        bearings = link_bearing_outputs(model, z, w)
         linear.append(max(v for k, v in bearings.items() if k.endswith(".force_max [N]")))
+    return system, dte, force, mesh_force, linear
+
+
+def test_named_bearings_summary_equals_the_hand_sweep(tmp_path):
+    """Bearings with names (two_shaft.toml, one mesh, on the link engine as every model):
+    ``bearing_force_max`` is the largest bearing force of the sweep (it was NaN: the
+    summary looked for columns named ``bearing ...``), ``dte_rms_peak [um]`` the largest
+    RMS DTE in µm, each recomputed here from the harmonics."""
+    summary, spec = one_task(tmp_path, TWO_SHAFT)
+    system, dte, _, mesh_force, linear = hand_sweep(spec)
+    assert all(b.name for b in system.bearings)
+    assert max(linear) > 100.0  # the bearings carry the mesh load (~2.3 kN over two bearings)
+    assert close(summary["dte_rms_peak [um]"], 1e6 * max(dte)), (summary["dte_rms_peak [um]"], max(dte))
+    assert summary["dte_rms_peak [um]"] > 0.01  # µm, not m
+    assert close(summary["bearing_force_max [N]"], max(linear)), (summary["bearing_force_max [N]"], linear)
+    assert close(summary["mesh_force_peak [N]"], max(mesh_force))
+
+
+def test_link_model_summary_equals_the_hand_sweep(tmp_path):
+    """A link model (two_shaft.toml with a bearing clearance): ``dte_rms_peak [um]`` is the
+    mesh's largest RMS DTE in µm (it was in metres: 1e6 too small) and
+    ``bearing_force_max`` the largest of the clearance's contact force and the linear
+    bearings' forces (it was the clearance's only), each recomputed here from the harmonics
+    (the link's own ``metrics``; the bearings' recovery, checked against the single path in
+    tests/test_engine_equivalence.py)."""
+    from nlgrd.nonlinear.models.link_model import needs_links
+
+    model_file = tmp_path / "two_shaft_clearance.toml"
+    model_file.write_text(TWO_SHAFT.read_text() + CLEARANCE)
+    assert needs_links(load_model(model_file))
+    summary, spec = one_task(tmp_path, model_file)
+    _, dte, force, mesh_force, linear = hand_sweep(spec)
     assert max(force) > 0.0  # the journal is on the clearance
     assert close(summary["dte_rms_peak [um]"], 1e6 * max(dte)), (summary["dte_rms_peak [um]"], max(dte))
     assert summary["dte_rms_peak [um]"] > 0.01  # µm, not m
@@ -170,11 +167,11 @@ def test_a_summary_column_missing_from_the_table_is_an_error(missing):
 def test_a_study_asks_every_model_for_period_auto(tmp_path, monkeypatch):
     """The same study file answers the same question on both paths (issue 33: the link
     path's sweep defaulted to period 1, the single mesh's to "auto"): the link model's
-    sweep is asked for ``period="auto"``, geared_sweep's own default."""
+    sweep is asked for ``period="auto"``, the default of ``nlgrd.sweep``."""
     import inspect
 
     import nlgrd.nonlinear.models.link_model as link_model
-    from nlgrd.nonlinear.models.geared import geared_sweep
+    from nlgrd.analyses import sweep
 
     asked = {}
     real = link_model.link_sweep
@@ -184,10 +181,12 @@ def test_a_study_asks_every_model_for_period_auto(tmp_path, monkeypatch):
         return real(*args, **kwargs)
 
     monkeypatch.setattr(link_model, "link_sweep", spy)
-    model_file = tmp_path / "two_shaft_clearance.toml"
-    model_file.write_text(TWO_SHAFT.read_text() + CLEARANCE)
-    one_task(tmp_path, model_file)
-    assert asked["period"] == inspect.signature(geared_sweep).parameters["period"].default == "auto"
+    for name, text in (("one_mesh", ""), ("clearance", CLEARANCE)):  # one mesh and a clearance
+        asked.clear()
+        model_file = tmp_path / f"two_shaft_{name}.toml"
+        model_file.write_text(TWO_SHAFT.read_text() + text)
+        one_task(tmp_path, model_file)
+        assert asked["period"] == inspect.signature(sweep).parameters["period"].default == "auto"
 
 
 def test_a_period_two_answer_is_not_counted_as_no_stable_response():

@@ -164,14 +164,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     rng.add_argument(
         "--hz",
-        help="mesh frequency range (a link sweep: base frequency) START:STOP:COUNT [Hz], START < STOP; with "
-        "--continuation START:STOP[:COUNT]",
+        help="base frequency range START:STOP:COUNT [Hz], START < STOP: the mesh frequency of one mesh, "
+        "the mesh frequency / N where its errors repeat every N mesh periods (teeth that differ, "
+        "runout), the common period of several meshes or an unbalance; with --continuation "
+        "START:STOP[:COUNT]",
     )
     sw.add_argument(
         "--harmonics",
         type=int,
         default=None,
-        help="number of harmonics H, at least 1, at most what memory holds for the model "
+        help="number of harmonics H of the base frequency (--hz; N H for H mesh harmonics where the "
+        "errors repeat every N mesh periods), at least 1, at most what memory holds for the model "
         "(default: chosen so that RMS DTE and maximum mesh force, "
         "and a clearance's force and displacement, are within 0.5 %% of the converged answer; "
         "5 is the paper's choice)",
@@ -207,7 +210,10 @@ def build_parser() -> argparse.ArgumentParser:
         "evenly spread over the range), each followed over the grid (H mesh harmonics: --harmonics, "
         "default 9); exit status 1, nothing written, when none is found. The CSV has each point's "
         "period, its ω/ν content and, where a complex pair of Floquet multipliers left the unit "
-        "circle (quasi-periodic), the secondary frequency",
+        "circle (quasi-periodic), the secondary frequency. Gear errors repeating every N mesh "
+        "periods: auto, or a multiple of N up to 6 (the CSV's period then counts base periods, "
+        "N mesh periods each); the DTE and bearing-force spectra of the largest RMS DTE are drawn "
+        "(<out>_spectrum.png)",
     )
     sw.add_argument(
         "--search-at",

@@ -2,9 +2,11 @@
 written as a CSV table and a figure, with a summary; one flow for every model: its link
 model (:func:`nlgrd.analyses.model`, one mesh too) behind the link view
 (:class:`~nlgrd.nonlinear.models.model_views.LinkView`). The columns are
-``<link>.<quantity> [unit]`` (:func:`link_quantity` reads ``--quantity``). One gear pair
-whose teeth differ is still swept over the revolution on its mesh coordinate
-(:func:`_shaft_order_command`: H in mesh harmonics, ``period`` N, the spectra)."""
+``<link>.<quantity> [unit]`` (:func:`link_quantity` reads ``--quantity``). A gear pair
+whose errors repeat every N mesh periods (teeth that differ, runout) takes the same flow:
+its plan's base is the mesh frequency / N, H counts harmonics of that base, ``--period``
+counts mesh periods (auto, or a multiple of N up to 6), and the DTE and bearing-force spectra of the point
+with the largest RMS DTE are drawn (:func:`_spectra`)."""
 
 from __future__ import annotations
 
@@ -15,7 +17,6 @@ from nlgrd.errors import ModelError
 from nlgrd.io.command_line import (
     Outputs,
     ProgressBar,
-    check_quantity,
     harmonics_line,
     output_file,
     parse_range,
@@ -68,8 +69,7 @@ def cmd_sweep(args) -> int:
 
     One flow for every model: the link model and its view
     (:class:`~nlgrd.nonlinear.models.model_views.LinkView`) do the work; the command
-    parses, writes and prints. One gear pair whose teeth differ goes to
-    :func:`_shaft_order_command`.
+    parses, writes and prints.
 
     Parameters
     ----------
@@ -108,16 +108,13 @@ def cmd_sweep(args) -> int:
     png = output_file("--plot", args.plot, "sweep.png") if args.plot else out.with_suffix(".png")
     if png.resolve() == out.resolve():
         raise ModelError("--plot", f"the plot would overwrite the CSV {out}; give --out a .csv name")
-    from nlgrd.cli.orbits import default_search, parse_period, parse_search
+    from nlgrd.cli.orbits import MAX_PERIOD, default_search, parse_period, parse_search
 
     period, search = parse_period(args.period), None
     if args.search_at is not None:
         if args.continuation:
             raise ModelError("--search-at", "searches beside a sweep, not a --continuation")
         search = parse_search(args, values)
-    if period != "auto" and period >= 3:
-        _check_period_options(args, period)
-        search = (search[0] if search is not None else default_search(values), (period,))
     system = load_model(args.model)
     try:
         check_harmonics_memory(system, args.harmonics, "--harmonics")
@@ -126,28 +123,35 @@ def cmd_sweep(args) -> int:
     if not system.gear_pairs and not system.bearing_clearances:
         raise ModelError("gear_pairs", "the model has no gear pair and no clearance", args.model)
     revolution = _revolution(system)
-    if search is not None and revolution:
-        key = "--search-at" if args.search_at is not None else "--period"
-        raise ModelError(key, "searches the orbits of one gear pair excited at its mesh period", args.model)
-    grid = None if args.continuation else values  # the values as typed, written in the CSV
-    nu = period if period != "auto" and period >= 3 else 1  # --period N: searched and followed
-    check_speed_range(system, float(max(values)), args.rpm is not None, option, repr(text))
-    pyplot()
-    if revolution:  # one gear pair whose teeth differ: the revolution's orders
-        gp = system.gear_pairs[0]
-        if args.continuation or period not in ("auto", gp.error_period):
+    if revolution > 1 and period != "auto":  # --period counts mesh periods: base periods here
+        if period % revolution:
+            multiple = "" if revolution > MAX_PERIOD else f" or a multiple of {revolution}"
             raise ModelError(
                 "--period",
-                f"the gear errors repeat every {gp.error_period} mesh periods: a sweep over that "
-                "period only (no --continuation, --period auto)",
+                f"the gear errors repeat every {revolution} mesh periods (the base frequency is the "
+                f"mesh frequency / {revolution}): give auto{multiple}",
+                args.model,
             )
-        quantity = check_quantity(args.quantity or "dslr")
-        unit = _Unit(
-            args.rpm is not None,
-            gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio),
-            grid,
+        period //= revolution
+    if search is not None and revolution > 1:
+        raise ModelError(
+            "--search-at",
+            f"the orbit search is not offered where the errors repeat every {revolution} mesh "
+            "periods (each start solves the whole revolution); sweep with --period auto",
+            args.model,
         )
-        return _shaft_order_command(args, system, unit.omega(values), unit, quantity, out, png)
+    if period != "auto" and period >= 3:
+        _check_period_options(args, period)
+        search = (search[0] if search is not None else default_search(values), (period,))
+    grid = None if args.continuation else values  # the values as typed, written in the CSV
+    nu = period if period != "auto" and period >= 3 else 1  # --period N: searched and followed
+    top, in_rpm = float(max(values)), args.rpm is not None
+    if revolution > 1 and not in_rpm:  # the base is mesh / N: checked as the shaft speed it is
+        from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
+
+        top, in_rpm = top * 60 * FrequencyPlan.of_model(system).speed_per_base, True
+    check_speed_range(system, top, in_rpm, option, repr(text))
+    pyplot()
     from types import SimpleNamespace
 
     from nlgrd.analyses import model as link_model
@@ -176,7 +180,16 @@ def cmd_sweep(args) -> int:
         from nlgrd.nonlinear.models.model_views import search_beside
 
         found = search_beside(view, res, omegas, *search, unit, print)
-    _write_sweep(view, res, quantity, out, png, found=found, unit=unit, title=_title(system, args))
+    extra, more = (
+        (_spectra(model, res, quantity, unit, out), _sidebands(model, res))
+        if revolution > 1
+        else (None, None)
+    )
+    _write_sweep(
+        view, res, quantity, out, png, extra, found=found, unit=unit, title=_title(system, args), more=more
+    )
+    if extra is not None:
+        print(f"wrote {extra[1]}")
     return _summary(args, view, res, unit, out, png, found is not None)
 
 
@@ -267,16 +280,12 @@ def link_quantity(text: str | None, model) -> tuple[str, str]:
     return f"{name}.{match[0]}", f"{name}: {match[0]}"
 
 
-def _revolution(system) -> bool:
-    """One gear pair, nothing else nonlinear, whose errors repeat over several mesh periods:
-    swept over the revolution by :func:`~nlgrd.nonlinear.models.shaft_orders.shaft_order_sweep`
-    (H in mesh harmonics, ``period`` N, and the spectra)."""
-    return (
-        len(system.gear_pairs) == 1
-        and not system.bearing_clearances
-        and not system.unbalance
-        and system.gear_pairs[0].error_period > 1
-    )
+def _revolution(system) -> int:
+    """N of one gear pair, nothing else nonlinear, whose errors repeat every N mesh periods
+    (1 otherwise): ``--period`` counts its mesh periods and the spectra are drawn."""
+    if len(system.gear_pairs) == 1 and not system.bearing_clearances and not system.unbalance:
+        return system.gear_pairs[0].error_period
+    return 1
 
 
 def _check_period_options(args, period: int) -> None:
@@ -341,9 +350,14 @@ def _beside(out, name: str):
     return out.with_name(f"{out.stem}_{name}.csv")
 
 
-def _write_sweep(view, res, quantity, out, png, extra=None, found=None, unit=None, title=None) -> None:
-    """The sweep's CSV (the range's column as typed), its figure, and the orbit tables."""
+def _write_sweep(
+    view, res, quantity, out, png, extra=None, found=None, unit=None, title=None, more=None
+) -> None:
+    """The sweep's CSV (the range's column as typed, ``more`` columns appended), its figure,
+    and the orbit tables."""
     frame = view.table(res)
+    for name, values in (more or {}).items():
+        frame[name] = values
     if unit.grid is not None:
         snap_to_grid(frame, unit.column, unit.grid)
     for table in found if found is not None and unit.grid is not None else ():
@@ -362,46 +376,47 @@ def _write_sweep(view, res, quantity, out, png, extra=None, found=None, unit=Non
         files.commit()
 
 
-def _shaft_order_command(args, system, omegas, unit, quantity, out, png) -> int:
-    """The sweep over the error period, and the spectra of its largest response."""
+def _sidebands(model, res) -> dict:
+    """``<mesh>.sideband_max [um]``: the largest DTE line between the mesh harmonics
+    (:func:`~nlgrd.nonlinear.models.shaft_orders.sideband_amplitudes`), NaN where the table
+    has no values."""
     import numpy as np
 
-    from nlgrd.nonlinear.models.model_views import GearedView
-    from nlgrd.nonlinear.models.shaft_orders import (
-        SHAFT_ORDER_LADDER,
-        bearing_force_spectrum,
-        dte_spectrum,
-        shaft_order_model,
-        shaft_order_sweep,
-    )
+    from nlgrd.nonlinear.links.contract import GearMeshLink
+    from nlgrd.nonlinear.models.shaft_orders import sideband_amplitudes
+
+    mesh = next(lk for lk in model.links if isinstance(lk, GearMeshLink))
+    r = res.result
+    a = sideband_amplitudes(model, r, mesh.name, mesh.order)
+    usable = np.isfinite(res.links[f"{mesh.name}.dte_rms [m]"].to_numpy(float))
+    return {f"{mesh.name}.sideband_max [um]": np.where(usable, 1e6 * a, np.nan)}
+
+
+def _spectra(model, res, quantity: str, unit, out):
+    """The DTE and bearing-force spectra of the stable point with the largest RMS DTE of
+    the mesh (:func:`~nlgrd.nonlinear.models.shaft_orders.link_spectra`): (figure, file),
+    or None when no point is stable and periodic."""
+    import numpy as np
+
+    from nlgrd.nonlinear.links.contract import GearMeshLink
+    from nlgrd.nonlinear.models.shaft_orders import link_spectra
     from nlgrd.plotting.sweep_figures import plot_spectra
 
-    model = shaft_order_model(system, float(omegas.max()), args.harmonics or SHAFT_ORDER_LADDER[-1])
-    res = shaft_order_sweep(
-        system,
-        omegas,
-        H=args.harmonics,
-        directions=args.direction,
-        model=model,
-        stability=not args.no_stability,
-        progress=ProgressBar("sweep"),
-    )
-    rms = np.where(res.mesh.converged & ~res.mesh.no_stable, res.mesh.dte_rms, -np.inf)
-    extra = None
-    if np.isfinite(rms.max()):
-        i = int(np.argmax(rms))
-        w_mesh = float(res.mesh.omega[i])
-        fb, ab = bearing_force_spectrum(model, float(res.mesh.omega[i]), res.mesh.harmonics[i])
-        j = int(np.argmax(ab.max(axis=0)))
-        title = f"spectra at {unit(res.mesh.omega[i])} {unit.name} (the largest RMS DTE)"
-        bearing = (fb, ab[:, j], res.bearing_names[j])
-        fig = plot_spectra(dte_spectrum(res, i), bearing, w_mesh, title)[0].figure
-        extra = (fig, out.with_name(out.stem + "_spectrum.png"))
-    view = GearedView(model)
-    _write_sweep(view, res, quantity, out, png, extra, unit=unit, title=_title(system, args))
-    if extra is not None:
-        print(f"wrote {extra[1]}")
-    return _summary(args, view, res, unit, out, png)
+    mesh = next(lk for lk in model.links if isinstance(lk, GearMeshLink))
+    r = res.result
+    rms = res.links[f"{mesh.name}.dte_rms [m]"].to_numpy(float)
+    ok = np.asarray(r.converged, dtype=bool) & ~np.asarray(r.no_stable, dtype=bool) & np.isfinite(rms)
+    if not ok.any():
+        return None
+    i = int(np.argmax(np.where(ok, rms, -np.inf)))
+    fr, dte, force, names = link_spectra(model, r, i, mesh.name)
+    title = f"spectra at {unit(r.omega[i])} {unit.name} (the largest RMS DTE)"
+    bearing = (fr, np.zeros_like(fr), "no bearing")
+    if force.shape[1]:
+        j = int(np.argmax(force.max(axis=0)))
+        bearing = (fr, force[:, j], names[j])
+    fig = plot_spectra((fr, dte), bearing, float(r.omega[i]) * mesh.order, title)[0].figure
+    return fig, out.with_name(out.stem + "_spectrum.png")
 
 
 def _summary(args, view, res, unit, out, png, orbits: bool = False) -> int:

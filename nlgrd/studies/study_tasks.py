@@ -183,7 +183,7 @@ class SummaryColumns:
         Parameters
         ----------
         outputs : sequence of nlgrd.units.OutputColumn
-            The table's outputs (``output_columns`` of a link model, ``one_mesh_columns``).
+            The table's outputs (``output_columns`` of a link model).
 
         Returns
         -------
@@ -216,64 +216,45 @@ def _link_columns(model) -> SummaryColumns:
 
 
 def _sweep_frame(system, analysis: dict) -> tuple[pd.DataFrame, list, str, float, SummaryColumns]:
-    """Run the analysis on ``system``: (points, jumps, x column, x per rad/s, summary columns)."""
-    from nlgrd.nonlinear.models.link_model import needs_links
+    """Run the analysis on ``system``: (points, jumps, x column, x per rad/s, summary columns).
+
+    One flow for every model, one mesh too: the link model
+    (:func:`~nlgrd.nonlinear.models.link_model.build_link_model`) on its frequency plan,
+    swept by :func:`~nlgrd.nonlinear.models.link_model.link_sweep` on the base frequency (a
+    gear pair whose errors repeat every N mesh periods: the mesh frequency / N, H in
+    harmonics of it) and its gaps answered as ``nlgrd sweep`` answers them.
+    """
+    from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 
     values = np.linspace(analysis["start"], analysis["stop"], analysis["count"])
     rpm = analysis["unit"] == "rpm"
-    options = {"directions": analysis["direction"], "stability": analysis["stability"]}
-    if needs_links(system):
-        from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
-
-        model = build_link_model(system)
-        per_rad = 30 / math.pi * model.receptance.plan.speed_per_base if rpm else 1 / (2 * math.pi)
-        res = link_sweep(  # period "auto", as geared_sweep's default: one question of every model
-            model,
-            values / per_rad,
-            H=analysis["harmonics"],
-            rtol=analysis["tolerance"],
-            period="auto",
-            **options,
-        )
-        res = _time_answers(res, model, analysis)
-        frame = res.to_frame()
-        x_col = "shaft_speed [rpm]" if rpm else "base_frequency [Hz]"
-        if rpm:
-            frame.insert(1, x_col, frame["base_frequency [Hz]"] * 2 * math.pi * per_rad)
-        return frame, res.jumps(), x_col, per_rad, _link_columns(model)
-    from nlgrd.nonlinear.models.geared import geared_sweep
-    from nlgrd.nonlinear.models.shaft_orders import shaft_order_sweep
-    from nlgrd.nonlinear.results.bearing_loads import one_mesh_columns
-
-    gp = system.gear_pairs[0]
-    mesh_per_pinion = gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
-    per_rad = 30 / math.pi / mesh_per_pinion if rpm else 1 / (2 * math.pi)
-    # teeth that differ: the sweep over their period (shaft orders and sidebands)
-    sweeper = geared_sweep if gp.error_period == 1 else shaft_order_sweep
-    res = sweeper(
-        system,
-        omegas=values / per_rad,
+    model = build_link_model(system)
+    per_rad = 30 / math.pi * model.receptance.plan.speed_per_base if rpm else 1 / (2 * math.pi)
+    res = link_sweep(  # period "auto": one question of every model
+        model,
+        values / per_rad,
         H=analysis["harmonics"],
-        harmonic_rtol=analysis["tolerance"],
-        **options,
+        rtol=analysis["tolerance"],
+        period="auto",
+        directions=analysis["direction"],
+        stability=analysis["stability"],
     )
-    if gp.error_period == 1:  # a shaft-order sweep's base is ω/N: its gaps stay gaps
-        res = _time_answers(res, None, analysis, system)
-    x_col = "pinion_speed [rpm]" if rpm else "mesh_frequency [Hz]"
-    columns = SummaryColumns.of(one_mesh_columns(res.bearing_names))
-    return res.to_frame(), res.jumps(), x_col, per_rad, columns
+    res = _time_answers(res, model, analysis)
+    frame = res.to_frame()
+    x_col = "shaft_speed [rpm]" if rpm else "base_frequency [Hz]"
+    if rpm:
+        frame.insert(1, x_col, frame["base_frequency [Hz]"] * 2 * math.pi * per_rad)
+    return frame, res.jumps(), x_col, per_rad, _link_columns(model)
 
 
-def _time_answers(res, model, analysis: dict, system=None):
+def _time_answers(res, model, analysis: dict):
     """``res`` with its points without a stable periodic orbit answered by time integration
     (:func:`nlgrd.timedomain.sweep_answers.answer_sweep`, the rule ``nlgrd sweep`` follows),
-    when the analysis has stability and ``time_domain``; ``model`` the link model (None:
-    built from ``system``)."""
+    when the analysis has stability and ``time_domain``; ``model`` the link model."""
     from nlgrd.timedomain.sweep_answers import answer_sweep
 
-    return answer_sweep(  # period "auto": both sweeps of a task run with it
+    return answer_sweep(
         res,
-        system=system,
         model=model,
         period="auto",
         stability=analysis["stability"],

@@ -300,6 +300,41 @@ def bearing_names(system) -> list[str]:
     return [b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})" for j, b in enumerate(system.bearings)]
 
 
+def link_bearing_harmonics(model, omega: float, harmonics: NDArray, dofs: NDArray | None = None):
+    """Complex harmonics of every linear bearing's displacement and force at one solved
+    point of a link model: the bearing nodes recovered from the link coordinates with the
+    link forces G = F - κ Y (the balance the solver met), then -(K_b + i k ω C_b) q_k.
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model solved (a period-ν model for a period-ν point).
+    omega : float
+        The frequency the model's receptances take [rad/s].
+    harmonics : ndarray (n_coords, 2H+1)
+        Real harmonics of the link coordinates on that base [m].
+    dofs : ndarray of int, optional
+        The bearing nodes' DOFs (:func:`bearing_node_dofs`, computed when None).
+
+    Returns
+    -------
+    Q : ndarray (H+1, 2 n_bearings), complex
+        Harmonics k = 0..H of each bearing node's (y, z) displacement [m].
+    F : ndarray (H+1, 2 n_bearings), complex
+        Harmonics of the (y, z) force of each bearing on its node [N].
+    """
+    rec, w = model.receptance, float(omega)
+    dofs = bearing_node_dofs(model.system) if dofs is None else dofs
+    z = np.asarray(harmonics, dtype=float).reshape(rec.n_coords, -1)
+    H = (z.shape[1] - 1) // 2
+    Y = real_to_complex(z).T  # (H+1, d)
+    F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
+    kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, Y.shape[1], Y.shape[1])
+    G = F - np.einsum("kij,kj->ki", kap, Y)
+    Q = real_to_complex(rec.recover(w, H, z, complex_to_real(G.T), dofs)).T  # (H+1, 2 n_b)
+    return Q, bearing_forces(model.system, Q, w, rec.plan.speed(w))
+
+
 def link_bearing_outputs(model, harmonics: NDArray, omega: float) -> dict[str, float]:
     """Every linear bearing's outputs at one solved point of a link model, named
     ``<bearing>.<quantity> [unit]`` like a link's: the bearing nodes' displacements
@@ -360,13 +395,7 @@ def link_bearing_outputs_of_points(model, harmonics, omegas) -> list[dict[str, f
         Q = np.empty((len(rows), H + 1, dofs.size), dtype=complex)
         Fb = np.empty_like(Q)
         for j, i in enumerate(rows):
-            w, z = float(omegas[i]), zs[i]
-            Y = real_to_complex(z).T  # (H+1, d)
-            F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
-            kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, Y.shape[1], Y.shape[1])
-            G = F - np.einsum("kij,kj->ki", kap, Y)
-            Q[j] = real_to_complex(rec.recover(w, H, z, complex_to_real(G.T), dofs)).T  # (H+1, 2 n_b)
-            Fb[j] = bearing_forces(system, Q[j], w, rec.plan.speed(w))
+            Q[j], Fb[j] = link_bearing_harmonics(model, float(omegas[i]), zs[i], dofs)
         samples = model.output_cache.get(H, lambda H=H: _period_samples(H))
         k = model.period  # the base frequency's harmonic on the base of a period-ν model
         amp = np.zeros((len(rows), dofs.size // 2))
