@@ -197,31 +197,3 @@ def test_jeffcott_harmonic_balance_against_time_integration():
     print(f"worst |HB/TD - 1| = {worst:.2e} at {TD_SPEEDS.size} speeds, {in_contact} in contact")
     assert in_contact >= 8
     assert worst < 0.01
-
-
-def test_link_reduction_of_a_gear_mesh_equals_the_mesh_receptance():
-    """The general reduction with the mesh as a GearMeshLink (dense LU of the whole model,
-    base = mesh frequency) gives the κ_k and F_k of the specialised mesh receptance
-    (sparse LU restricted to the mesh-connected part), k = 0..5, at three mesh frequencies
-    of two_shaft.toml: two code paths for the same algebra, 1e-9 (rounding of two
-    factorisations of a matrix with condition ~1e6)."""
-    from pathlib import Path
-
-    from nlgrd.io.model_file import load_model
-    from nlgrd.nonlinear.links.contract import GearMeshLink
-    from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
-    from nlgrd.nonlinear.reduction.link_reduction import LinkReceptance
-    from nlgrd.nonlinear.reduction.receptance import MeshReceptance
-
-    system = load_model(Path(__file__).resolve().parents[1] / "data" / "models" / "two_shaft.toml")
-    mr = MeshReceptance(system, method="direct")
-    link = GearMeshLink.from_system(system)
-    static = sum(g.static_torques(system) for g in system.gear_pairs)
-    lr = LinkReceptance(
-        system, [link], FrequencyPlan(mr.speed_per_mesh_frequency, "mesh"), static_force=static
-    )
-    for w in 2 * np.pi * np.array([1500.0, 3600.0, 5200.0]):
-        kap, frc = lr.terms(w, 5)
-        E = real_to_complex(link.mesh.offset(5)[0])[:, None]
-        assert np.allclose(kap, mr.kappa(w, 5), rtol=1e-9, atol=1e-9 * np.max(np.abs(kap[1:])))
-        assert np.allclose(frc, mr.force(w, 5, E), rtol=1e-9, atol=1e-9 * np.max(np.abs(frc)))

@@ -18,7 +18,6 @@ from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
 from nlgrd.io.model_writer import model_to_dict, save_model
 from nlgrd.nonlinear.models.link_model import Unbalance, build_link_model, link_sweep, needs_links
-from nlgrd.nonlinear.reduction.receptance import MeshReceptance
 from nlgrd.rotor.loads import Unbalance as RotorUnbalance
 from nlgrd.rotor.system import refined
 
@@ -109,14 +108,10 @@ def test_bad_entry_through_the_cli_is_one_line(tmp_path, capsys):
 
 def test_library_default_is_the_systems_unbalance():
     """build_link_model(system) takes system.unbalance (base = the shaft speed); an explicit
-    ``unbalance=()`` wins (base = the mesh frequency, as without unbalance). The single-mesh
-    path refuses a model with unbalance rather than ignore it."""
+    ``unbalance=()`` wins (base = the mesh frequency, as without unbalance)."""
     system = dc.replace(load_model(TWO_SHAFT), unbalance=(Unbalance(1, 4, 1e-2, 0.3),))
     assert build_link_model(system).receptance.plan.speed_per_base == 1.0
     assert build_link_model(system, unbalance=()).receptance.plan.speed_per_base == pytest.approx(1 / 25)
-    with pytest.raises(ModelError, match="no unbalance") as err:  # the single-mesh path
-        MeshReceptance(system)
-    assert err.value.key == "unbalance"
 
 
 def cli_sweep(path: Path, tmp_path: Path, capsys) -> pd.DataFrame:

@@ -5,7 +5,7 @@ the full FE model (:func:`nlgrd.timedomain.run_down.run_down`, pinion speed ramp
 linearly from 10 000 to 5500 rpm at two rates, started on the harmonic-balance down
 sweep's orbit at 10 000 rpm) over the harmonic-balance up and down sweeps of the CLI grid
 (``nlgrd sweep --rpm 4000:16000:241``) and of notebook 01's grid (300 speeds over
-2000-16 000 rpm), H chosen by the error estimate, ``jump="auto"``. Prints the down jumps
+2000-16 000 rpm), H chosen by the error estimate, ``jump="auto"``, on the link engine. Prints the down jumps
 (CLI: :meth:`SweepResult.jumps`; notebook: :func:`nlgrd.studies.experimental.resonance_jumps`;
 run-down: :meth:`RampResult.jump`) and the run times. 7-13 minutes on one core.
 
@@ -24,16 +24,18 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from nlgrd.io.model_file import load_model  # noqa: E402
-from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep  # noqa: E402
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep  # noqa: E402
 from nlgrd.plotting import save_figure  # noqa: E402
 from nlgrd.plotting.common import place_legend  # noqa: E402
 from nlgrd.plotting.nonlinear import plot_sweep_frame  # noqa: E402
+from nlgrd.rotor.modal import gear_pair_mode  # noqa: E402
 from nlgrd.studies.experimental import directions_of, resonance_jumps  # noqa: E402
-from nlgrd.timedomain.geared import start_from_harmonics  # noqa: E402
+from nlgrd.timedomain.links import start_from_harmonics  # noqa: E402
 from nlgrd.timedomain.run_down import run_down  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
-RPM = "pinion_speed [rpm]"
+RPM = "shaft_speed [rpm]"
+DTE = "mesh0.dte_rms [um]"
 TOP, BOTTOM = 10000.0, 5500.0  # the ramp [rpm]
 RATES = (250.0, 125.0)  # pinion rpm/s
 STEPS = 256  # time steps per mesh period at the top speed (the step is fixed)
@@ -43,31 +45,35 @@ GRIDS = {"CLI": (4000, 16000, 241), "notebook 01": (2000, 16000, 300)}  # [rpm],
 def main() -> None:
     system = load_model(ROOT / "data" / "case_studies" / "kubo.toml")
     n_p = system.gear_pairs[0].geometry.teeth_pinion
-    model = build_geared_model(system, 2 * np.pi * 16000 / 60 * n_p, H=25)
+    model = build_link_model(system)
+    per_rpm = 2 * np.pi / 60 * n_p  # mesh frequency [rad/s] per pinion rpm
+
+    def rpm(omega):
+        return float(omega) / per_rpm
+
     rpm_res = gear_pair_mode(system)[0] * 60 / n_p
     frames, notes = {}, []
     for name, spec in GRIDS.items():
         grid = np.linspace(*spec)
         t = time.time()
-        fe = geared_sweep(system, rpm=grid, H=None, directions="both", model=model, jump="auto")
+        fe = link_sweep(model, grid * per_rpm, H=None, directions="both", jump="auto")
         frames[name] = fe.to_frame()
-        c = directions_of(frames[name], RPM, "dte_rms [um]")
+        frames[name].insert(1, RPM, frames[name]["base_frequency [Hz]"] * 2 * np.pi / per_rpm)
+        c = directions_of(frames[name], RPM, DTE)
         down = resonance_jumps(c["up"], c["down"], rpm_res)[1]
         listed = [
-            (round(float(model.pinion_rpm(j.omega_from))), round(float(model.pinion_rpm(j.omega_to))))
+            (round(rpm(j.omega_from)), round(rpm(j.omega_to)))
             for j in fe.jumps()
-            if j.direction == "down" and 5500 < model.pinion_rpm(j.omega_from) < 10000
+            if j.direction == "down" and 5500 < rpm(j.omega_from) < 10000
         ]
         # the CLI's main down jump: the first listed one where the DTE RMS falls to less than half
         falls = [
-            (float(model.pinion_rpm(j.omega_from)), float(model.pinion_rpm(j.omega_to)))
+            (rpm(j.omega_from), rpm(j.omega_to))
             for j in fe.jumps()
-            if j.direction == "down"
-            and j.omega_from < model.mesh_frequency(TOP)
-            and j.value_to < 0.5 * j.value_from
+            if j.direction == "down" and j.omega_from < TOP * per_rpm and j.value_to < 0.5 * j.value_from
         ]
         step = grid[1] - grid[0]
-        h_text = f"H = {fe.mesh.H} (harmonics of ω/2 where period 2)"
+        h_text = f"H = {fe.result.H} (harmonics of ω/2 where period 2)"
         print(f"{name} grid (step {step:.1f} rpm), {h_text}, {time.time() - t:.0f} s")
         print(f"  down jumps listed by the CLI between 5500 and 10000 rpm: {listed}")
         if falls:
@@ -87,17 +93,16 @@ def main() -> None:
         if first is not None:
             notes.append(f"HB down jump, {name} grid: {first[0]:.0f} -> {first[1]:.0f} rpm")
     # the run-down starts on the HB down sweep's orbit at the top speed (CLI grid: 10 000 rpm on it)
-    fe_top = geared_sweep(system, rpm=np.linspace(TOP, 16000, 121), H=13, directions="down", model=model)
-    i = int(np.argmin(fe_top.mesh.omega))
-    state0 = start_from_harmonics(model, fe_top.mesh.omega[i], fe_top.mesh.harmonics[i])
-    per_rpm = float(model.mesh_frequency(1.0))
+    fe_top = link_sweep(model, np.linspace(TOP, 16000, 121) * per_rpm, H=13, directions="down").result
+    i = int(np.argmin(fe_top.omega))
+    state0 = start_from_harmonics(model, fe_top.omega[i], 13, fe_top.harmonics[i])
     ramps = []
     for rate in RATES:
         t = time.time()
         r = run_down(
             model,
-            float(fe_top.mesh.omega[i]),
-            float(model.mesh_frequency(BOTTOM)),
+            float(fe_top.omega[i]),
+            BOTTOM * per_rpm,
             rate * per_rpm,
             state0=state0,
             steps_per_period=STEPS,
@@ -114,9 +119,7 @@ def main() -> None:
     window = (BOTTOM - 300, TOP + 500)
     for k, (name, frame) in enumerate(frames.items()):
         part = frame[(frame[RPM] >= window[0]) & (frame[RPM] <= window[1])]
-        plot_sweep_frame(
-            part, RPM, "dte_rms [um]", ax=ax, label=f"HB, {name} grid", series=k, ms=2.5 + k, lw=0.6
-        )
+        plot_sweep_frame(part, RPM, DTE, ax=ax, label=f"HB, {name} grid", series=k, ms=2.5 + k, lw=0.6)
     rate, r, jump = ramps[-1]
     r.plot(ax=ax, label=f"run-down, {rate:g} rpm/s")
     ax.text(

@@ -204,7 +204,7 @@ def time_answers(args, system, res, period, model=None):
         The options of ``nlgrd sweep``.
     system : RotorSystem
         The model.
-    res : GearedSweepResult or LinkSweepResult
+    res : LinkSweepResult
         The sweep.
     period : int or str
         The parsed ``--period``.
@@ -213,7 +213,7 @@ def time_answers(args, system, res, period, model=None):
 
     Returns
     -------
-    GearedSweepResult or LinkSweepResult
+    LinkSweepResult
 
     Raises
     ------

@@ -78,39 +78,6 @@ def plot_multipliers(multipliers, ax=None, title: str | None = None):
     return ax
 
 
-def plot_bearing_loads(frame: pd.DataFrame, quantity: str = "force_max", x: str | None = None, ax=None):
-    """One quantity of every bearing per point (``<bearing> <quantity> [unit]`` columns),
-    a line per bearing; a NaN point (not converged, no stable response) is a gap.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        The table of :meth:`~nlgrd.nonlinear.results.bearing_loads.BearingResponse.to_frame`.
-    quantity : str
-        The quantity, e.g. "force_max" or "displacement_rms".
-    x : str, optional
-        The column of the abscissa; None: the point's index.
-    ax : matplotlib.axes.Axes, optional
-        Axes to draw on; a new figure when None.
-
-    Returns
-    -------
-    matplotlib.axes.Axes
-    """
-    ax = get_ax(ax)
-    cols = [c for c in frame.columns if c.split(" [")[0].rsplit(" ", 1)[-1] == quantity]
-    xs = frame[x].to_numpy(float) if x else np.arange(len(frame), dtype=float)
-    for i, col in enumerate(cols):
-        name = col.rsplit(" ", 2)[0]
-        y = frame[col].to_numpy(float)
-        draw_points(ax, xs, y, np.full(y.size, UNKNOWN), f"C{i % 10}", "o", name)
-    ax.set_xlabel(axis_label(x) if x else "point [-]")
-    unit = cols[0].split(" [")[-1].rstrip("]") if cols else "-"
-    ax.set_ylabel(f"bearing {quantity.replace('_', ' ')} [{'µm' if unit == 'um' else unit}]")
-    place_legend(ax)
-    return ax
-
-
 def plot_tori(frame: pd.DataFrame, quantity: str = "dte_rms", ax=None, title: str | None = None):
     """Tori over speed (:meth:`~nlgrd.nonlinear.tracing.torus_sweep.TorusResult.to_frame`):
     each converged torus an open square at its value against pinion speed, as a sweep

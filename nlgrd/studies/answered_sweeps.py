@@ -27,7 +27,6 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 import numpy as np
 import pandas as pd
 
-from nlgrd.nonlinear.models.geared import GearedSweepResult
 from nlgrd.nonlinear.models.link_model import LinkModel, build_link_model
 from nlgrd.nonlinear.results.link_results import LinkSweepResult
 from nlgrd.nonlinear.results.sweep_results import SweepResult
@@ -45,8 +44,8 @@ __all__ = [
     "response_counts",
 ]
 
-#: A report's sweep: one mesh's (the former engine) or a link model's (``nlgrd.sweep``).
-Sweep = GearedSweepResult | LinkSweepResult
+#: A report's sweep: a link model's (``nlgrd.sweep``, every model).
+Sweep = LinkSweepResult
 
 #: The ``response`` of a point without any answer.
 NOT_FOUND = "not found"
@@ -58,15 +57,11 @@ KIND_ORDER = ("periodic", "period", "quasi-periodic", "time domain", "chaotic", 
 
 def _points(result: Sweep | SweepResult) -> SweepResult:
     """The harmonic-balance points of a sweep."""
-    if isinstance(result, GearedSweepResult):
-        return result.mesh
     return result.result if isinstance(result, LinkSweepResult) else result
 
 
 def _with_points(result: Sweep, points: SweepResult) -> Sweep:
     """``result`` with its harmonic-balance points replaced."""
-    if isinstance(result, GearedSweepResult):
-        return dc.replace(result, mesh=points)
     return dc.replace(result, result=points)
 
 
@@ -96,7 +91,7 @@ def gap_rows(result: Sweep | SweepResult) -> np.ndarray:
 
     Parameters
     ----------
-    result : GearedSweepResult, LinkSweepResult or SweepResult
+    result : LinkSweepResult or SweepResult
         The sweep.
 
     Returns
@@ -172,8 +167,8 @@ def torus_answers_in_parallel(
 
     Parameters
     ----------
-    result : GearedSweepResult or LinkSweepResult
-        The sweep: one mesh's, or a link model's (``nlgrd.sweep``).
+    result : LinkSweepResult
+        The sweep (``nlgrd.sweep``).
     system : RotorSystem
         The rotor swept.
     workers : int
@@ -186,27 +181,15 @@ def torus_answers_in_parallel(
     The same type as ``result``.
     """
     res = _points(result)
-    n = len(res)
     direction = np.asarray(res.direction).astype(str)
     groups = [np.nonzero(direction == d)[0] for d in dict.fromkeys(direction.tolist())]
     workers = max(1, min(int(workers), len(groups)))
     if workers == 1:
         return _speed_kept(result, with_torus_answers(result, system, rtol=rtol))
     context = multiprocessing.get_context("spawn")  # no fork of a threaded kernel
-    if isinstance(result, LinkSweepResult):
-        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-            futures = {pool.submit(_torus_rows, result, system, g, rtol): g for g in groups}
-            return _merged(result, [(fut.result(), futures[fut]) for fut in as_completed(futures)])
-    merged = {f.name: getattr(res, f.name) for f in dc.fields(res)}
-    bearings = {f.name: getattr(result.bearings, f.name) for f in dc.fields(result.bearings)}
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         futures = {pool.submit(_torus_rows, result, system, g, rtol): g for g in groups}
-        for fut in as_completed(futures):
-            part, g = fut.result(), futures[fut]
-            _put_rows(merged, part.mesh, g, n)
-            _put_rows(bearings, part.bearings, g, n)
-    cls = type(result.bearings)
-    return dc.replace(result, mesh=dc.replace(res, **merged), bearings=cls(**bearings))
+        return _merged(result, [(fut.result(), futures[fut]) for fut in as_completed(futures)])
 
 
 def answer_gaps_in_parallel(
@@ -237,8 +220,8 @@ def answer_gaps_in_parallel(
 
     Parameters
     ----------
-    result : GearedSweepResult or LinkSweepResult
-        The sweep: one mesh's, or a link model's (``nlgrd.sweep``).
+    result : LinkSweepResult
+        The sweep (``nlgrd.sweep``).
     system : RotorSystem
         The rotor swept.
     model : LinkModel, optional
@@ -269,37 +252,14 @@ def answer_gaps_in_parallel(
         return _speed_kept(result, with_time_answers(result, model, progress=progress, **options))
     tasks = [rows[i::workers] for i in range(workers)]
     context = multiprocessing.get_context("spawn")  # no fork of a threaded kernel
-    if isinstance(result, LinkSweepResult):
-        parts = []
-        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-            futures = {pool.submit(_answer_rows, result, system, t, options): t for t in tasks}
-            for done, fut in enumerate(as_completed(futures), 1):
-                parts.append((fut.result(), futures[fut]))
-                if progress is not None:
-                    progress(done, len(tasks))
-        return _merged(result, parts)
-    res, n = result.mesh, len(result.mesh)
-    merged = {f.name: getattr(res, f.name) for f in dc.fields(res)}
-    nan = {
-        f.name: np.full_like(np.asarray(getattr(result.bearings, f.name), float), np.nan)
-        for f in dc.fields(result.bearings)
-    }
-    bearings = {f.name: getattr(result.bearings, f.name) for f in dc.fields(result.bearings)}
-    unc = nan if result.bearing_uncertainty is None else dc.asdict(result.bearing_uncertainty)
+    parts = []
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         futures = {pool.submit(_answer_rows, result, system, t, options): t for t in tasks}
         for done, fut in enumerate(as_completed(futures), 1):
-            part, t = fut.result(), futures[fut]
-            _put_rows(merged, part.mesh, t, n)
-            _put_rows(bearings, part.bearings, t, n)
-            if part.bearing_uncertainty is not None:
-                _put_rows(unc, part.bearing_uncertainty, t, n)
+            parts.append((fut.result(), futures[fut]))
             if progress is not None:
                 progress(done, len(tasks))
-    cls = type(result.bearings)
-    return dc.replace(
-        result, mesh=dc.replace(res, **merged), bearings=cls(**bearings), bearing_uncertainty=cls(**unc)
-    )
+    return _merged(result, parts)
 
 
 def answered_table(hb: pd.DataFrame, answered: pd.DataFrame, value: str = "dte_rms [um]") -> pd.DataFrame:

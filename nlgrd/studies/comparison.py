@@ -111,8 +111,8 @@ def compare(data: ExperimentalSet, frame: pd.DataFrame) -> pd.DataFrame:
     data : ExperimentalSet
         The measured data set.
     frame : pandas.DataFrame
-        The sweep table (``SweepResult.to_frame()``, ``GearedSweepResult.to_frame()`` or a
-        link table's, ``nlgrd.sweep(...).to_frame()``), with the data set's abscissa and
+        The sweep table (``nlgrd.sweep(...).to_frame()`` or ``SweepResult.to_frame()``),
+        with the data set's abscissa and
         quantity columns (:func:`frame_columns`) and ``direction``.
 
     Returns

@@ -7,8 +7,8 @@ digitisation, axis calibration, uncertainty, case, quantity), then the columns
 unknown). :func:`load_experimental` reads and checks one file; bad data raise
 :class:`~nlgrd.errors.ModelError` naming the file, the column and the line.
 
-:func:`compare` scores a sweep table (``SweepResult.to_frame()`` or
-``GearedSweepResult.to_frame()``) against a data set, per sweep direction: resonance
+:func:`compare` scores a sweep table (``nlgrd.sweep(...).to_frame()`` or
+``SweepResult.to_frame()``) against a data set, per sweep direction: resonance
 location (x of the largest value), peak value, jump location (largest jump) and the RMS
 difference on the measured points. :func:`curve_landmarks` and
 :func:`hysteresis_bands` extract the same landmarks from any curve, computed or measured.

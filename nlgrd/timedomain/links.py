@@ -20,7 +20,7 @@ that equation). Integration runs period by period to a periodic steady state
 
 :class:`LinkIntegrator` is nlgrd's one HHT-α integrator of these equations: of a link
 model (its constructor) and of the FE model of one gear mesh
-(:meth:`LinkIntegrator.of_mesh`, used by :func:`nlgrd.timedomain.geared.integrate_fe`).
+(:meth:`LinkIntegrator.of_mesh`).
 """
 
 from __future__ import annotations

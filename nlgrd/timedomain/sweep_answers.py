@@ -1,13 +1,13 @@
 """A sweep's gaps answered: :func:`answer_sweep` is the rule every sweep follows. On a
-sweep (one mesh or any links) a point whose orbit lost stability to a complex pair is first answered
+sweep (any model) a point whose orbit lost stability to a complex pair is first answered
 by the torus harmonic balance where it converges within the sweep's tolerance
 (:func:`with_torus_answers`: "quasi-periodic", its stability not computed); then in the
 time domain (:func:`with_time_answers`): every point where the harmonic balance
 converged on an orbit but no stable periodic response exists (``no_stable``: quasi-periodic
 or none) gets the statistics of :func:`nlgrd.timedomain.time_answer.time_answer`, started
 from that unstable orbit (its mesh-periodic part), and its ``response`` becomes
-"time domain" or "chaotic" with the values' sampling uncertainty beside them. On a link
-sweep (``nlgrd.sweep``) a record that settled on a period-1 motion (its last period
+"time domain" or "chaotic" with the values' sampling uncertainty beside them. A record
+that settled on a period-1 motion (its last period
 repeats the one before to 1e-3 of each link coordinate's range; its transient cut in the
 first half or not: a slow approach to an orbit) is polished
 (:mod:`nlgrd.timedomain.settled_orbits`): the harmonic balance at the sweep's H solved
@@ -38,9 +38,7 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
-from nlgrd.nonlinear.models.geared import GearedSweepResult
 from nlgrd.nonlinear.models.link_model import LinkModel
-from nlgrd.nonlinear.results.bearing_loads import BearingResponse
 from nlgrd.nonlinear.results.link_results import LinkSweepResult
 from nlgrd.nonlinear.results.metrics import METRIC_NAMES
 from nlgrd.nonlinear.results.response_kinds import QUASI_PERIODIC, uncertainty_column
@@ -144,23 +142,6 @@ def answer_gaps(
     return dc.replace(result, time_kind=kind, metrics=metrics, uncertainty=unc, amplitudes=amps), answers
 
 
-def _bearing_response(result: GearedSweepResult, answers: dict[int, TimeAnswer]):
-    """A geared sweep's bearing outputs with the answered rows' values, and their
-    uncertainties (NaN at the other rows)."""
-    fields = list(BearingResponse.__dataclass_fields__)
-    values = {f: np.array(getattr(result.bearings, f), dtype=float, copy=True) for f in fields}
-    unc = {f: np.full_like(values[f], np.nan) for f in fields}
-    if result.bearing_uncertainty is not None:
-        unc = {f: np.array(getattr(result.bearing_uncertainty, f), dtype=float, copy=True) for f in fields}
-    for i, a in answers.items():
-        for j, name in enumerate(result.bearing_names):
-            for f in fields:
-                e = a.bearings.get(f"{name}.{f} [{'m' if f.startswith('displacement') else 'N'}]")
-                if e is not None:
-                    values[f][i, j], unc[f][i, j] = e.value, e.uncertainty
-    return BearingResponse(**values), BearingResponse(**unc)
-
-
 def _link_frame(links: pd.DataFrame, answers: dict[int, TimeAnswer]) -> pd.DataFrame:
     """A link sweep's columns with the answered rows' values and their uncertainty columns
     (the linear bearings' too, where the frame has their columns)."""
@@ -198,17 +179,17 @@ def with_time_answers(
     orbit_rtol: float = OUTPUT_RTOL,
     **options,
 ):
-    """A sweep's result (one mesh, a link model, or the bare points) with its gaps answered
+    """A sweep's result (a link sweep or the bare points) with its gaps answered
     in the time domain (:func:`answer_gaps`); on a link sweep a record (answered, or its
     transient outlasting it) that settled on a stable period-1 orbit is that orbit
     (:mod:`nlgrd.timedomain.settled_orbits`).
 
     Parameters
     ----------
-    result : GearedSweepResult, LinkSweepResult or SweepResult
+    result : LinkSweepResult or SweepResult
         The sweep.
     model : LinkModel
-        Its model as a link model.
+        Its model.
     progress : callable, optional
         ``progress(done, total)`` after each point answered.
     orbit_rtol : float
@@ -220,18 +201,15 @@ def with_time_answers(
     -------
     The same type as ``result``.
     """
-    if isinstance(result, GearedSweepResult):
-        res, answers = answer_gaps(model, result.mesh, progress=progress, **options)
-        if not answers:
-            return dc.replace(result, mesh=res)
-        bearings, unc = _bearing_response(result, answers)
-        return dc.replace(result, mesh=res, bearings=bearings, bearing_uncertainty=unc)
     if isinstance(result, LinkSweepResult):
         unfinished: dict[int, TimeAnswer] = {}
         res, answers = answer_gaps(model, result.result, progress=progress, unfinished=unfinished, **options)
         orbits = _settled_orbits(model, res, {**answers, **unfinished}, orbit_rtol)
         timed = {i: a for i, a in answers.items() if i not in orbits}
-        return with_orbits(LinkSweepResult(res, _link_frame(result.links, timed), result.bearings), orbits)
+        answered = dc.replace(result, result=res, links=_link_frame(result.links, timed))
+        return dc.replace(
+            with_orbits(answered, orbits), speed_per_base=result.speed_per_base, speed_unit=result.speed_unit
+        )
     return answer_gaps(model, result, progress=progress, **options)[0]
 
 
@@ -332,16 +310,14 @@ def with_torus_answers(
     :func:`nlgrd.nonlinear.tracing.link_torus.torus_link_columns`) and
     ``secondary_frequency`` the torus's, ``harmonic_error`` its convergence estimate; the
     torus's stability is not computed (``verdict`` "not computed", ``stable`` not written).
-    The other points are left as they were. One mesh and a link model take one path: the
-    link torus (:class:`~nlgrd.nonlinear.tracing.link_torus.LinkTorus`) of the sweep's link
-    model, one mesh too (built from ``system``: its one coordinate is the mesh's, the
-    one-mesh sweep's harmonics), through
-    :func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori`.
+    The other points are left as they were. Every model takes one path: the link torus
+    (:class:`~nlgrd.nonlinear.tracing.link_torus.LinkTorus`) of the sweep's link model,
+    through :func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori`.
 
     Parameters
     ----------
-    result : GearedSweepResult or LinkSweepResult
-        The sweep.
+    result : LinkSweepResult
+        The sweep (another result is returned as it is).
     system : RotorSystem, optional
         Its model (its link model is built from it when ``model`` is None).
     model : LinkModel, optional
@@ -358,34 +334,11 @@ def with_torus_answers(
     Raises
     ------
     ModelError
-        A link sweep without ``model`` or ``system``; a one-mesh sweep whose link model's
-        base is not the mesh frequency (its gear errors repeat over several mesh periods).
+        A link sweep without ``model`` or ``system``.
     """
     if isinstance(result, LinkSweepResult):
         return _link_torus_answers(result, system, model, rtol, progress)
-    system = system if system is not None else getattr(model, "system", None)
-    if not isinstance(result, GearedSweepResult) or system is None:
-        return result
-    mesh = result.mesh
-    if not _ns_points(mesh).any():
-        return result
-    model = _torus_link_model(system, model)
-    if int(model.top_order) != 1:
-        raise ModelError(
-            "result",
-            f"the link model's base is the mesh frequency / {int(model.top_order)}: "
-            "answer the tori of its link sweep (nlgrd.sweep), not of a one-mesh sweep",
-        )
-    found = _link_tori(mesh, model, rtol, progress)
-    if not found:
-        return result
-    fields = list(BearingResponse.__dataclass_fields__)
-    bearings = {f: np.array(getattr(result.bearings, f), dtype=float, copy=True) for f in fields}
-    for i, a in found.items():
-        for f in fields:
-            if f in a.bearings:
-                bearings[f][i] = _digits(a.bearings[f])
-    return dc.replace(result, mesh=_with_tori(mesh, found, 0), bearings=BearingResponse(**bearings))
+    return result
 
 
 def _torus_link_model(system, model: LinkModel | None) -> LinkModel:
@@ -450,19 +403,18 @@ def answer_sweep(
     stability is on, ``period`` is "auto" and ``time_domain`` is set, the points without a
     stable periodic response are answered: first the points whose orbit lost stability
     to a complex pair by the torus harmonic balance where it converges within ``rtol``
-    (:func:`with_torus_answers`, one mesh or a link model alike), then every other one by
+    (:func:`with_torus_answers`), then every other one by
     time integration (:func:`with_time_answers`); otherwise ``result`` is returned as it
     is.
 
     Parameters
     ----------
-    result : GearedSweepResult, LinkSweepResult or SweepResult
+    result : LinkSweepResult or SweepResult
         The sweep.
     system : RotorSystem, optional
-        The model; its link model is built from it when ``model`` is None (a sweep of one
-        mesh, whose reduced model is not a link model).
+        The model; its link model is built from it when ``model`` is None.
     model : LinkModel, optional
-        The sweep's link model (a sweep of several meshes or clearances).
+        The sweep's link model.
     period : int or str
         The sweep's ``period``: only "auto" tells a period doubling from a gap.
     stability : bool

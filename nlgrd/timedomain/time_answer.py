@@ -130,7 +130,7 @@ class TimeAnswer:
         row (radial magnitudes over the record: the largest displacement and force, the
         RMS of their alternating parts, the mean force's magnitude) and
         ``displacement_mean [m]`` and ``force_amplitude [N]`` (the base harmonic of the
-        synchronous average, the larger of y and z) of a geared sweep's.
+        synchronous average, the larger of y and z).
     tail : ndarray (p, d, steps)
         The link coordinates over the record's last :data:`TAIL` periods (whether the
         motion settled on a periodic orbit: :mod:`nlgrd.timedomain.settled_orbits`) [m].

@@ -3,9 +3,8 @@ parametric k_h ρ(θ) with the effective unloaded error (issue 12, item 3).
 
 :func:`mesh_law` states how k(θ) and e(θ) combine; :func:`gear_mesh_force` builds the
 :class:`~nlgrd.nonlinear.laws.force_laws.BacklashMesh` or
-:class:`~nlgrd.nonlinear.laws.force_laws.ParametricMesh` of a gear pair for the single-mesh
-model (:func:`nlgrd.nonlinear.models.geared.build_geared_model`) and the links
-(:class:`nlgrd.nonlinear.links.contract.GearMeshLink`).
+:class:`~nlgrd.nonlinear.laws.force_laws.ParametricMesh` of a gear pair for its link
+(:class:`nlgrd.nonlinear.links.contract.GearMeshLink`) and the single-DOF model.
 """
 
 from __future__ import annotations

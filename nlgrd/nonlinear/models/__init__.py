@@ -1,1 +1,1 @@
-"""The model builders: the geared FE model, the link model, the single-DOF model, shaft orders."""
+"""The model builders: the link model (every FE model), its views, the single-DOF model, shaft orders."""

@@ -1,18 +1,11 @@
-"""One way through a sweep for every model: what differs between a gear pair reduced onto its
-mesh coordinate and any set of links, behind one interface (a *view*), so that ``nlgrd
-sweep`` and the orbit search run one flow and the model decides only which library call
-does the work.
+"""One way through a sweep for every model, behind one interface (a *view*), so that ``nlgrd
+sweep`` and the orbit search run one flow: :class:`LinkView`, any set of meshes, clearances
+and unbalance (:func:`~nlgrd.nonlinear.models.link_model.build_link_model`, one mesh too):
+``link_sweep``, ``link_continuation``; its table and orbits have the base frequency, the
+reference shaft speed and every link's and linear bearing's outputs over the orbit's whole
+period.
 
-- :class:`GearedView`, one gear pair excited at its mesh period
-  (:func:`~nlgrd.nonlinear.models.geared.build_geared_model`): ``geared_sweep``,
-  ``geared_continuation``; its table has the mesh frequency and the pinion speed, its orbits
-  the mesh's outputs (:data:`ORBIT_COLUMNS`);
-- :class:`LinkView`, any set of meshes, clearances and unbalance
-  (:func:`~nlgrd.nonlinear.models.link_model.build_link_model`): ``link_sweep``,
-  ``link_continuation``; its table and orbits have the base frequency, the reference shaft
-  speed and every link's and linear bearing's outputs over the orbit's whole period.
-
-The orbit search on either: :func:`search_beside` (``--search-at``: ``<out>_orbits.csv``,
+The orbit search on it: :func:`search_beside` (``--search-at``: ``<out>_orbits.csv``,
 every orbit found with whether the sweep has it, and ``<out>_branches.csv``, the branch of
 each stable orbit the sweep does not have, followed over the grid) and
 :func:`period_branches` (``--period N``: the same two and the merged period-N response), both
@@ -25,170 +18,6 @@ import numpy as np
 import pandas as pd
 
 from nlgrd.nonlinear.tracing.period_branches import PERIOD_HARMONICS
-
-#: Columns of ``<out>_orbits.csv`` for one gear pair.
-ORBIT_COLUMNS = (
-    "search at",
-    "mesh_frequency [Hz]",
-    "pinion_speed [rpm]",
-    "period",
-    "stable",
-    "floquet_max [-]",
-    "on the sweep",
-    "dte_rms [um]",
-    "force_max [N]",
-    "dslr [-]",
-    "amplitude [um]",
-    "start",
-)
-
-
-class GearedView:
-    """One gear pair on its mesh coordinate: its sweep and continuation, the sweep's table
-    and figure, the period-ν models and what is written of each orbit and branch
-    (:data:`ORBIT_COLUMNS`).
-
-    Parameters
-    ----------
-    model : GearedModel
-        The sweep's model (period 1), or the period-``nu`` model of a ``--period`` search.
-    nu : int
-        The period ``model`` was built for [mesh periods].
-    """
-
-    columns = ORBIT_COLUMNS
-
-    def __init__(self, model, nu: int = 1):
-        self.model, self.nu = model, nu
-
-    def points(self, res):
-        """The harmonic-balance points of a sweep of this model (a SweepResult)."""
-        return res.mesh
-
-    def sweep(self, omegas, H, directions: str, stability: bool, period, progress=None):
-        """:func:`~nlgrd.nonlinear.models.geared.geared_sweep` of the model over ``omegas`` [rad/s]."""
-        from nlgrd.nonlinear.models.geared import geared_sweep
-
-        return geared_sweep(
-            self.model.system,
-            omegas=omegas,
-            H=H,
-            directions=directions,
-            model=self.model,
-            stability=stability,
-            progress=progress,
-            period=period,
-        )
-
-    def continuation(self, begin: float, end: float, H, quantity: str, stability: bool, **options):
-        """:func:`~nlgrd.nonlinear.models.geared.geared_continuation` from ``begin`` to ``end``
-        [rad/s]: the curve (its metrics hold ``quantity``) and its table."""
-        from nlgrd.nonlinear.models.geared import geared_continuation
-
-        res = geared_continuation(
-            self.model.system, begin, end, H=H, model=self.model, stability=stability, **options
-        )
-        return res, res.to_frame()
-
-    def time_model(self):
-        """The model :func:`nlgrd.timedomain.sweep_answers.answer_sweep` takes: None (it
-        integrates the system's geared model itself)."""
-        return None
-
-    def period_model(self, nu: int, H: int):
-        """The period-ν GearedModel serving ν H' harmonics of ω/ν, H' the larger of ``H`` and
-        the harmonics per mesh period ``model`` was built for (a model is never rebuilt
-        smaller); ``model`` itself when it is that one, else built once (``model.cache``)."""
-        from nlgrd.nonlinear.models.geared import build_geared_model
-
-        m = self.model
-        n = nu * max(H, m.H // self.nu)
-        if (nu, n) == (self.nu, m.H):
-            return m
-        return m.cache.get(
-            ("period", nu, n),
-            lambda: build_geared_model(
-                m.system, m.max_mesh_frequency, n, m.receptance.requested_method, period=nu
-            ),
-        )
-
-    def model_of(self, H: int, top: float):
-        """``model_of(nu)`` for the orbit search: the period-ν reduced model
-        (:meth:`period_model`; ``top`` is the model's own ``max_mesh_frequency``)."""
-        return lambda nu: self.period_model(nu, H).reduced
-
-    def row(self, o) -> dict:
-        m = o.metrics
-        return {
-            "mesh_frequency [Hz]": o.omega / (2 * np.pi),
-            "pinion_speed [rpm]": float(self.model.pinion_rpm(o.omega)),
-            "dte_rms [um]": np.nan if m is None else m.dte_rms * 1e6,
-            "force_max [N]": np.nan if m is None else m.force_max,
-            "dslr [-]": np.nan if m is None else m.dslr,
-        }
-
-    def text(self, row: dict) -> str:
-        return f"RMS DTE {row['dte_rms [um]']:.4g} um"
-
-    def frame(self, branch) -> pd.DataFrame:
-        f = branch.to_frame()
-        f.insert(0, "pinion_speed [rpm]", self.model.pinion_rpm(branch.omega))
-        return f
-
-    def table(self, res) -> pd.DataFrame:
-        """The sweep's table (:meth:`GearedSweepResult.to_frame`: the pinion speed beside the
-        mesh frequency)."""
-        return res.to_frame()
-
-    def words(self) -> str:
-        """What the sweep's summary says of the model before its H: nothing (one mesh)."""
-        return ""
-
-    def figure(self, res, frame, quantity: str, x: str, xaxis, title: str, branches=None):
-        """The sweep's figure: ``quantity`` (a metric name) against ``xaxis`` (label, value per
-        mesh frequency [Hz]), the branches of ``x`` when given
-        (:func:`nlgrd.plotting.nonlinear.plot_sweep`)."""
-        from nlgrd.plotting.common import place_legend
-        from nlgrd.plotting.nonlinear import plot_sweep
-
-        title = f"{title}\nH = {res.mesh.H} harmonics of the mesh frequency"
-        ax = plot_sweep(res.mesh, quantity=quantity, xaxis=xaxis, title=title)
-        if branches is not None:
-            from nlgrd.plotting.sweep_figures import draw_branches
-
-            draw_branches(ax, branches, x, quantity)
-            ax.set_xlabel(xaxis[0])
-            place_legend(ax, fontsize=7)
-        ax.figure.tight_layout()
-        return ax.figure
-
-    def on_sweep(self, res):
-        """``known(orbit, omega, followed)``: the sweep ``res`` has the orbit (its period, RMS
-        DTE and largest force to 1e-6) at a converged, stable point of that speed."""
-        mesh = res.mesh
-
-        def known(o, w: float, followed) -> bool:
-            here = np.nonzero(np.isclose(mesh.omega, w, rtol=1e-12) & mesh.converged & ~mesh.no_stable)[0]
-            return o.metrics is not None and any(
-                int(mesh.period[i]) == o.period
-                and np.isclose(mesh.metrics["dte_rms"][i], o.metrics.dte_rms, rtol=1e-6)
-                and np.isclose(mesh.metrics["force_max"][i], o.metrics.force_max, rtol=1e-6)
-                for i in here
-            )
-
-        return known
-
-    def result(self, res, H: int):
-        """The merged period-ν response ``res`` with its bearing loads: a GearedSweepResult."""
-        import dataclasses as dc
-
-        from nlgrd.nonlinear.models.geared import GearedSweepResult
-        from nlgrd.nonlinear.results.bearing_loads import bearing_names, bearing_response
-
-        model = self.period_model(self.nu, H)
-        on_base = dc.replace(res, omega=res.omega / self.nu)  # the frequencies the model's receptances take
-        names = bearing_names(model.system)
-        return GearedSweepResult(res, bearing_response(model, on_base), model.pinion_rpm(res.omega), names, H)
 
 
 def _unit(name: str) -> str:
@@ -404,9 +233,9 @@ def search_beside(view, res, omegas, at, periods, unit, report=None) -> tuple[pd
 
     Parameters
     ----------
-    view : GearedView or LinkView
+    view : LinkView
         The sweep's model and its columns.
-    res : GearedSweepResult or LinkSweepResult
+    res : LinkSweepResult
         The sweep.
     omegas : ndarray
         The sweep's base frequencies [rad/s].
@@ -444,8 +273,8 @@ def period_branches(view, omegas, at, nu: int, H: int | None, directions: str, u
 
     Parameters
     ----------
-    view : GearedView or LinkView
-        The model (a GearedView holds the period-ν model) and its columns.
+    view : LinkView
+        The model and its columns.
     omegas : ndarray
         The grid's base frequencies [rad/s].
     at : ndarray
@@ -463,7 +292,7 @@ def period_branches(view, omegas, at, nu: int, H: int | None, directions: str, u
 
     Returns
     -------
-    (GearedSweepResult or LinkSweepResult or None, DataFrame, DataFrame)
+    (LinkSweepResult or None, DataFrame, DataFrame)
         The response (None when no period-ν orbit was found), the orbits found and the
         followed branches.
     """

@@ -243,7 +243,7 @@ def sdof_model(system: RotorSystem):
             raise ModelError(
                 "stiffness_file" if gp.stiffness_file is not None else "stiffness_variation",
                 "the single-DOF model is mesh-periodic: a varying mesh stiffness with errors that "
-                f"repeat every {gp.error_period} mesh cycles needs the FE model (shaft_order_sweep)",
+                f"repeat every {gp.error_period} mesh cycles needs the FE model (nlgrd.sweep)",
             )
         lste, rho = mesh_law(gp, 30)  # the effective unloaded error with k_h ρ(θ)
     return SDOFGearPair(

@@ -1,5 +1,6 @@
 """Direct receptances h_k = Wᵀ Z_k⁻¹ W of a geared rotor: one factorisation per harmonic
-and frequency (the ``"direct"`` method of :class:`~nlgrd.nonlinear.reduction.receptance.MeshReceptance`).
+and frequency (the ``"banded"`` strategy of
+:class:`~nlgrd.nonlinear.reduction.link_reduction.LinkReceptance`).
 
 Z_k holds the mesh damping c_m w wᵀ, which couples the shafts and widens Z's band. The
 factorisation is made of Z'_k = Z_k - i kω W diag(c_m) Wᵀ instead: its sparsity graph is

@@ -222,8 +222,7 @@ class LinkReceptance:
             self.prepare(max_frequency)
 
     def _auto_method(self, poles_apply: bool) -> str:
-        """What ``method="auto"`` takes, as the single-mesh path decides
-        (:class:`~nlgrd.nonlinear.reduction.receptance.MeshReceptance`): the pole-residue form
+        """What ``method="auto"`` takes: the pole-residue form
         up to :data:`POLES_LIMIT` DOFs coupled to a link or a forced DOF, else the banded LU
         where the band is narrow (``direct_receptance.BAND_LIMIT``), else the pole-residue
         form or direct LU as before; above :data:`DENSE_LIMIT` DOFs with exact derivatives,

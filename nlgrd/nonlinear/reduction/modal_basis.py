@@ -1,9 +1,8 @@
 """Reduction bases for large models: lowest undamped modes plus attachment vectors.
 
 A Galerkin basis V for the receptances of a few coordinates W of a large linear model
-(the meshes of :class:`~nlgrd.nonlinear.reduction.receptance.MeshReceptance`, the links of
-:class:`~nlgrd.nonlinear.reduction.link_reduction.LinkReceptance`): the undamped modes of K_r φ =
-λ M φ up to a cut-off frequency, the static attachment vectors (K_r + M)⁻¹ W and the
+(the links of :class:`~nlgrd.nonlinear.reduction.link_reduction.LinkReceptance`): the
+undamped modes of K_r φ = λ M φ up to a cut-off frequency, the static attachment vectors (K_r + M)⁻¹ W and the
 dynamic ones Z(iω)⁻¹ W at 1/4, 1/2 and 1 of the highest excitation frequency (modal
 summation with residual correction, Craig & Kurdila 2006, Fundamentals of Structural
 Dynamics, §17.3; here in projected form, so gyroscopic, non-proportional and circulatory

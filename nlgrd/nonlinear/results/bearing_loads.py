@@ -1,25 +1,16 @@
-"""Bearing displacements and forces of a geared sweep, recovered from the solved mesh
-harmonics (:func:`bearing_response`)."""
+"""Bearing displacements and forces of a link sweep, recovered from the solved link
+harmonics (:func:`link_bearing_outputs`, :func:`link_bearing_outputs_of_points`)."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
-
 import numpy as np
-import pandas as pd
 from numpy.typing import NDArray
 
-from nlgrd.errors import ModelError
 from nlgrd.nonlinear.fourier.harmonics import complex_to_real, real_to_complex
-from nlgrd.nonlinear.results.metrics import METRIC_UNITS
-from nlgrd.nonlinear.results.sweep_results import SweepResult
-from nlgrd.units import WRITTEN, OutputColumn, column, written
 
-RECOVERY_RTOL = 1e-12
-
-#: Each linear bearing's outputs on a link model (:func:`link_bearing_outputs`), radial
-#: magnitudes as :class:`BearingResponse`'s.
+#: Each linear bearing's outputs on a link model (:func:`link_bearing_outputs`): radial
+#: magnitudes |(y, z)| over one period, the largest, the RMS of the alternating part, the
+#: magnitude of the mean, and the amplitude of the base harmonic.
 BEARING_OUTPUTS = (
     "displacement_max [m]",
     "displacement_rms [m]",
@@ -28,138 +19,6 @@ BEARING_OUTPUTS = (
     "force_max [N]",
     "force_amplitude [N]",
 )
-
-#: The fields of :class:`BearingResponse` and their SI units: the typed description of a
-#: one-mesh sweep's bearing outputs.
-BEARING_QUANTITIES = {
-    "displacement_mean": "m",
-    "displacement_rms": "m",
-    "displacement_max": "m",
-    "force_mean": "N",
-    "force_rms": "N",
-    "force_max": "N",
-    "force_amplitude": "N",
-}
-
-
-@dataclass(frozen=True)
-class BearingResponse:
-    """Bearing displacements and forces per sweep point, arrays (n_points, n_bearings).
-
-    Displacement and force are radial magnitudes |(y, z)| over one period:
-    ``*_mean`` of the static part, ``*_rms`` of the alternating part, ``*_max`` overall;
-    ``force_amplitude`` is the amplitude of the first mesh harmonic (largest axis).
-    NaN at points that did not converge or have no stable response.
-
-    Attributes
-    ----------
-    displacement_mean, displacement_rms, displacement_max : ndarray
-        Radial displacement of each bearing node, (n_points, n_bearings) [m].
-    force_mean, force_rms, force_max : ndarray
-        Radial bearing force, (n_points, n_bearings) [N].
-    force_amplitude : ndarray
-        Amplitude of the first mesh harmonic of the bearing force, largest of y and z,
-        (n_points, n_bearings) [N].
-    """
-
-    displacement_mean: NDArray
-    displacement_rms: NDArray
-    displacement_max: NDArray
-    force_mean: NDArray
-    force_rms: NDArray
-    force_max: NDArray
-    force_amplitude: NDArray
-
-    def to_frame(self, names: Sequence[str] | None = None) -> pd.DataFrame:
-        """One row per point, per bearing its ``<bearing> <quantity> [unit]`` columns as a
-        one-mesh sweep writes them (displacements in µm, forces in N; NaN kept).
-
-        Parameters
-        ----------
-        names : sequence of str, optional
-            The bearings' names (:func:`bearing_names`); default "bearing 0", "bearing 1", ...
-
-        Returns
-        -------
-        pandas.DataFrame
-
-        Raises
-        ------
-        ModelError
-            (``names``) Not one name per bearing.
-        """
-        n = self.force_max.shape[1]
-        names = [f"bearing {j}" for j in range(n)] if names is None else list(names)
-        if len(names) != n:
-            raise ModelError("names", f"one name per bearing ({n}), got {len(names)}")
-        data = {}
-        for j, name in enumerate(names):
-            for quantity, si in BEARING_QUANTITIES.items():
-                unit, values = written(getattr(self, quantity)[:, j], si)
-                data[f"{name} {column(quantity, unit)}"] = values
-        return pd.DataFrame(data)
-
-    def plot(self, quantity: str = "force_max", ax=None, names: Sequence[str] | None = None):
-        """One quantity of every bearing per point (:func:`nlgrd.plotting.result_figures.plot_bearing_loads`).
-
-        Parameters
-        ----------
-        quantity : str
-            A field of this class, e.g. "force_max" or "displacement_rms".
-        ax : matplotlib.axes.Axes, optional
-            Axes to draw on; a new figure when None.
-        names : sequence of str, optional
-            The bearings' names, as :meth:`to_frame`.
-
-        Returns
-        -------
-        matplotlib.axes.Axes
-
-        Raises
-        ------
-        ModelError
-            (``quantity``) Not a field of this class.
-        """
-        from nlgrd.plotting.result_figures import plot_bearing_loads
-
-        if quantity not in BEARING_QUANTITIES:
-            raise ModelError("quantity", f"one of {', '.join(BEARING_QUANTITIES)}, got {quantity!r}")
-        return plot_bearing_loads(self.to_frame(names), quantity, ax=ax)
-
-
-#: The bearing columns a one-mesh sweep's table writes per bearing (no mean displacement).
-ONE_MESH_BEARING_COLUMNS = (
-    "displacement_max",
-    "displacement_rms",
-    "force_mean",
-    "force_rms",
-    "force_max",
-    "force_amplitude",
-)
-
-
-def one_mesh_columns(bearings: Sequence[str]) -> list[OutputColumn]:
-    """The typed description of a one-mesh sweep's output columns: the mesh's metrics
-    (``dte_rms [um]``, ..., owner None, kind "gear mesh") and per bearing
-    :data:`ONE_MESH_BEARING_COLUMNS` (``<bearing> <quantity> [unit]``, kind "bearing").
-
-    Parameters
-    ----------
-    bearings : sequence of str
-        The bearings' names (:func:`bearing_names`).
-
-    Returns
-    -------
-    list of nlgrd.units.OutputColumn
-    """
-    out = [
-        OutputColumn(q, WRITTEN[si][0] if si else None, None, "gear mesh") for q, si in METRIC_UNITS.items()
-    ]
-    for b in bearings:
-        for q in ONE_MESH_BEARING_COLUMNS:
-            unit = WRITTEN[BEARING_QUANTITIES[q]][0]
-            out.append(OutputColumn(q, unit, b, "bearing", name=f"{b} {column(q, unit)}"))
-    return out
 
 
 def _period_samples(H: int) -> tuple[NDArray, NDArray]:
@@ -200,41 +59,6 @@ def _radial_rms(X: NDArray) -> NDArray:
     """RMS over a period of the alternating part of |(x_y, x_z)| from complex harmonics
     X (..., H+1, 2 n_b): sqrt(Σ_k≥1 (|X_y,k|² + |X_z,k|²) / 2)."""
     return np.sqrt(np.sum(np.abs(X[..., 1:, 0::2]) ** 2 + np.abs(X[..., 1:, 1::2]) ** 2, axis=-2) / 2)
-
-
-def bearing_harmonics(model, omega: float, harmonics: NDArray) -> tuple[NDArray, NDArray]:
-    """Complex harmonics of every bearing's displacement and force at one solved point.
-
-    At a converged point the mesh force harmonics are G_k = F_k - κ_k Y_k (the balance the
-    solver met, to its tolerance), so recovery needs only the receptances the sweep
-    already computed: Q_k = U_k (F_k - G_k), Q_0 from the mean terms.
-
-    Parameters
-    ----------
-    model : nlgrd.nonlinear.models.geared.GearedModel
-        The model solved.
-    omega : float
-        The frequency the model's receptances take: the mesh frequency, or the base ω/ν of
-        a period-ν model [rad/s].
-    harmonics : ndarray (2H+1,) or (1, 2H+1)
-        Real harmonics of δ on that base [m].
-
-    Returns
-    -------
-    Q : ndarray (H+1, 2 n_bearings), complex
-        Harmonics k = 0..H of each bearing node's (y, z) displacement [m].
-    F : ndarray (H+1, 2 n_bearings), complex
-        Harmonics of the (y, z) force of each bearing on its node [N].
-    """
-    system, mr = model.system, model.receptance
-    z = np.asarray(harmonics, dtype=float).reshape(-1)
-    H = (z.size - 1) // 2
-    w = float(omega)
-    Y = real_to_complex(z)[:, None]
-    F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
-    kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, -1)
-    Q = mr.recover(w, Y, F - kap * Y, F)
-    return Q, bearing_forces(system, Q, w, mr.speed(w))
 
 
 def bearing_forces(system, Q: NDArray, omega: float, speed: float) -> NDArray:
@@ -355,18 +179,16 @@ def link_bearing_outputs(model, harmonics: NDArray, omega: float) -> dict[str, f
     -------
     dict
         ``<bearing>.displacement_max [m]``, ``.displacement_rms [m]``, ``.force_mean [N]``,
-        ``.force_rms [N]``, ``.force_max [N]`` per bearing (radial magnitudes, as
-        :class:`BearingResponse`) and ``.force_amplitude [N]``: the amplitude of the base
-        frequency's harmonic of the force, the larger of y and z (for one mesh its mesh
-        harmonic, as :class:`BearingResponse`'s).
+        ``.force_rms [N]``, ``.force_max [N]`` per bearing (radial magnitudes) and
+        ``.force_amplitude [N]``: the amplitude of the base frequency's harmonic of the
+        force, the larger of y and z (for one mesh its mesh harmonic).
     """
     return link_bearing_outputs_of_points(model, [harmonics], [omega])[0]
 
 
 def link_bearing_outputs_of_points(model, harmonics, omegas) -> list[dict[str, float]]:
     """:func:`link_bearing_outputs` of many points: the recovery point by point, the
-    statistics and maxima of all points with the same H at once (as
-    :func:`bearing_response`).
+    statistics and maxima of all points with the same H at once.
 
     Parameters
     ----------
@@ -418,52 +240,3 @@ def link_bearing_outputs_of_points(model, harmonics, omegas) -> list[dict[str, f
         for j, i in enumerate(rows):
             out[i] = {f"{n}.{q}": float(v[j, b]) for b, n in enumerate(names) for q, v in stats.items()}
     return out
-
-
-def bearing_response(model, result: SweepResult) -> BearingResponse:
-    """Recover bearing displacements and forces for every converged point of ``result``
-    (:func:`bearing_harmonics` per point, the maxima of all points at once).
-
-    Parameters
-    ----------
-    model : nlgrd.nonlinear.models.geared.GearedModel
-        The model the sweep was solved on.
-    result : SweepResult
-        The mesh solutions (harmonics of δ per point), at the frequencies the model's
-        receptances take (the base ω/ν of a period-ν model).
-
-    Returns
-    -------
-    BearingResponse
-        Per point and bearing; NaN at points that did not converge or have no stable
-        response.
-    """
-    system, mr = model.system, model.receptance
-    nb = len(system.bearings)
-    n = len(result.omega)
-    out = {k: np.full((n, nb), np.nan) for k in BearingResponse.__dataclass_fields__}
-    pts = [i for i in range(n) if result.converged[i] and not result.no_stable[i]]
-    if not pts:
-        return BearingResponse(**out)
-    H = (result.harmonics[pts[0]].size - 1) // 2
-    Qs = np.empty((len(pts), H + 1, 2 * nb), dtype=complex)
-    Fs = np.empty_like(Qs)
-    for row, i in enumerate(pts):
-        Qs[row], Fs[row] = bearing_harmonics(model, float(result.omega[i]), result.harmonics[i])
-    rows = np.array(pts)
-    out["displacement_mean"][rows] = np.hypot(Qs[:, 0, 0::2].real, Qs[:, 0, 1::2].real)
-    out["displacement_rms"][rows] = _radial_rms(Qs)
-    out["force_mean"][rows] = np.hypot(Fs[:, 0, 0::2].real, Fs[:, 0, 1::2].real)
-    out["force_rms"][rows] = _radial_rms(Fs)
-    m = mr.period  # the mesh harmonic on the base of a period-ν model
-    amp = np.maximum(np.abs(Fs[:, m, 0::2]), np.abs(Fs[:, m, 1::2])) if H >= m else 0.0
-    out["force_amplitude"][rows] = amp
-    for a in range(0, len(pts), 200):
-        sl = slice(a, a + 200)
-        out["displacement_max"][rows[sl]] = _radial_maxima(Qs[sl])
-        out["force_max"][rows[sl]] = _radial_maxima(Fs[sl])
-    # A bearing the mesh does not load (a stub shaft coupled in torsion only) gets
-    # rounding, 1e-60 and below, which differs from machine to machine: written as 0.
-    for v in out.values():
-        v[np.abs(v) <= RECOVERY_RTOL * np.nanmax(np.abs(v))] = 0.0
-    return BearingResponse(**out)

@@ -91,7 +91,7 @@ def link_torus_model(model) -> qp.TorusModel:
 
 def torus_link_bearings(model, sol: qp.TorusSolution, n_samples: tuple[int, int] = SAMPLES) -> dict:
     """Every linear bearing's outputs over a torus of a link model (module docstring):
-    the fields of :func:`nlgrd.nonlinear.tracing.torus_outputs.torus_bearing_outputs`.
+    the fields of :func:`nlgrd.nonlinear.tracing.torus_outputs.torus_bearing_statistics`.
 
     Parameters
     ----------

@@ -273,8 +273,7 @@ def search_orbits(
     ----------
     model_of : callable
         ``model_of(nu)``: the period-ν model on the base ω/ν (e.g.
-        ``lambda nu: pair.subharmonic(nu).reduced_model()``, the ``reduced`` model of
-        :func:`nlgrd.nonlinear.models.geared.build_geared_model` with ``period=nu``, or of
+        ``lambda nu: pair.subharmonic(nu).reduced_model()``, or the ``reduced`` model of
         :func:`nlgrd.nonlinear.models.link_model.period_model`); also asked for the divisors of
         each ν when an orbit of a shorter period is found (``shorter_periods``).
     omega : float

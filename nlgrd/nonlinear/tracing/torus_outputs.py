@@ -1,19 +1,10 @@
-"""The torus of a one-mesh geared FE model and what a torus reports: the mesh outputs
-averaged over it and its bearings' loads.
-
-The torus is the two-frequency harmonic balance of :mod:`nlgrd.nonlinear.hb.quasi_periodic` on
-the mesh coordinate of the receptance-reduced model
-(:func:`nlgrd.nonlinear.models.geared.build_geared_model`), the linear part entering through
-h(Ω) = wᵀ Z(Ω)⁻¹ w at each combination frequency Ω (Z of the full FE model at the shaft
-speed of ω₁, with the mesh damping, without k_h: the matrix of the periodic harmonic
-balance's direct receptance). Its outputs are sampled on the torus (time averages of the
-quasi-periodic motion). :class:`GearedTorus` bundles them for
-:mod:`nlgrd.nonlinear.tracing.torus_sweep`; :mod:`nlgrd.nonlinear.tracing.link_torus` is the
-same for a model with any links, one mesh too, and the one the library uses (issue 33:
-:class:`GearedTorus`, :func:`geared_torus_model`, :func:`torus_bearing_forces` and
-:func:`torus_bearing_outputs` are the former one-mesh path, kept until the old engine goes).
-The outputs (:func:`torus_outputs`, :func:`torus_back_contact`, the bearing statistics)
-and κ(Ω) with its slope (:func:`kappa_and_slope`, :func:`dynamic_matrices`) serve both.
+"""What a torus reports, for :mod:`nlgrd.nonlinear.tracing.link_torus` (the torus of a model
+with any links, one mesh too): the mesh outputs averaged over it (:func:`torus_outputs`,
+:func:`torus_back_contact`), its bearings' loads (:func:`bearing_force_harmonics`,
+:func:`torus_bearing_statistics`) and κ(Ω) with its slope at each combination frequency Ω
+(:func:`kappa_and_slope`, :func:`dynamic_matrices`: Z of the full FE model at the shaft
+speed of ω₁, with the links' damping, without their stiffness). The outputs are sampled on
+the torus (time averages of the quasi-periodic motion).
 """
 
 from __future__ import annotations
@@ -23,7 +14,6 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from nlgrd.errors import ModelError
 from nlgrd.nonlinear.hb import quasi_periodic as qp
 
 #: Output names of a torus point, in the order of a torus sweep's outputs (SI), with the
@@ -41,48 +31,8 @@ TORUS_OUTPUTS = {
 }
 #: The outputs whose change with (H₁, H₂) is the convergence estimate.
 CHECKED = ("dte_rms", "force_max", "secondary_frequency")
-#: Bearing forces below this fraction of the largest are rounding of the recovery (as the
-#: sweep's :data:`nlgrd.nonlinear.models.geared` bearing columns).
+#: Bearing outputs below this fraction of the largest are rounding of the recovery.
 BEARING_FLOOR = 1e-9
-
-
-def geared_torus_model(model) -> qp.TorusModel:
-    """The :class:`~nlgrd.nonlinear.hb.quasi_periodic.TorusModel` of a geared model.
-
-    Parameters
-    ----------
-    model : GearedModel
-        From :func:`nlgrd.nonlinear.models.geared.build_geared_model` (one mesh, period 1).
-
-    Returns
-    -------
-    TorusModel
-        κ(Ω) = (wᵀ Z(Ω)⁻¹ w)⁻¹ by a sparse LU of the full FE Z per frequency, at the speed of ω₁;
-        the periodic κ_k and F_k of ``model.reduced``.
-
-    Raises
-    ------
-    ModelError
-        When the model is of period ν > 1.
-    """
-    rec = model.receptance
-    if rec.period != 1:
-        raise ModelError("period", f"the torus balance needs a period-1 model, got period {rec.period}")
-    W = rec.W
-
-    def kappa_at(freqs: NDArray, omega: float) -> NDArray:
-        speed = rec.speed(omega)
-        out = np.empty((len(freqs), W.shape[1], W.shape[1]), dtype=complex)
-        for i, f in enumerate(freqs):
-            Z = rec.model.dynamic_stiffness(float(f), speed).tocsc()
-            out[i] = np.linalg.inv(W.T @ spla.splu(Z).solve(W.astype(complex)))
-        return out
-
-    def kappa_slope_at(freqs: NDArray, omega: float) -> tuple[NDArray, NDArray]:
-        return kappa_and_slope(rec.model, W, freqs, rec.speed(omega))
-
-    red = model.reduced
-    return qp.TorusModel(kappa_at, red.kappa, red.force, red.nonlinearities, kappa_slope_at=kappa_slope_at)
 
 
 def dynamic_matrices(linear, freqs: NDArray, speed: float, extra: sp.spmatrix | None = None):
@@ -178,71 +128,6 @@ def kappa_and_slope(linear, W: NDArray, freqs: NDArray, speed: float, extra: sp.
     return kap, slope
 
 
-class GearedTorus:
-    """What :func:`~nlgrd.nonlinear.tracing.torus_sweep.torus_sweep` and
-    :func:`~nlgrd.nonlinear.tracing.torus_sweep.converged_tori` need of a one-mesh geared model:
-    its torus model, its periodic model and a torus's outputs and their convergence
-    estimate. :class:`nlgrd.nonlinear.tracing.link_torus.LinkTorus` is the same for a link
-    model; the sweep asks nothing else of either.
-
-    Parameters
-    ----------
-    model : GearedModel
-        From :func:`nlgrd.nonlinear.models.geared.build_geared_model` (period 1).
-
-    Attributes
-    ----------
-    torus_model : TorusModel
-        :func:`geared_torus_model`.
-    reduced : ReducedModel
-        The periodic model (its orbits and Floquet multipliers).
-    bearing_names : list of str
-        The bearings' names, as the sweep's columns.
-    """
-
-    def __init__(self, model):
-        self.model = model
-        self.torus_model = geared_torus_model(model)
-        self.reduced = model.reduced
-        self.bearing_names = [
-            b.name or f"bearing {j} (shaft {b.shaft}, node {b.node})"
-            for j, b in enumerate(model.system.bearings)
-        ]
-
-    def omegas(self, rpm: NDArray) -> NDArray:
-        """Mesh frequencies [rad/s] of pinion speeds ``rpm`` [rpm]."""
-        return self.model.mesh_frequency(rpm)
-
-    def rpm(self, omegas: NDArray) -> NDArray:
-        """Pinion speeds [rpm] of mesh frequencies ``omegas`` [rad/s]."""
-        return self.model.pinion_rpm(omegas)
-
-    def outputs(self, sol: qp.TorusSolution) -> NDArray:
-        """:func:`torus_outputs` of the mesh (SI)."""
-        return torus_outputs(sol, self.model.mesh)
-
-    def change(
-        self, outputs: NDArray, sol: qp.TorusSolution, fine: qp.TorusSolution
-    ) -> tuple[NDArray, float]:
-        """The relative change of the :data:`CHECKED` outputs from ``sol`` (whose
-        ``outputs`` are given) to ``fine`` and the largest, the convergence estimate [-]."""
-        idx = [list(TORUS_OUTPUTS).index(c) for c in CHECKED]
-        ch = torus_outputs(fine, self.model.mesh)[idx] / outputs[idx] - 1
-        return ch, float(np.max(np.abs(ch)))
-
-    def bearing_force_max(self, sol: qp.TorusSolution) -> NDArray:
-        """:func:`torus_bearing_forces` [N]."""
-        return torus_bearing_forces(self.model, sol)
-
-    def answer(self, sol: qp.TorusSolution, outputs: NDArray) -> tuple[dict, dict, dict]:
-        """A torus's answer to a sweep point: the :data:`TORUS_OUTPUTS` with
-        ``back_contact``, the bearings' outputs (:func:`torus_bearing_outputs`) and no
-        link columns."""
-        out = dict(zip(TORUS_OUTPUTS, outputs, strict=True))
-        out["back_contact"] = torus_back_contact(sol, self.model.mesh)
-        return out, torus_bearing_outputs(self.model, sol), {}
-
-
 def torus_outputs(
     sol: qp.TorusSolution, mesh, n_samples: tuple[int, int] = (256, 48), coord: int = 0
 ) -> NDArray:
@@ -300,57 +185,6 @@ def torus_outputs(
     )
 
 
-def torus_bearing_forces(model, sol: qp.TorusSolution, n_samples: tuple[int, int] = (256, 48)) -> NDArray:
-    """The largest radial force of every bearing over a torus [N].
-
-    All the forcing a mesh-reduced model has at k ≠ 0 acts along w (the mesh force and the
-    LSTE's damping force), so each node follows δ: Q_k = (Z(Ω_k)⁻¹ w) h(Ω_k)⁻¹ Y_k at every
-    combination frequency Ω_k; the mean Q_0 is the periodic recovery's
-    (:meth:`~nlgrd.nonlinear.reduction.receptance.MeshReceptance.recover`). The force of bearing b on
-    its node, -(K_b + i Ω_k C_b) q_k in (y, z), is sampled on the torus.
-
-    Parameters
-    ----------
-    model : GearedModel
-        The model solved.
-    sol : TorusSolution
-        A converged torus.
-    n_samples : tuple of int
-        Samples along θ₁ and θ₂ [-].
-
-    Returns
-    -------
-    ndarray (n_bearings,)
-        max |(F_y, F_z)| per bearing [N]; NaN when not converged.
-    """
-    nb = len(model.system.bearings)
-    if not sol.converged:
-        return np.full(nb, np.nan)
-    return torus_bearing_outputs(model, sol, n_samples)["force_max"]
-
-
-def _torus_bearing_harmonics(model, sol: qp.TorusSolution) -> tuple[NDArray, NDArray, NDArray]:
-    """Each bearing node's (y, z) 2-D harmonics Q and its force's Fb (terms, 2 n_b), and
-    the combination frequencies (terms,) [rad/s] (:func:`torus_bearing_forces`)."""
-    system, rec = model.system, model.receptance
-    g, w = sol.grid, sol.omega
-    speed = rec.speed(w)
-    Y = sol.Y[0]
-    W = rec.W.astype(complex)
-    dofs = model.bearing_dofs
-    Q = np.zeros((g.n_terms, dofs.size), dtype=complex)
-    H1 = g.H1
-    F = np.asarray(model.reduced.force(w, H1), dtype=complex).reshape(H1 + 1, -1)
-    kap = np.asarray(model.reduced.kappa(w, H1), dtype=complex).reshape(H1 + 1, -1)
-    Yr = Y[: H1 + 1, None]
-    Q[0] = rec.recover(w, Yr[:1], F[:1] - kap[:1] * Yr[:1], F[:1], dofs)[0]
-    freqs = g.k1 * w + g.k2 * sol.secondary
-    for i in range(1, g.n_terms):
-        x = spla.splu(rec.model.dynamic_stiffness(float(freqs[i]), speed).tocsc()).solve(W)
-        Q[i] = x[dofs] @ np.linalg.solve(rec.W.T @ x, [Y[i]])
-    return Q, bearing_force_harmonics(system, Q, freqs, speed), freqs
-
-
 def bearing_force_harmonics(system, Q: NDArray, freqs: NDArray, speed: float) -> NDArray:
     """The force of each bearing on its node, -(K_b + i Ω_k C_b) q_k, at every combination
     frequency Ω_k of a torus (each bearing at its own shaft's speed).
@@ -379,40 +213,11 @@ def bearing_force_harmonics(system, Q: NDArray, freqs: NDArray, speed: float) ->
     return Fb
 
 
-def torus_bearing_outputs(model, sol: qp.TorusSolution, n_samples: tuple[int, int] = (256, 48)) -> dict:
-    """Every bearing's outputs over a torus, the quantities of a periodic sweep's bearing
-    columns (:class:`~nlgrd.nonlinear.results.bearing_loads.BearingResponse`): radial
-    displacement and force of its node sampled on the torus (their largest, the RMS of
-    the alternating part, the magnitude of the mean) and the amplitude of the force's
-    mesh harmonic (k₁ = 1, k₂ = 0; the larger of y and z). Q as
-    :func:`torus_bearing_forces` recovers it.
-
-    Parameters
-    ----------
-    model : GearedModel
-        The model solved.
-    sol : TorusSolution
-        A converged torus.
-    n_samples : tuple of int
-        Samples along θ₁ and θ₂ [-].
-
-    Returns
-    -------
-    dict of str to ndarray (n_bearings,)
-        ``displacement_mean``, ``displacement_rms``, ``displacement_max`` [m],
-        ``force_mean``, ``force_rms``, ``force_max``, ``force_amplitude`` [N].
-    """
-    nb = len(model.system.bearings)
-    fields = ("displacement_mean", "displacement_rms", "displacement_max")
-    fields += ("force_mean", "force_rms", "force_max", "force_amplitude")
-    if not sol.converged or nb == 0:
-        return {f: np.full(nb, np.nan) for f in fields}
-    Q, Fb, _ = _torus_bearing_harmonics(model, sol)
-    return torus_bearing_statistics(Q, Fb, sol.grid, n_samples)
-
-
 def torus_bearing_statistics(Q: NDArray, Fb: NDArray, grid, n_samples: tuple[int, int] = (256, 48)) -> dict:
-    """Every bearing's outputs (:func:`torus_bearing_outputs`) from the 2-D harmonics of
+    """Every bearing's outputs over a torus, the quantities of a periodic sweep's bearing
+    columns: radial displacement and force of its node sampled on the torus (their largest,
+    the RMS of the alternating part, the magnitude of the mean) and the amplitude of the
+    force's base harmonic (k₁ = 1, k₂ = 0; the larger of y and z), from the 2-D harmonics of
     its node's (y, z) displacement and force on the torus's index set.
 
     Parameters
@@ -429,7 +234,8 @@ def torus_bearing_statistics(Q: NDArray, Fb: NDArray, grid, n_samples: tuple[int
     Returns
     -------
     dict of str to ndarray (n_bearings,)
-        As :func:`torus_bearing_outputs`.
+        ``displacement_mean``, ``displacement_rms``, ``displacement_max`` [m],
+        ``force_mean``, ``force_rms``, ``force_max``, ``force_amplitude`` [N].
     """
     nb = Q.shape[1] // 2
     fields = ("displacement_mean", "displacement_rms", "displacement_max")

@@ -66,7 +66,7 @@ class TorusResult:
     H, H2 : int
         Harmonics of ω₁ and of ω₂ [-].
     bearing_force_max : ndarray (n, n_bearings)
-        :func:`torus_bearing_forces` per point [N].
+        The largest force of every bearing over the torus per point [N].
     bearing_names : list of str
         The bearings' names, as the sweep's columns.
     solutions : list
@@ -380,7 +380,7 @@ class TorusAnswer:
     outputs : dict of str to float
         :data:`TORUS_OUTPUTS` (SI) and ``back_contact``.
     bearings : dict of str to ndarray
-        :func:`torus_bearing_outputs`.
+        :func:`~nlgrd.nonlinear.tracing.torus_outputs.torus_bearing_statistics`.
     error : float
         Its convergence estimate: the largest relative change of the :data:`CHECKED`
         outputs from (H₁, H₂) to (H₁ + 4, H₂ + 2) [-].
@@ -511,7 +511,7 @@ def tori_of_sweep(model, result, direction: str = "down", *, H2: int = 4, check:
     ----------
     model : LinkModel
         The model the sweep was made on (one mesh: its link model).
-    result : LinkSweepResult, GearedSweepResult or SweepResult
+    result : LinkSweepResult or SweepResult
         The sweep (its mesh result holds the harmonics and the multipliers).
     direction : {"up", "down"}
         Which direction's points.
