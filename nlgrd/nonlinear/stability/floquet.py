@@ -493,6 +493,8 @@ def floquet_analysis(
     on ``larger`` when max |μ| moved by at most :data:`TRUNCATION_ATOL` (the basis at the same
     Magnus steps), else on ``full`` (docs/conventions.md, "Stability state space"; a constant
     tangent keeps the basis); a basis only where its dropped modes' exceed its max |μ| by no more.
+    A ``larger`` with no more vectors than the basis (no mode between the two cut-offs: Kubo's
+    rig sized for 12 kHz) checks nothing, and ``full`` decides.
     Its result is kept in the basis's shared ``cache`` per (state space, ω, orbit), and
     returned again for the same orbit (the H' lift after the verdicts' check).
 
@@ -539,6 +541,8 @@ def _checked(state_space, nonlinearities, Y: NDArray, omega: float, deflate: boo
             return res
     elif state_space.larger is not None:  # the truncation checked by twice the cut-off
         larger = state_space.larger()
+        if larger.M.shape[0] <= state_space.M.shape[0]:  # no vector added: no check
+            return _analysis(full(), nonlinearities, Y, omega, deflate, method)
         big = _analysis(larger, nonlinearities, Y, omega, deflate, method)
         res = _analysis(state_space, nonlinearities, Y, omega, deflate, method, big.steps)  # same steps
         top = [float(np.max(np.abs(r.multipliers))) for r in (res, big)]
