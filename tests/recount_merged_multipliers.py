@@ -32,9 +32,9 @@ from pathlib import Path
 import numpy as np
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.models.geared import gear_pair_mode
 from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep, period_model
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+from nlgrd.rotor.modal import gear_pair_mode
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Twice the agreement of two rungs' verdicts (verdicts.MULTIPLIER_RTOL).

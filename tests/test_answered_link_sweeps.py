@@ -2,8 +2,7 @@
 (``nlgrd.sweep``, what notebooks 01 and 03 run): the gaps answered on two processes give
 the same numbers as one, every column of the table; the table of a link sweep (its
 ``base_frequency [Hz]`` and ``mesh0.<quantity>`` columns) marks every point without a
-value "not found". The one-mesh engine's version of the same checks is
-tests/test_answered_sweeps.py."""
+value "not found"."""
 
 from __future__ import annotations
 
@@ -87,6 +86,7 @@ def test_link_table_marks_points_without_a_value_and_counts_them(kb_sweep):
     assert table[HB_RESPONSE].tolist() == hb["response"].tolist()
     counts = response_counts(table).set_index("direction")
     assert counts.loc["up", NOT_FOUND] == 2 and counts.loc["up", "periodic"] == 1
+    assert counts.loc["both", "points"] == 3
     with pytest.raises(ValueError, match="same sweep"):
         answered_table(hb, answered.iloc[:2], DTE)
 
@@ -95,11 +95,13 @@ def test_link_tori_of_each_direction_on_their_own_process_give_the_numbers_of_on
     """Each direction's tori are followed along that direction only, so the up and down
     rows answered on two processes and put back are bit for bit those of one process.
     Kubo's rig at 13 750 and 13 800 rpm, up and down: Neimark-Sacker points whose torus
-    converges (tests/test_answered_sweeps.py, on the one-mesh engine)."""
+    converges (tests/test_torus_answers.py). About 10 s CPU each way (2.3 s a torus), 2 s
+    more to spawn."""
     system = nlgrd.load(ROOT / "data" / "case_studies" / "kubo.toml")
     res = nlgrd.sweep(system, rpm=[13750.0, 13800.0], directions="both", time_domain=False)
     serial = with_speed_of(with_torus_answers(res, system), res).to_frame()
     parallel = torus_answers_in_parallel(res, system, workers=2).to_frame()
     assert (serial["response"] == "quasi-periodic").sum() == 4  # every point a torus: not vacuous
+    assert (serial["verdict"] == "not computed").all()
     assert "shaft_speed [rpm]" in parallel
     pd.testing.assert_frame_equal(parallel, serial, check_exact=True)

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import nlgrd.nonlinear.models.geared
+import nlgrd.nonlinear.models.link_model
 import nlgrd.rotor.modal
 from nlgrd.cli import main
 from nlgrd.errors import ModelError
@@ -56,8 +56,6 @@ def no_computation(monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("computation started before the options were checked")
 
-    for name in ("build_geared_model", "geared_sweep", "geared_continuation"):
-        monkeypatch.setattr(nlgrd.nonlinear.models.geared, name, forbidden)
     for name in ("build_link_model", "link_sweep", "link_continuation"):
         monkeypatch.setattr(nlgrd.nonlinear.models.link_model, name, forbidden)
     for name in ("modal_analysis", "campbell"):

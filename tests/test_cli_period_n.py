@@ -31,7 +31,7 @@ from nlgrd.cli import main
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.fourier.periods import amplitudes
-from nlgrd.nonlinear.models.geared import geared_sweep
+from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 from nlgrd.nonlinear.models.sdof import SDOFGearPair
 from nlgrd.rotor.modal import modal_analysis
 from nlgrd.timedomain.sdof import integrate
@@ -256,8 +256,9 @@ def test_bad_period_options_are_one_line(argv, key, tmp_path, capsys):
     assert len(err.splitlines()) == 1 and key in err, err
 
 
-def test_geared_sweep_points_to_the_orbit_search(tmp_path):
-    system = load_model(write_model(tmp_path))
+def test_link_sweep_points_to_the_orbit_search(tmp_path):
+    """A sweep asked for period 3 refuses (ModelError 'period') and names the orbit search."""
+    model = build_link_model(load_model(write_model(tmp_path)))
     with pytest.raises(ModelError, match="orbit_search.search_orbits") as err:
-        geared_sweep(system, omegas=[2 * np.pi * 13000.0], H=5, period=3)
+        link_sweep(model, [2 * np.pi * 13000.0], H=5, period=3)
     assert err.value.key == "period"

@@ -41,10 +41,10 @@ import nlgrd.nonlinear.reduction.state_space as hb_state_space
 import nlgrd.nonlinear.stability.floquet as fl
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.models.geared import gear_pair_mode
 from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
 from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
 from nlgrd.nonlinear.stability.tangent import tangent_pieces
+from nlgrd.rotor.modal import gear_pair_mode
 from nlgrd.rotor.rigid_body import rigid_body_modes
 
 TWO_SHAFT = Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml"

@@ -25,11 +25,11 @@ from scipy.optimize import brentq
 
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.fourier.harmonics import evaluate
-from nlgrd.nonlinear.models.geared import gear_pair_mode
 from nlgrd.nonlinear.models.link_model import build_link_model
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 from nlgrd.nonlinear.stability.floquet_mode import dominant_floquet_mode
 from nlgrd.nonlinear.tracing.sweep import sweep
+from nlgrd.rotor.modal import gear_pair_mode
 
 TWO_SHAFT = Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml"
 

@@ -23,8 +23,8 @@ import scipy.sparse.linalg as spla
 
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.fourier.harmonics import real_to_complex
-from nlgrd.nonlinear.models.geared import sdof_model
 from nlgrd.nonlinear.models.link_model import build_link_model, link_continuation, link_sweep
+from nlgrd.nonlinear.models.sdof import sdof_model
 from nlgrd.nonlinear.results.bearing_loads import bearing_names
 from nlgrd.rotor.assembly import assemble
 
@@ -163,8 +163,8 @@ def test_stability_basis_gives_the_verdicts_of_the_full_basis():
     every point, and max |μ| within 1e-2 (observed 3e-3 on the 252-DOF benchmark model;
     the modes left out lie above 3x the mesh frequency, quasi-static in the variational
     equation)."""
-    from nlgrd.nonlinear.models.geared import gear_pair_mode
     from nlgrd.nonlinear.stability.floquet import floquet_multipliers
+    from nlgrd.rotor.modal import gear_pair_mode
 
     s = load_model(Path(__file__).resolve().parent.parent / "data" / "models" / "two_shaft.toml")
     s = dc.replace(s, gear_pairs=(dc.replace(s.gear_pairs[0], damping_ratio=0.03),))

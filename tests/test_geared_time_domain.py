@@ -2,7 +2,7 @@
 ``build_link_model``, ``link_sweep``) against direct time integration.
 
 The independent reference is the HHT-α integration of the same equations of motion of
-the full finite-element model (:func:`nlgrd.timedomain.geared.time_sweep`), run to a
+the full finite-element model (:func:`nlgrd.timedomain.links.link_time_sweep`), run to a
 periodic steady state at every frequency and swept up and down with each point starting
 from the previous state, exactly like the harmonic-balance sweep. Model: Kubo's rig
 (data/case_studies/kubo.toml) with every element split in two (144 DOFs) and mesh damping
@@ -29,9 +29,8 @@ import numpy as np
 import pytest
 
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.models.geared import build_geared_model
 from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
-from nlgrd.timedomain.geared import time_sweep
+from nlgrd.timedomain.links import link_time_sweep
 
 KUBO = Path(__file__).resolve().parent.parent / "data" / "case_studies" / "kubo.toml"
 
@@ -93,12 +92,16 @@ def check_case(case):
     system = refined_kubo(backlash)
     assert system.n_dofs >= 100
     omegas = 2 * np.pi * freqs
-    hb = link_sweep(build_link_model(system), omegas, H=9, stability=True).to_frame()
-    # the link table's names as the time sweep's (one mesh: base frequency = mesh frequency)
-    hb = hb.rename(columns={"base_frequency [Hz]": "mesh_frequency [Hz]"})
-    hb = hb.rename(columns=lambda c: c.removeprefix("mesh0."))
-    model = build_geared_model(system, float(omegas.max()), H=9)  # the time domain's model
-    td = time_sweep(model, omegas, steps_per_period=steps, tol=1e-5).to_frame()
+    model = build_link_model(system)
+    hb = link_sweep(model, omegas, H=9, stability=True).to_frame()
+    td = link_time_sweep(model, omegas, steps_per_period=steps, tol=1e-5).to_frame()
+
+    def names(frame):
+        """The mesh's columns without their prefix (one mesh: base frequency = mesh frequency)."""
+        frame = frame.rename(columns={"base_frequency [Hz]": "mesh_frequency [Hz]"})
+        return frame.rename(columns=lambda c: c.removeprefix("mesh0."))
+
+    hb, td = names(hb), names(td)
     assert hb["converged"].all(), hb[~hb["converged"]]
     key = ["direction", "mesh_frequency [Hz]"]
     hb, td = hb.sort_values(key).reset_index(drop=True), td.sort_values(key).reset_index(drop=True)

@@ -18,7 +18,7 @@ import pytest
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.models.geared import sdof_model
+from nlgrd.nonlinear.models.sdof import sdof_model
 from nlgrd.nonlinear.tracing.harmonic_convergence import (
     FOLD_RTOL,
     OUTPUT_RTOL,

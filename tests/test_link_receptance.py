@@ -206,7 +206,7 @@ def test_bearing_variants_equal_dense_solves(name, variant):
         ),
     ],
 )
-def test_recovered_bearing_harmonics_equal_dense_solves(name, method):
+def test_recovered_bearing_spectra_equal_dense_solves(name, method):
     """Every bearing node's displacement harmonics k = 1..5 recovered from the same (Y, G)
     (random: recovery is linear in them) against q_k = Z_k⁻¹ (f_k - P G_k) by dense solves
     of the whole model, to 1e-9 of their largest at three frequencies."""

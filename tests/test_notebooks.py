@@ -74,7 +74,8 @@ import pytest
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.models.geared import gear_pair_mode, sdof_model
+from nlgrd.nonlinear.models.sdof import sdof_model
+from nlgrd.rotor.modal import gear_pair_mode
 from nlgrd.studies.answered_sweeps import HB_RESPONSE, NOT_FOUND
 from nlgrd.studies.experimental import directions_of, hysteresis_bands, local_peak, resonance_jumps
 from nlgrd.studies.notebooks import NOTEBOOKS, notebook_parameters, run_notebook

@@ -5,9 +5,9 @@ Each test here failed on the code before issue 9 ("The same answer on every mach
 unconverged points wrote ``stable = False`` and ``back_contact = True`` (NaN cast to
 bool), sweeps without stability wrote ``stable = False``, continuation residuals were
 scaled by the starting point's force and ``converged`` was set to True, the iterative
-eigensolvers started from random vectors, a reused GearedModel accepted frequencies
-past the ones its bases were built for, and the stability basis kept the cut-off of
-its first call.
+eigensolvers started from random vectors (and, on the former one-mesh engine, a reused
+model accepted frequencies past the ones its bases were built for and the stability
+basis kept the cut-off of its first call).
 """
 
 from __future__ import annotations
@@ -20,13 +20,12 @@ import pytest
 
 from nlgrd.errors import ModelError
 from nlgrd.io.model_file import load_model
-from nlgrd.nonlinear.models.geared import build_geared_model, gear_pair_mode, geared_sweep
 from nlgrd.nonlinear.models.link_model import build_link_model, link_continuation, link_sweep
 from nlgrd.nonlinear.models.sdof import SDOFGearPair
 from nlgrd.nonlinear.reduction.modal_basis import ModeCapWarning, lowest_modes
-from nlgrd.nonlinear.reduction.receptance import MeshReceptance
 from nlgrd.nonlinear.tracing.continuation import continuation
 from nlgrd.nonlinear.tracing.sweep import sweep
+from nlgrd.rotor.modal import gear_pair_mode
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 LSTE = np.array([0.0, 3e-6, 0.0, 1e-6, 0.0])
@@ -126,51 +125,6 @@ def test_modal_receptances_and_floquet_are_byte_identical_in_one_process():
     assert ok.sum() >= 10 and frames[0].loc[ok, "floquet_max [-]"].notna().all()
 
 
-def test_reused_model_refuses_frequencies_and_harmonics_it_was_not_built_for():
-    """A GearedModel built for mesh frequencies up to f and H = 3 raises ModelError('model')
-    for a sweep reaching 1.5 f or asking H = 5, instead of answering with bases that are
-    too small."""
-    s = _two_shaft()
-    f0 = 2 * np.pi * gear_pair_mode(s)[0]
-    m = build_geared_model(s, f0, H=3)
-    with pytest.raises(ModelError, match="built for mesh frequencies"):
-        geared_sweep(s, omegas=np.array([0.9, 1.5]) * f0, H=3, model=m)
-    with pytest.raises(ModelError, match="H <= 3"):
-        geared_sweep(s, omegas=np.array([0.9]) * f0, H=5, model=m)
-
-
-def test_stability_basis_follows_the_requested_cutoff():
-    """state_space(ω, f_max) built first for f_max, then for 5 f_max: the second basis
-    holds more modes (it was cached from the first call before)."""
-    s = _two_shaft()
-    f0 = 2 * np.pi * gear_pair_mode(s)[0]
-    mr = MeshReceptance(s, method="direct")
-    small = mr.state_space(f0, f0)[0].shape[0]
-    big = mr.state_space(f0, 5 * f0)[0].shape[0]
-    assert big > 1.5 * small
-    assert mr.state_space(f0, f0)[0].shape[0] == small
-
-
-@pytest.mark.slow
-def test_pole_residue_receptances_are_checked_and_fall_back_to_a_direct_solve(monkeypatch):
-    """The a-posteriori check of the pole-residue form passes on the two-shaft model
-    (difference < 1e-8 for every harmonic); with the check's tolerance forced to fail,
-    each harmonic falls back to the direct reduced solve and gives the same h_k to 1e-8."""
-    import nlgrd.nonlinear.reduction.receptance as rec
-
-    s = _two_shaft()
-    f0 = 2 * np.pi * gear_pair_mode(s)[0]
-    mr = MeshReceptance(s, method="modal", max_frequency=5 * f0)
-    h = mr.receptance(0.9 * f0, 5)
-    assert sorted(mr.pole_check) == [1, 2, 3, 4, 5]
-    assert max(mr.pole_check.values()) < 1e-8
-    monkeypatch.setattr(rec, "POLE_CHECK_RTOL", -1.0)
-    mr2 = MeshReceptance(s, method="modal", max_frequency=5 * f0)
-    h2 = mr2.receptance(0.9 * f0, 5)
-    assert all(v is None for v in mr2._poles.values()) and len(mr2._poles) == 5
-    np.testing.assert_allclose(h2, h, rtol=1e-8)
-
-
 def test_mode_basis_cap_is_reported():
     """A basis that stops doubling at its cap short of the cut-off warns (ModeCapWarning)."""
     n = 60
@@ -189,7 +143,7 @@ def test_mode_basis_cap_is_reported():
         (lambda rm, om: sweep(rm, om, H=3, jump="sideways"), "jump"),
         (lambda rm, om: sweep(rm, om, H=3, directions="sideways"), "directions"),
         (lambda rm, om: sweep(rm, om, H=3, stability=False).plot("dslrr"), "quantity"),
-        (lambda rm, om: MeshReceptance(_two_shaft(), method="fast"), "method"),
+        (lambda rm, om: build_link_model(_two_shaft(), method="fast"), "method"),
     ],
     ids=["jump", "direction", "quantity", "receptance"],
 )

@@ -87,22 +87,20 @@ def _points(ax, gid: str, markers: bool = True) -> int:
     return sum(int(np.isfinite(np.asarray(ln.get_ydata(), dtype=float)).sum()) for ln in lines)
 
 
-def test_link_sweep_figure_marks_stability_gaps_and_jumps_as_the_one_mesh_figure():
+def test_link_sweep_figure_marks_stability_gaps_and_jumps():
     """Kubo's rig over its main resonance (3-6 kHz, H = 5, no time answers: quasi-periodic
-    points stay gaps): ``nlgrd.sweep(...).plot()`` draws the same kinds of marks (gids of
-    :mod:`nlgrd.plotting.common`) as the former one-mesh figure (``geared_sweep(...).plot()``),
-    and each as many as its table says: a filled marker per stable point, an edge mark per
-    point without a stable periodic response, one arrow per jump whose two ends are drawn."""
-    from nlgrd.nonlinear.models.geared import geared_sweep
+    points stay gaps): ``nlgrd.sweep(...).plot()`` draws the marks of stable points, of
+    points without a stable periodic response and of jumps (gids of
+    :mod:`nlgrd.plotting.common`), each as many as its table says: a filled marker per
+    stable point, an edge mark per point without a stable periodic response, one arrow per
+    jump whose two ends are drawn."""
     from nlgrd.plotting.common import JUMP_GID, NO_RESPONSE_GID, STABILITY_GIDS, STABLE
 
     system = nlgrd.load(ROOT / "data" / "case_studies" / "kubo.toml")
     hz = np.linspace(3000.0, 6000.0, 16)
     res = nlgrd.sweep(system, hz=hz, H=5, time_domain=False)
-    old = geared_sweep(system, 2 * np.pi * hz, H=5)
-    ax, ax_old = res.plot("dte_rms"), old.plot("dte_rms")
+    ax = res.plot("dte_rms")
     kinds = {ln.get_gid() for ln in ax.get_lines()} - {None}
-    assert kinds == {ln.get_gid() for ln in ax_old.get_lines()} - {None}
     assert {STABILITY_GIDS[STABLE], NO_RESPONSE_GID, JUMP_GID} <= kinds
     frame = res.to_frame()
     assert _points(ax, STABILITY_GIDS[STABLE]) == int(frame["stable"].eq(True).sum())
@@ -112,7 +110,6 @@ def test_link_sweep_figure_marks_stability_gaps_and_jumps_as_the_one_mesh_figure
     shafts = [ln for ln in ax.get_lines() if ln.get_gid() == JUMP_GID and ln.get_linestyle() != "None"]
     assert sum(int(ln.get_label().rsplit("(", 1)[1].rstrip(")")) for ln in shafts) == len(drawn) > 0
     plt.close(ax.figure)
-    plt.close(ax_old.figure)
 
 
 # ----------------------------------------------------------------------------- time responses
@@ -160,33 +157,6 @@ def test_sdof_time_response_table_and_plot():
     np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), frame["dte [um]"], rtol=1e-15)
     plt.close(fig)
     plt.close(res.plot(quantity="force").figure)
-
-
-def test_fe_time_response_table_and_plot():
-    """``integrate_fe``'s FETimeResponse on the two-inertia pair of tests/test_continuation.py:
-    the same table and plot as the single DOF."""
-    from nlgrd.timedomain.geared import integrate_fe
-
-    sd = _sdof()
-    r, inertia = 0.047, 1.152e-3
-    w = np.array([r, r])
-    res = integrate_fe(
-        np.diag([inertia, inertia]),
-        sd.mesh_damping * np.outer(w, w),
-        np.zeros((2, 2)),
-        w,
-        sd.mesh(),
-        sd.static_load * w,
-        0.8 * sd.natural_frequency,
-        steps_per_period=128,
-        store_dofs=False,
-    )
-    frame = res.to_frame()
-    _history_checks(res, frame)
-    fig, ax = plt.subplots()
-    assert res.plot(quantity="force", ax=ax) is ax
-    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), frame["mesh_force [N]"], rtol=1e-15)
-    plt.close(fig)
 
 
 def test_link_time_response_table_and_plot():

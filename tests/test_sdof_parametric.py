@@ -19,7 +19,7 @@ from nlgrd.errors import ModelError
 from nlgrd.gear.modifications import GearErrors
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.fourier.harmonics import analyse, evaluate
-from nlgrd.nonlinear.models.geared import sdof_model
+from nlgrd.nonlinear.models.sdof import sdof_model
 
 KUBO = Path(__file__).resolve().parents[1] / "data" / "case_studies" / "kubo.toml"
 

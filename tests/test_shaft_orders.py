@@ -66,7 +66,7 @@ def test_revolution_lste_holds_mesh_harmonics_and_sidebands():
     assert err.value.key == "plan"
 
 
-def test_shaft_order_sweep_chooses_h_and_reports_the_sidebands():
+def test_link_sweep_chooses_h_and_reports_the_sidebands():
     """The link sweep at 2600 Hz mesh: H chosen on the ladder 25 x (5, 7, ...) (5 mesh
     harmonics against 7, as the single-mesh shaft-order sweep chose), the spectra read from
     its harmonics: the DTE at every base harmonic, the mesh harmonics at multiples of 25,

@@ -25,7 +25,7 @@ import pytest
 
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.fourier.harmonics import differentiate, evaluate
-from nlgrd.nonlinear.models.geared import sdof_model
+from nlgrd.nonlinear.models.sdof import sdof_model
 from nlgrd.nonlinear.tracing.sweep import sweep
 from nlgrd.timedomain.sdof import time_sweep
 
