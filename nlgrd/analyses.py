@@ -99,8 +99,8 @@ def model(system: RotorSystem):
     or without clearances and unbalance, reduced onto all its link coordinates on its
     frequency plan (:func:`nlgrd.nonlinear.models.link_model.build_link_model`: the mesh
     frequency for one mesh excited at its mesh period, the error period's base when its
-    teeth differ, the shaft speed without gears). On one mesh it equals the former
-    mesh-coordinate reduction to 1e-9 (tests/test_engine_equivalence.py).
+    teeth differ, the shaft speed without gears); its κ_k equal dense solves of the
+    full model to 1e-9 (tests/test_link_receptance.py).
 
     Parameters
     ----------

@@ -163,7 +163,7 @@ def torus_answers_in_parallel(
     (:func:`~nlgrd.timedomain.sweep_answers.with_torus_answers`), each direction on its own
     process: a direction's tori are followed from point to point along it and never from the
     other direction's, so its rows put back are the numbers one process gives
-    (tests/test_answered_sweeps.py). Spawned workers, as :func:`answer_gaps_in_parallel`.
+    (tests/test_answered_link_sweeps.py). Spawned workers, as :func:`answer_gaps_in_parallel`.
 
     Parameters
     ----------
@@ -213,7 +213,7 @@ def answer_gaps_in_parallel(
     ``workers`` = 1 is :func:`~nlgrd.timedomain.sweep_answers.answer_sweep` itself;
     more split the time-domain rows among processes (interleaved, so that each gets points from
     every part of the range) and put every per-point field back at its rows: the same
-    numbers (module docstring; tests/test_answered_sweeps.py). The workers are spawned,
+    numbers (module docstring; tests/test_answered_link_sweeps.py). The workers are spawned,
     not forked (a notebook's kernel runs threads): a script that calls this with
     ``workers`` > 1 keeps its work under ``if __name__ == "__main__":``, as
     :mod:`multiprocessing` requires of a spawned child's parent module.
