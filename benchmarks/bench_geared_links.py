@@ -123,7 +123,7 @@ def banded(rounds: int = 2) -> None:
     warmed up on two points (set-up timed apart); then ``rounds`` rounds of the three in
     turn, the fastest round of each reported (the machine is shared). Last, the largest
     difference of the pole-residue and dense-LU harmonics from the banded ones over the
-    converged points. (The recorded rows of the single-mesh engine's ``geared_sweep`` in
+    converged points. (The recorded rows of the single-mesh engine's sweep in
     benchmarks/README.md are history: that engine is deleted.)"""
     grid = 2 * np.pi * np.linspace(1000.0, 1700.0, 15)
     H = 9

@@ -8,7 +8,7 @@ the arc-length corrector asks), at H = 7 and 17 over 200 frequencies 1000-2900 H
 best of three rounds; with ``--sweep`` the CPU time of
 ``nlgrd.sweep(two_shaft, hz=np.linspace(1000, 2900, 40), time_domain=False)``.
 
-The single-mesh engine's side (``MeshReceptance.kappa_derivative`` and its reduced
+The single-mesh engine's side (its mesh receptance's ``kappa_derivative`` and its reduced
 model) is deleted: its figures stay in benchmarks/README.md as recorded history.
 """
 

@@ -9,7 +9,7 @@ Run from the repository root::
 Everything runs on the link engine (:func:`~nlgrd.nonlinear.models.link_model.build_link_model`,
 :func:`~nlgrd.nonlinear.models.link_model.link_sweep`, what ``nlgrd.sweep`` runs;
 :func:`nlgrd.timedomain.links.link_time_response`). The single-mesh engine these cases were
-first measured with (``geared_sweep``, the mesh receptance, its HHT-α ``time_response``) is
+first measured with (its sweep, the mesh receptance, its HHT-α time response) is
 deleted: its figures in ``benchmarks/README.md`` are recorded history, and nothing here
 compares against it. Four cases, each printed as a table (figures and machine in
 ``benchmarks/README.md``):

@@ -14,7 +14,7 @@ and without Floquet stability. Both on the link engine
 plan base is the mesh frequency, the tooth error's the gear revolution (mesh/25,
 ``top_order`` 25), so its sweep runs at ω_mesh/25 with 5 x 25 harmonics. Figures and
 machine in benchmarks/README.md (the recorded table was measured with the single-mesh
-engine's ``geared_sweep`` / ``shaft_order_sweep``, since deleted).
+engine's mesh-periodic and shaft-order sweeps, since deleted).
 """
 
 from __future__ import annotations

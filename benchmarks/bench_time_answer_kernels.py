@@ -31,7 +31,7 @@ records. Figures: benchmarks/README.md.
 ``starts`` sweeps with the link engine (:func:`~nlgrd.nonlinear.models.link_model.link_sweep`,
 ``period=1``, ``jump="auto"``): the row numbers of SAMPLE, SCREEN, NEAR and NEAR2 are
 indices into the link engine's gap list. The recorded figures were made from the
-single-mesh engine's ``geared_sweep`` (deleted), whose gap list may differ: rerun
+single-mesh engine's sweep (deleted), whose gap list may differ: rerun
 ``starts`` and check the rows before comparing with them.
 """
 
