@@ -1,6 +1,6 @@
 """One dκ_k/dω + dF_k/dω evaluation of the banded link path.
 
-`.venv/bin/python benchmarks/bench_link_derivatives.py [--sweep]` (about 5 s; with
+`.venv/bin/python benchmarks/bench_link_derivatives.py [--sweep]` (about 15 s; with
 ``--sweep`` one more minute). two_shaft.toml, one BLAS thread: the per-call time of
 ``LinkReceptance.derivatives`` (κ_k and F_k included: each call at a new frequency), then
 of one frequency's dκ_k/dω, dF_k/dω, κ_k and F_k on the link model's reduced model (what
