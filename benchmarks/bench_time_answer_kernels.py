@@ -14,7 +14,7 @@ default kernel, the 4x record (a prefix four times the answer's length).
 
 Steps (OUT defaults to /tmp/time_answer_kernels)::
 
-    python benchmarks/bench_time_answer_kernels.py starts
+    python benchmarks/bench_time_answer_kernels.py starts        # [points], 300 by default
     python benchmarks/bench_time_answer_kernels.py record default 4096 sample
     python benchmarks/bench_time_answer_kernels.py record default 2048 screen
     OPENBLAS_CORETYPE=Haswell python benchmarks/bench_time_answer_kernels.py record Haswell 2048 sample
@@ -27,6 +27,12 @@ Steps (OUT defaults to /tmp/time_answer_kernels)::
 ``former`` replays the estimator and rule before this change (20 batch means with the
 lag-1 gate at 2/√20; no extension beyond ``max_periods``), copied here to judge the same
 records. Figures: benchmarks/README.md.
+
+``starts`` sweeps with the link engine (:func:`~nlgrd.nonlinear.models.link_model.link_sweep`,
+``period=1``, ``jump="auto"``): the row numbers of SAMPLE, SCREEN, NEAR and NEAR2 are
+indices into the link engine's gap list. The recorded figures were made from the
+single-mesh engine's sweep (deleted), whose gap list may differ: rerun
+``starts`` and check the rows before comparing with them.
 """
 
 from __future__ import annotations
@@ -61,16 +67,17 @@ NEAR2 = (143, 160, 200, 262, 240, 212, 300, 170)
 PERIODS, MAX_PERIODS = 256, 1024
 
 
-def starts() -> None:
-    """The sweep's gaps and their unstable orbits -> OUT/starts.npz."""
+def starts(points: int = 300) -> None:
+    """The sweep's gaps and their unstable orbits -> OUT/starts.npz (``points`` per
+    direction: 300 as recorded, fewer for a smoke run)."""
     from nlgrd.io.model_file import load_model
-    from nlgrd.nonlinear.models.geared import build_geared_model, geared_sweep
+    from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
     from nlgrd.timedomain.sweep_answers import base_harmonics
 
     system = load_model(KB)
-    omegas = 2 * np.pi * np.linspace(800.0, 6000.0, 300)
-    model = build_geared_model(system, omegas.max(), H=25)
-    m = geared_sweep(system, omegas=omegas, H=None, directions="both", model=model, jump="auto").mesh
+    omegas = 2 * np.pi * np.linspace(800.0, 6000.0, points)
+    model = build_link_model(system)  # one mesh: the plan base is the mesh frequency
+    m = link_sweep(model, omegas, H=None, directions="both", jump="auto", period=1).result
     gaps = np.nonzero(np.asarray(m.converged, bool) & np.asarray(m.no_stable, bool))[0]
     z = np.empty(gaps.size, dtype=object)
     z[:] = [base_harmonics(m.harmonics[i], int(m.base)) for i in gaps]
@@ -288,7 +295,7 @@ def compare(files: list[str]) -> None:
 if __name__ == "__main__":
     step, args = sys.argv[1], sys.argv[2:]
     if step == "starts":
-        starts()
+        starts(*map(int, args[:1]))
     elif step == "record":
         record(args[0], int(args[1]), {"sample": SAMPLE, "screen": SCREEN, "near": NEAR + NEAR2}[args[2]])
     elif step == "judge":

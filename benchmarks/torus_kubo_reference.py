@@ -20,10 +20,11 @@ the CSV's ``ti_*`` columns, nothing written).
 Writes benchmarks/torus_kubo_reference.csv (``_high.csv``) (speeds, time-domain and torus figures, their
 relative differences, the cost of each torus point and of the periodic point).
 
-The stored CSVs were made by the former one-mesh path (``build_geared_model``,
-``geared_sweep``, ``GearedTorus`` and ``nlgrd.timedomain.geared.time_response``, whose
-integrator is this one: ``LinkIntegrator.of_mesh``); ``check`` shows that this script's
-integration gives their ``ti_*`` figures again.
+The stored CSVs were made by the single-mesh engine (since deleted: its model builder,
+sweep, torus and HHT-α time response; see benchmarks/README.md), whose integrator is this
+one (``LinkIntegrator.of_mesh``); ``check`` shows that this script's integration gives
+their ``ti_*`` figures again. Their torus columns are that engine's torus, not the link
+torus this script now computes.
 """
 
 from __future__ import annotations
