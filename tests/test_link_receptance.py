@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.linalg as sla
+from test_link_strategies import system as system_variant  # the bearing variants, in one place
 
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.fourier.harmonics import real_to_complex
@@ -139,38 +140,6 @@ FILES = {"two_shaft": TWO_SHAFT, "kubo": ROOT / "data" / "case_studies" / "kubo.
 POINTS_HZ = {"two_shaft": (1500.0, 3600.0, 5200.0), "kubo": (2000.0, 3400.0, 4500.0)}
 
 
-def variant_system(name: str, variant: str):
-    """The model ``name`` modified in memory: ``cross`` every bearing cross-coupled
-    (k_yz = 0.2 k_yy = -k_zy, c_yz = 0.1 c_yy = -c_zy); ``tabulated`` one more bearing,
-    tabulated against speed (100 -> 3000 rad/s: k_yy 0.5 -> 2 k, k_zz 0.6 -> 1.5 k, k_yz
-    0 -> 0.3 k) at a node without one; ``loss`` a loss factor 0.01 in every material."""
-    import tomllib
-
-    from nlgrd.io.model_file import model_from_file_data
-
-    path = FILES[name]
-    data = tomllib.loads(path.read_text())
-    if variant == "cross":
-        for b in data["bearings"]:
-            k, c = b.get("kyy", 0.0), b.get("cyy", 0.0)
-            b.update(kyz=0.2 * k, kzy=-0.2 * k, cyz=0.1 * c, czy=-0.1 * c)
-    elif variant == "tabulated":
-        first = data["bearings"][0]
-        k = first["kyy"]
-        extra = {
-            "shaft": 0,
-            "node": 3 if name == "two_shaft" else 0,
-            "cyy": first["cyy"],
-            "czz": first["czz"],
-        }
-        extra.update(speeds=[100.0, 3000.0], kyy=[0.5 * k, 2 * k], kzz=[0.6 * k, 1.5 * k], kyz=[0.0, 0.3 * k])
-        data["bearings"].append(extra)
-    elif variant == "loss":
-        for m in data["materials"].values():
-            m["loss_factor"] = 0.01
-    return model_from_file_data(data, str(path))
-
-
 @pytest.mark.parametrize("variant", ["cross", "tabulated", "loss"])
 @pytest.mark.parametrize("name", list(FILES))
 def test_bearing_variants_equal_dense_solves(name, variant):
@@ -178,7 +147,7 @@ def test_bearing_variants_equal_dense_solves(name, variant):
     reduction's κ_k (k = 1..5) against dense solves of the model's own dynamic stiffness at
     the speed (bearing tables interpolated there, the loss factor's i η K sign(k)) to 1e-9
     relative (rounding of two factorisations of matrices with condition up to ~1e6)."""
-    rec = build_link_model(variant_system(name, variant)).receptance
+    rec = build_link_model(system_variant(name, variant)).receptance
     worst = 0.0
     for f in POINTS_HZ[name]:
         om = 2 * np.pi * f
