@@ -188,7 +188,7 @@ def test_batch_of_four_sets_of_notebook_01_on_the_local_cluster(tmp_path):
     for name, h, top in (("H5", 5, 16000), ("H7", 7, 16000), ("to13k", 5, 13000), ("to14k", 5, 14000)):
         sweep = pd.read_csv(out / name / "dslr_fe.csv")
         assert set(sweep["H"].dropna().astype(int)) == {h}
-        assert sweep["pinion_speed [rpm]"].max() == pytest.approx(top)
+        assert sweep["shaft_speed [rpm]"].max() == pytest.approx(top)
     record = json.loads((out / "batch.json").read_text())
     assert [record[n]["parameters"]["H"] for n in ("H5", "H7")] == [5, 7]
     assert all(record[n]["error"] is None for n in record)

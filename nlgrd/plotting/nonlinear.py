@@ -562,8 +562,7 @@ def plot_spectrum(
     label: str | None = None,
 ):
     """A line spectrum against frequency [Hz], the mesh harmonics told from the sidebands
-    and shaft orders between them (:func:`nlgrd.nonlinear.models.shaft_orders.dte_spectrum`,
-    :func:`~nlgrd.nonlinear.models.shaft_orders.bearing_force_spectrum`).
+    and shaft orders between them (:func:`nlgrd.nonlinear.models.shaft_orders.link_spectra`).
 
     Parameters
     ----------

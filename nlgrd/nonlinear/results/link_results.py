@@ -91,6 +91,7 @@ def with_speed(frame: pd.DataFrame, omega: NDArray, speed_per_base: float | None
     """
     if speed_per_base is not None and "shaft_speed [rpm]" not in frame:
         values = rpm(np.asarray(omega, dtype=float) * speed_per_base)
+        frame = frame.copy()  # one block: the tables joined column by column are fragmented
         frame.insert(0 if unit == "rpm" else 1, "shaft_speed [rpm]", values)
     return frame
 
