@@ -38,9 +38,10 @@ compares against it. Four cases, each printed as a table (figures and machine in
    ``data/models/two_shaft.toml`` at 40 base frequencies 1000-2900 Hz both ways (H chosen,
    stability, period "auto", without the time-domain answers), with CPU and wall time,
    corrector evaluations of the landing searches, sweeps per ladder and Floquet calls. Issue
-   33's target (link / old <= 1.10) was met against the deleted single-mesh engine
-   (benchmarks/README.md); ``--before FILE`` compares with a table this case printed before
-   (another library version's run), row by row.
+   33's target (link / old <= 1.10) against the deleted single-mesh engine: 1.01-1.14 on
+   case 1's sweep, missed on the two_shaft sweep (1.33-1.36; ``bench_against_deleted.py``
+   runs both side by side, benchmarks/README.md); ``--before FILE`` compares with a table
+   this case printed before (another library version's run), row by row.
 
 How it measures
 ---------------
@@ -995,7 +996,7 @@ def case_engines(cfg) -> None:
         f"both ways, H chosen, stability, period 'auto', no time-domain answers; each run builds its model.\n"
         f"Best of {cfg.repeats} by CPU time; load at start {load_average()}.\n"
         f"The single-mesh engine's rows (issue 33's link / old ratio) are recorded history in\n"
-        f"benchmarks/README.md: that engine is deleted, nothing here runs it."
+        f"benchmarks/README.md: that engine is deleted (bench_against_deleted.py runs it from a worktree)."
     )
     link_model = build_link_model(system)
     link_model.receptance.prepare(5 * float(omegas.max()))

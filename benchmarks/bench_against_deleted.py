@@ -1,0 +1,192 @@
+"""Issue 33's acceptance side by side: the single-mesh sweep on the link engine against the
+deleted single-mesh engine, in one run.
+
+Run from the repository root, with a worktree of the last commit that had the old engine::
+
+    git worktree add ../wt-old bbfba76
+    .venv/bin/python benchmarks/bench_against_deleted.py --old ../wt-old --repeats 3
+
+Case (b) of ``benchmarks/bench_nonlinear.py --cases 4``: ``data/models/two_shaft.toml`` as
+in the file (each tree's own copy; whether the two are the same bytes is printed), 40 base
+frequencies 1000-2900 Hz both ways, H chosen, stability, period "auto" (the link engine;
+the old ``geared_sweep`` has no period option), model built inside the timing. Each run is
+a fresh subprocess (``PYTHONPATH`` set to the tree measured, one BLAS thread), old and
+link alternating, so both see the same load; the best of ``--repeats`` by CPU time is kept
+per engine and the ratio link / old printed (target <= 1.10), with the load average
+before each run, the corrector evaluations of the landing searches (``Tracer.system``
+calls; both engines have it), the process time inside the landing searches
+(``jump_to_branch``) and inside the Floquet analyses (``floquet_analysis``, every
+caller's), and the points converged / stable / without a stable response. Figures and
+machine in benchmarks/README.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+MODEL = Path("data") / "models" / "two_shaft.toml"
+
+
+def child(engine: str) -> None:
+    """Run case (b) in this process on the ``nlgrd`` of ``PYTHONPATH``; print one JSON line."""
+    import numpy as np
+
+    import nlgrd
+    import nlgrd.nonlinear.tracing.arclength as arclength
+    from nlgrd.io.model_file import load_model
+
+    evals = {"n": 0}
+    original = arclength.Tracer.system
+
+    def system(self, *args, **kwargs):
+        evals["n"] += 1
+        return original(self, *args, **kwargs)
+
+    arclength.Tracer.system = system
+    spent = {"landing": 0.0, "floquet": 0.0}
+    _timed(arclength, "jump_to_branch", spent, "landing", ("sweep", "landing"))
+    import nlgrd.nonlinear.stability.floquet as floquet
+
+    _timed(floquet, "floquet_analysis", spent, "floquet", ())
+    tree = Path(nlgrd.__file__).resolve().parents[1]
+    grid = 2 * np.pi * np.linspace(1000.0, 2900.0, 40)
+    w0, c0 = time.perf_counter(), time.process_time()
+    base = load_model(tree / MODEL)
+    if engine == "old":
+        from nlgrd.nonlinear.models.geared import geared_sweep
+
+        res = geared_sweep(base, omegas=grid, H=None, model=None, stability=True).mesh
+    else:
+        from nlgrd.nonlinear.models.link_model import build_link_model, link_sweep
+
+        res = link_sweep(build_link_model(base), grid, None, stability=True, period="auto").result
+    cpu, wall = time.process_time() - c0, time.perf_counter() - w0
+    out = {
+        "tree": str(tree),
+        "cpu": cpu,
+        "wall": wall,
+        "H": int(res.H),
+        "converged": int(np.sum(res.converged)),
+        "stable": int(np.sum(res.stable)),
+        "no_stable": int(np.sum(res.no_stable)),
+        "evaluations": evals["n"],
+        "landing": spent["landing"],
+        "floquet": spent["floquet"],
+    }
+    print(json.dumps(out))
+
+
+def _timed(module, name: str, spent: dict, key: str, users: tuple[str, ...]) -> None:
+    """Add the process time of ``module.name`` (outermost calls only) to ``spent[key]``, also
+    where the modules ``nlgrd.nonlinear.tracing.<users>`` imported it by name."""
+    import importlib
+
+    original = getattr(module, name)
+    depth = {"n": 0}
+
+    def wrapper(*args, **kwargs):
+        depth["n"] += 1
+        c0 = time.process_time()
+        try:
+            return original(*args, **kwargs)
+        finally:
+            depth["n"] -= 1
+            if not depth["n"]:
+                spent[key] += time.process_time() - c0
+
+    setattr(module, name, wrapper)
+    for user in users:
+        mod = importlib.import_module(f"nlgrd.nonlinear.tracing.{user}")
+        if getattr(mod, name, None) is original:
+            setattr(mod, name, wrapper)
+
+
+def load() -> str:
+    """The 1, 5 and 15 min load averages."""
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+def cpu_model() -> str:
+    """The processor's name (Linux), else platform.processor()."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def run(engine: str, tree: Path) -> dict:
+    """One subprocess run of ``engine`` on ``tree``; its JSON result with the load before."""
+    env = dict(os.environ, PYTHONPATH=str(tree), OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    before = load()
+    out = subprocess.run(
+        [sys.executable, str(Path(__file__).resolve()), "--child", engine],
+        env=env,
+        cwd=str(tree),
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    if out.returncode != 0:
+        sys.exit(f"{engine} run failed:\n{out.stderr[-3000:]}")
+    res = json.loads(out.stdout.strip().splitlines()[-1])
+    if Path(res["tree"]) != tree.resolve():
+        sys.exit(f"{engine} imported nlgrd from {res['tree']}, not {tree}")
+    res["load"] = before
+    return res
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--old", help="worktree of the deleted engine (commit bbfba76)")
+    ap.add_argument("--repeats", type=int, default=2, help="runs per engine, alternating (best kept)")
+    ap.add_argument("--child", choices=("old", "link"), help=argparse.SUPPRESS)
+    cfg = ap.parse_args(argv)
+    if cfg.child:
+        child(cfg.child)
+        return
+    if not cfg.old:
+        ap.error("--old is required (a worktree of commit bbfba76)")
+    old = Path(cfg.old).resolve()
+    same = (old / MODEL).read_bytes() == (ROOT / MODEL).read_bytes()
+    print(f"machine: {cpu_model()}, {os.cpu_count()} CPUs; Python {platform.python_version()}")
+    print(f"case (b): {MODEL} (the two trees' copies {'identical' if same else 'DIFFER'}), 2 x 40 points")
+    best: dict[str, dict] = {}
+    for i in range(cfg.repeats):
+        for engine, tree in (("old", old), ("link", ROOT)):
+            r = run(engine, tree)
+            print(
+                f"run {i + 1} {engine:4s}: CPU {r['cpu']:6.2f} s, wall {r['wall']:6.2f} s, H {r['H']}, "
+                f"conv/stable/no stable {r['converged']}/{r['stable']}/{r['no_stable']}, "
+                f"corrector evaluations {r['evaluations']}, in landing searches {r['landing']:.2f} s, "
+                f"in Floquet analyses {r['floquet']:.2f} s, load before {r['load']}",
+                flush=True,
+            )
+            if engine not in best or r["cpu"] < best[engine]["cpu"]:
+                best[engine] = r
+    o, n = best["old"], best["link"]
+    print(
+        f"best of {cfg.repeats} by CPU: old {o['cpu']:.2f} s, link {n['cpu']:.2f} s, "
+        f"link / old = {n['cpu'] / o['cpu']:.2f} (target <= 1.10); load at end {load()}"
+    )
+    print(
+        f"of them: landing searches old {o['landing']:.2f} s, link {n['landing']:.2f} s; "
+        f"Floquet analyses old {o['floquet']:.2f} s, link {n['floquet']:.2f} s; "
+        f"the rest old {o['cpu'] - o['landing'] - o['floquet']:.2f} s, "
+        f"link {n['cpu'] - n['landing'] - n['floquet']:.2f} s (Floquet at the searches' crossings "
+        "counted in both)"
+    )
+
+
+if __name__ == "__main__":
+    main()
