@@ -56,7 +56,7 @@ def s_curve(x):
     return up, down
 
 
-def sweep_frame(x, up, down, xcol="pinion_speed [rpm]", ycol="dslr [-]"):
+def sweep_frame(x, up, down, xcol="shaft_speed [rpm]", ycol="dslr [-]"):
     return pd.DataFrame(
         {
             xcol: np.concatenate([x, x[::-1]]),
@@ -79,9 +79,9 @@ def test_load_valid_file(tmp_path):
     np.testing.assert_array_equal(d.value, [1.2, 1.5, 1.1])
     assert d.direction.tolist() == ["up", "down", "unknown"]
     assert d.header["source"].startswith("SYNTHETIC")
-    assert d.frame_x_column == "pinion_speed [rpm]" and d.frame_column == "dslr [-]"
+    assert d.frame_x_column == "shaft_speed [rpm]" and d.frame_column == "dslr [-]"
     assert d.directions() == ["up", "down", "unknown"]
-    assert list(d.to_frame().columns) == ["pinion_speed [rpm]", "dslr [-]", "direction"]
+    assert list(d.to_frame().columns) == ["shaft_speed [rpm]", "dslr [-]", "direction"]
 
 
 def test_mesh_frequency_column_and_dte(tmp_path):
@@ -92,7 +92,7 @@ def test_mesh_frequency_column_and_dte(tmp_path):
         ("direction", "mesh_frequency_hz", "value"),
     )
     d = load_experimental(p)
-    assert d.frame_x_column == "mesh_frequency [Hz]" and d.frame_column == "dte_rms [um]"
+    assert d.frame_x_column == "base_frequency [Hz]" and d.frame_column == "dte_rms [um]"
     np.testing.assert_array_equal(d.x, [2000, 3000])
 
 
@@ -226,4 +226,4 @@ def test_compare_unknown_direction_uses_nearest_branch(tmp_path):
 def test_compare_names_missing_column(tmp_path):
     data = load_experimental(write(tmp_path / "d.csv", [(1, 1, "up"), (2, 2, "up")]))
     with pytest.raises(ModelError, match="dslr"):
-        compare(data, pd.DataFrame({"pinion_speed [rpm]": [1.0], "direction": ["up"]}))
+        compare(data, pd.DataFrame({"shaft_speed [rpm]": [1.0], "direction": ["up"]}))
