@@ -212,6 +212,27 @@ def test_compare_shift_and_offset(tmp_path):
     assert s0.loc[0, "rms difference [-]"] == pytest.approx(0.1, rel=1e-9)
 
 
+def test_compare_reads_a_link_table_and_a_single_dof_table(tmp_path):
+    """A data set in Hz against a link table (``base_frequency [Hz]``, the mesh's
+    ``mesh0.dte_rms [um]``) and against a single-DOF table (``mesh_frequency [Hz]``,
+    ``dte_rms [um]``): the same scores (the same curves under the two tables' names)."""
+    x = np.linspace(1000, 3000, 101)
+    up, down = s_curve(x / 2000)
+    link = sweep_frame(x, up, down, "base_frequency [Hz]", "mesh0.dte_rms [um]")
+    one = sweep_frame(x, up, down, "mesh_frequency [Hz]", "dte_rms [um]")
+    rows = [(a, b + 0.1, "up") for a, b in zip(x[::5], up[::5], strict=True)]
+    p = write(
+        tmp_path / "kb.csv",
+        rows,
+        {"case": "kahraman_blankenship", "quantity": "dte_rms"},
+        ("mesh_frequency_hz", "value", "direction"),
+    )
+    data = load_experimental(p)
+    a, b = compare(data, link), compare(data, one)
+    assert a.loc[0, "rms difference [um]"] == pytest.approx(0.1, rel=1e-9)
+    pd.testing.assert_frame_equal(a, b)
+
+
 def test_compare_unknown_direction_uses_nearest_branch(tmp_path):
     x = np.linspace(5000, 15000, 101)
     up, down = s_curve(x / 10000)
