@@ -292,8 +292,9 @@ def search_orbits(
     from nlgrd.nonlinear.tracing.orbit_search import search_orbits as search
 
     omega = float(_omegas(system, rpm, hz)[0])
-    model_of = LinkView(model(system), None).model_of(int(H), omega)
-    return search(model_of, omega, int(H), periods, **options)
+    view = LinkView(model(system), None)
+    options.setdefault("outputs", view.values)  # every link's columns in the table
+    return search(view.model_of(int(H), omega), omega, int(H), periods, **options)
 
 
 def time_sweep(

@@ -720,9 +720,9 @@ def test_speeds_written_as_given_after_their_round_trip():
     scale = 25 * np.pi / 30  # Kubo: 25 pinion teeth, mesh frequency per pinion rpm
     trip = (grid * scale) / scale
     assert np.any(trip != grid)  # the round trip does leave noise
-    frame = pd.DataFrame({"pinion_speed [rpm]": np.append(trip, 10612.5)})
-    snap_to_grid(frame, "pinion_speed [rpm]", grid)
-    assert frame["pinion_speed [rpm]"].tolist() == [*grid.tolist(), 10612.5]
+    frame = pd.DataFrame({"shaft_speed [rpm]": np.append(trip, 10612.5)})
+    snap_to_grid(frame, "shaft_speed [rpm]", grid)
+    assert frame["shaft_speed [rpm]"].tolist() == [*grid.tolist(), 10612.5]
 
 
 def test_a_sweep_whose_every_point_fails_exits_1(tmp_path, capsys, monkeypatch):

@@ -1,7 +1,8 @@
 """docs/conventions.md, "Column names": the rename table lists every column the package's
-result tables write (old column where a table is not renamed yet, new column where it is:
-the link results and ``nlgrd sweep``'s CSV, issue 33 item 5); each of its new names
-follows the schema of :func:`nlgrd.units.column`."""
+result tables write, and every writer it names (the link sweeps and curves, ``nlgrd
+sweep``'s CSV, tori, orbit search, time responses, static deflection, speed ramp, LSTE, ...;
+issue 33 item 5) writes only the current names of its rows; each new name follows the
+schema of :func:`nlgrd.units.column`."""
 
 from __future__ import annotations
 
@@ -27,8 +28,8 @@ PLACEHOLDERS = {
     "<link>": r"[^.\[]+",
     "<k>": r"\d+",
     "<j>": r"\d+",
-    "<metric>": r"[a-z_]+",
-    "<quantity>": r"[a-z_]+",
+    "<metric>": r"[a-z][a-z0-9_]*",
+    "<quantity>": r"[a-z][a-z0-9_]*",
     "<coordinate>": r"[a-z]+",
     "[unit]": r"\[[^\]]+\]",
 }
@@ -54,11 +55,45 @@ def _pattern(name: str) -> re.Pattern:
 
 OLD = [_pattern(n) for _, olds, _ in _rows() for n in olds]
 NEW = [_pattern(n) for _, _, news in _rows() for n in news]
-#: The rows of the tables renamed (the sweeps' and curves' of the link engine and of
-#: ``nlgrd sweep``): their old names with a new one, and every name they may write now.
-APPLIED = [r for r in _rows() if r[0].startswith(("sweep", "curve", "continuation"))]
-RENAMED = [_pattern(n) for _, olds, news in APPLIED if news for n in olds]
-CURRENT = [_pattern(n) for _, olds, news in APPLIED for n in (news or olds)]
+#: The writers of the table (its first cell's words before the bracket), per result class
+#: of tests/test_result_family.py: each table may write only the current names of its rows
+#: (the new name, or the old one where the row says "unchanged").
+WRITERS = {
+    "nlgrd.gear.transmission_error.LSTEResult": ("LSTE",),
+    "nlgrd.nonlinear.results.link_results.LinkSweepResult": ("sweep", "curve"),
+    "nlgrd.nonlinear.results.link_results.LinkContinuationResult": ("sweep", "curve", "continuation"),
+    "nlgrd.nonlinear.stability.floquet.FloquetResult": ("Floquet multipliers",),
+    "nlgrd.nonlinear.tracing.orbit_search.OrbitSearchResult": ("orbit search",),
+    "nlgrd.nonlinear.tracing.torus_sweep.TorusResult": ("tori",),
+    "nlgrd.rotor.frequency_response.FrequencyResponse": ("frequency response",),
+    "nlgrd.rotor.frequency_response.StaticResult": ("static deflection",),
+    "nlgrd.rotor.modal.ModalResult": ("modes",),
+    "nlgrd.rotor.modal.CampbellResult": ("Campbell",),
+    "nlgrd.timedomain.link_response.LinkTimeResponse": ("time response",),
+    "nlgrd.timedomain.run_down.RampResult": ("speed ramp",),
+    "nlgrd.timedomain.sdof.TimeResponse": ("time response",),
+}
+#: Result classes whose table is not one the package writes: the mesh result inside a link
+#: result (``LinkSweepResult.result``, ``LinkContinuationResult.curve``; with_links renames
+#: its columns) and the single-DOF pair's sweep on it.
+INNER = {
+    "nlgrd.nonlinear.results.sweep_results.SweepResult",
+    "nlgrd.nonlinear.results.sweep_results.ContinuationResult",
+}
+
+
+def _group(writers: tuple[str, ...]) -> list[tuple[str, list[str], list[str]]]:
+    return [r for r in _rows() if r[0].split(" (")[0].startswith(writers)]
+
+
+def _current(writers: tuple[str, ...]) -> list[re.Pattern]:
+    """The names a table of these writers may write: each row's new names, its old ones
+    where it has none ("unchanged")."""
+    return [_pattern(n) for _, olds, news in _group(writers) for n in (news or olds)]
+
+
+def _renamed(writers: tuple[str, ...]) -> list[re.Pattern]:
+    return [_pattern(n) for _, olds, news in _group(writers) if news for n in olds]
 
 
 def _unlisted(columns) -> list[str]:
@@ -66,9 +101,17 @@ def _unlisted(columns) -> list[str]:
     return [c for c in columns if not any(p.match(c) for p in OLD + NEW)]
 
 
-def _stale(columns) -> list[str]:
-    """Columns still under an old name the table renames (no new or unchanged name fits)."""
-    return [c for c in columns if any(p.match(c) for p in RENAMED) and not any(p.match(c) for p in CURRENT)]
+def _stale(columns, writers: tuple[str, ...] = ("sweep", "curve", "continuation")) -> list[str]:
+    """Columns still under an old name the table renames for these writers (no new or
+    unchanged name of theirs fits)."""
+    current, renamed = _current(writers), _renamed(writers)
+    return [c for c in columns if any(p.match(c) for p in renamed) and not any(p.match(c) for p in current)]
+
+
+def _foreign(columns, writers: tuple[str, ...]) -> list[str]:
+    """Columns that are no current name of these writers' rows."""
+    current = _current(writers)
+    return [c for c in columns if not any(p.match(c) for p in current)]
 
 
 def test_the_table_is_there():
@@ -141,3 +184,39 @@ def test_the_link_result_tables_use_the_new_names():
     for name in ("LinkSweepResult", "LinkContinuationResult"):
         key = f"nlgrd.nonlinear.results.link_results.{name}"
         assert _stale(family.CASES[key]().to_frame().columns) == [], name
+
+
+def test_every_writer_of_the_table_is_checked():
+    """Each result class has its writer rows in the table (or is an inner table), and each
+    writer named in WRITERS has rows."""
+    assert sorted(set(family.CASES) - set(WRITERS) - INNER) == []
+    for name, writers in WRITERS.items():
+        assert _group(writers), (name, writers)
+
+
+@pytest.mark.parametrize("name", sorted(WRITERS))
+def test_every_table_writes_only_the_current_names_of_its_rows(name):
+    """The rename applied to every writer of the table (issue 33 item 5): each column of
+    the small case's table is a new name of its rows or an unchanged one, none an old
+    name the table renames (``mesh_frequency [Hz]`` of a torus table, ``dte [um]`` of a
+    time response, ``ux [m]`` of a static deflection)."""
+    columns = family.CASES[name]().to_frame().columns
+    writers = WRITERS[name]
+    assert _stale(columns, writers) == [], name
+    assert _foreign(columns, writers) == [], name
+
+
+@pytest.mark.parametrize(
+    ("writers", "old"),
+    [
+        (("tori",), ["mesh_frequency [Hz]", "pinion_speed [rpm]", "dte_rms [um]", "force_max [N]"]),
+        (("tori",), ["dte_rms_change [-]", "B1 force_max [N]", "floquet_multiplier_abs [-]"]),
+        (("orbit search",), ["mesh_frequency [Hz]", "dte_rms [um]", "back_contact"]),
+        (("time response",), ["dte [um]", "lste [um]", "mesh_deflection [um]", "mesh_force [N]"]),
+        (("static deflection",), ["ux [m]", "uy [m]", "uz [m]"]),
+    ],
+)
+def test_an_old_name_of_another_writer_is_caught(writers, old):
+    """The check can fail: each table's old names are stale and foreign to it."""
+    assert _stale(old, writers) == old
+    assert _foreign(old, writers) == old

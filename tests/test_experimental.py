@@ -56,7 +56,7 @@ def s_curve(x):
     return up, down
 
 
-def sweep_frame(x, up, down, xcol="pinion_speed [rpm]", ycol="dslr [-]"):
+def sweep_frame(x, up, down, xcol="shaft_speed [rpm]", ycol="dslr [-]"):
     return pd.DataFrame(
         {
             xcol: np.concatenate([x, x[::-1]]),
@@ -79,9 +79,9 @@ def test_load_valid_file(tmp_path):
     np.testing.assert_array_equal(d.value, [1.2, 1.5, 1.1])
     assert d.direction.tolist() == ["up", "down", "unknown"]
     assert d.header["source"].startswith("SYNTHETIC")
-    assert d.frame_x_column == "pinion_speed [rpm]" and d.frame_column == "dslr [-]"
+    assert d.frame_x_column == "shaft_speed [rpm]" and d.frame_column == "dslr [-]"
     assert d.directions() == ["up", "down", "unknown"]
-    assert list(d.to_frame().columns) == ["pinion_speed [rpm]", "dslr [-]", "direction"]
+    assert list(d.to_frame().columns) == ["shaft_speed [rpm]", "dslr [-]", "direction"]
 
 
 def test_mesh_frequency_column_and_dte(tmp_path):
@@ -92,7 +92,7 @@ def test_mesh_frequency_column_and_dte(tmp_path):
         ("direction", "mesh_frequency_hz", "value"),
     )
     d = load_experimental(p)
-    assert d.frame_x_column == "mesh_frequency [Hz]" and d.frame_column == "dte_rms [um]"
+    assert d.frame_x_column == "base_frequency [Hz]" and d.frame_column == "dte_rms [um]"
     np.testing.assert_array_equal(d.x, [2000, 3000])
 
 
@@ -212,6 +212,27 @@ def test_compare_shift_and_offset(tmp_path):
     assert s0.loc[0, "rms difference [-]"] == pytest.approx(0.1, rel=1e-9)
 
 
+def test_compare_reads_a_link_table_and_a_single_dof_table(tmp_path):
+    """A data set in Hz against a link table (``base_frequency [Hz]``, the mesh's
+    ``mesh0.dte_rms [um]``) and against a single-DOF table (``mesh_frequency [Hz]``,
+    ``dte_rms [um]``): the same scores (the same curves under the two tables' names)."""
+    x = np.linspace(1000, 3000, 101)
+    up, down = s_curve(x / 2000)
+    link = sweep_frame(x, up, down, "base_frequency [Hz]", "mesh0.dte_rms [um]")
+    one = sweep_frame(x, up, down, "mesh_frequency [Hz]", "dte_rms [um]")
+    rows = [(a, b + 0.1, "up") for a, b in zip(x[::5], up[::5], strict=True)]
+    p = write(
+        tmp_path / "kb.csv",
+        rows,
+        {"case": "kahraman_blankenship", "quantity": "dte_rms"},
+        ("mesh_frequency_hz", "value", "direction"),
+    )
+    data = load_experimental(p)
+    a, b = compare(data, link), compare(data, one)
+    assert a.loc[0, "rms difference [um]"] == pytest.approx(0.1, rel=1e-9)
+    pd.testing.assert_frame_equal(a, b)
+
+
 def test_compare_unknown_direction_uses_nearest_branch(tmp_path):
     x = np.linspace(5000, 15000, 101)
     up, down = s_curve(x / 10000)
@@ -226,4 +247,4 @@ def test_compare_unknown_direction_uses_nearest_branch(tmp_path):
 def test_compare_names_missing_column(tmp_path):
     data = load_experimental(write(tmp_path / "d.csv", [(1, 1, "up"), (2, 2, "up")]))
     with pytest.raises(ModelError, match="dslr"):
-        compare(data, pd.DataFrame({"pinion_speed [rpm]": [1.0], "direction": ["up"]}))
+        compare(data, pd.DataFrame({"shaft_speed [rpm]": [1.0], "direction": ["up"]}))

@@ -86,7 +86,6 @@ NAMES = ("01_kubo_dynamic_factor", "02_kahraman_blankenship_dte", "03_flexibilit
 #: Per-cell execution timeout of the test runs [s].
 TIMEOUT = 300
 RTOL = 1e-4
-RPM, HZ = "pinion_speed [rpm]", "mesh_frequency [Hz]"  # 02's tables (the one-mesh engine's names)
 #: 01's and 03's tables (``nlgrd.sweep``, the link engine; docs/conventions.md "Column names"):
 #: the pinion's speed, the mesh frequency as the base, the mesh's outputs ``mesh0.<quantity>``.
 LINK_RPM, LINK_HZ, MESH = "shaft_speed [rpm]", "base_frequency [Hz]", "mesh0"

@@ -308,7 +308,7 @@ def test_torus_result_plot_marks_the_speed_without_a_torus():
     ax = res.plot("dte_rms")
     squares = [ln for ln in ax.get_lines() if ln.get_label() == "quasi-periodic (torus HB)"]
     assert len(squares) == 1 and squares[0].get_markerfacecolor() == "none"
-    np.testing.assert_array_equal(squares[0].get_ydata(), frame["dte_rms [um]"].to_numpy()[[0, 2]])
+    np.testing.assert_array_equal(squares[0].get_ydata(), frame["mesh0.dte_rms [um]"].to_numpy()[[0, 2]])
     np.testing.assert_array_equal(squares[0].get_ydata(), res.outputs[[0, 2], 1] * 1e6)
     missing = [ln for ln in ax.get_lines() if ln.get_label() == "torus HB: no torus (1)"]
     assert len(missing) == 1 and list(missing[0].get_xdata()) == [2424.0]
@@ -323,12 +323,12 @@ def test_orbit_search_table_and_figure():
     found = _orbits()
     frame = found.to_frame()
     assert len(frame) == len(found) == 3
-    np.testing.assert_array_equal(frame["mesh_frequency [Hz]"], [o.omega / (2 * np.pi) for o in found])
+    np.testing.assert_array_equal(frame["base_frequency [Hz]"], [o.omega / (2 * np.pi) for o in found])
     np.testing.assert_array_equal(frame["amplitude [um]"], [o.amplitude * 1e6 for o in found])
     assert frame["stable"].tolist() == [o.stable for o in found]
-    np.testing.assert_array_equal(frame["dte_rms [um]"], [o.metrics.dte_rms * 1e6 for o in found])
-    assert str(frame["back_contact"].dtype) == "boolean"
-    assert frame["back_contact"].tolist() == [bool(o.metrics.back_contact) for o in found]
+    np.testing.assert_array_equal(frame["mesh0.dte_rms [um]"], [o.metrics.dte_rms * 1e6 for o in found])
+    assert str(frame["mesh0.back_contact"].dtype) == "boolean"
+    assert frame["mesh0.back_contact"].tolist() == [bool(o.metrics.back_contact) for o in found]
     ax = found.plot()
     labels = sorted(ln.get_label() for ln in ax.get_lines())
     assert labels == ["period 1", "period 3", "period 3, unstable"]

@@ -129,18 +129,18 @@ def _history_checks(res, frame):
     h = res.history
     assert list(frame.columns) == [
         "time [s]",
-        "dte [um]",
-        "lste [um]",
-        "mesh_deflection [um]",
-        "mesh_force [N]",
+        "mesh0.delta [um]",
+        "mesh0.lste [um]",
+        "mesh0.deflection [um]",
+        "mesh0.force [N]",
     ]
     np.testing.assert_array_equal(frame["time [s]"], h.t)
-    np.testing.assert_allclose(frame["dte [um]"], h.delta * 1e6, rtol=1e-15)
-    np.testing.assert_allclose(frame["lste [um]"], h.lste * 1e6, rtol=1e-15)
+    np.testing.assert_allclose(frame["mesh0.delta [um]"], h.delta * 1e6, rtol=1e-15)
+    np.testing.assert_allclose(frame["mesh0.lste [um]"], h.lste * 1e6, rtol=1e-15)
     np.testing.assert_allclose(
-        frame["mesh_deflection [um]"], (h.delta - h.lste) * 1e6, rtol=1e-12, atol=1e-12
+        frame["mesh0.deflection [um]"], (h.delta - h.lste) * 1e6, rtol=1e-12, atol=1e-12
     )
-    np.testing.assert_allclose(frame["mesh_force [N]"], h.force, rtol=1e-15)
+    np.testing.assert_allclose(frame["mesh0.force [N]"], h.force, rtol=1e-15)
 
 
 def test_sdof_time_response_table_and_plot():
@@ -154,7 +154,7 @@ def test_sdof_time_response_table_and_plot():
     _history_checks(res, frame)
     fig, ax = plt.subplots()
     assert res.plot(ax=ax) is ax
-    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), frame["dte [um]"], rtol=1e-15)
+    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), frame["mesh0.delta [um]"], rtol=1e-15)
     plt.close(fig)
     plt.close(res.plot(quantity="force").figure)
 

@@ -66,7 +66,9 @@ def test_every_written_column_is_the_si_value_times_its_factor(two_shaft):
         np.testing.assert_array_equal(
             frame[written_name(c)].to_numpy(float), res.links[c].to_numpy(float) * factor
         )
-    assert converted == 3 + 2 * 4  # the mesh's DTE mean, RMS, p2p; 4 bearings' 2 displacements
+    amps = [c for c in res.links.columns if parse_column(c)[1].startswith("dte_amp_")]
+    assert len(amps) == res.result.H + 1  # the mesh's DTE harmonic amplitudes, k = 0..H
+    assert converted == 3 + 2 * 4 + len(amps)  # the mesh's DTE mean, RMS, p2p; 4 bearings' 2 displacements
     assert sum(parse_column(c)[2] == "um" for c in frame.columns) == converted + 1  # + subharmonic
 
 

@@ -199,7 +199,7 @@ def test_a_period_two_answer_is_not_counted_as_no_stable_response():
 
     frame = pd.DataFrame(
         {
-            "mesh_frequency [Hz]": [1.0, 2.0, 3.0, 4.0, 5.0],
+            "base_frequency [Hz]": [1.0, 2.0, 3.0, 4.0, 5.0],
             "direction": ["up"] * 5,
             "converged": [True, True, True, True, False],
             "response": pd.array(
@@ -210,7 +210,7 @@ def test_a_period_two_answer_is_not_counted_as_no_stable_response():
         }
     )
     columns = SummaryColumns(dslr=["dslr [-]"], dte_rms=[], mesh_force=[], bearing_force=[])
-    row = summarise(frame, [], "mesh_frequency [Hz]", 1.0, columns)
+    row = summarise(frame, [], "base_frequency [Hz]", 1.0, columns)
     assert row["no_stable_points"] == 2 and row["failed_points"] == 1
 
 

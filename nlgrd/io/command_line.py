@@ -110,7 +110,7 @@ def snap_to_grid(frame, column: str, grid) -> None:
     frame : pandas.DataFrame
         A result table; nothing happens when it has no ``column``.
     column : str
-        The column in the range's unit, e.g. ``"pinion_speed [rpm]"``.
+        The column in the range's unit, e.g. ``"shaft_speed [rpm]"``.
     grid : array_like
         The values of the range (:func:`parse_range`), in that unit.
     """

@@ -70,16 +70,8 @@ NOT_CONVERGED_GID = "not converged"
 #: gid of the edge marks of converged points without a stable periodic response.
 NO_RESPONSE_GID = "no response"
 
-#: Readable axis labels of table columns (:func:`axis_label`).
+#: Axis labels of the columns not worded by their quantity (:func:`axis_label`; else :data:`_WORDS`).
 COLUMN_LABELS = {
-    "mesh_frequency [Hz]": "mesh frequency [Hz]",
-    "base_frequency [Hz]": "base frequency [Hz]",
-    "pinion_speed [rpm]": "pinion speed [rpm]",
-    "shaft_speed [rpm]": "shaft speed [rpm]",
-    "speed [rpm]": "speed [rpm]",
-    "dte_rms [um]": "RMS of alternating DTE [µm]",
-    "dte_mean [um]": "mean DTE [µm]",
-    "dte_p2p [um]": "peak-to-peak DTE [µm]",
     "force_max [N]": "max mesh force [N]",
     "force_min [N]": "min mesh force [N]",
     "dslr [-]": "DSLR = max W / W0 [-]",
@@ -100,6 +92,12 @@ _WORDS = {
     "dte_p2p": "peak-to-peak DTE",
     "dte_mean": "mean DTE",
     "dslr": "DSLR",
+    "delta": "DTE δ",
+    "lste": "LSTE e",
+    "deflection": "mesh deflection δ - e",
+    "force": "mesh force W",
+    "dte_rms_change": "change of the RMS DTE",
+    "force_max_change": "change of the max force",
     "modal_floor": "modal damping floor ζ_min",
     "rayleigh_alpha": "Rayleigh α",
     "rayleigh_beta": "Rayleigh β",
@@ -138,6 +136,8 @@ def axis_label(column: str) -> str:
     parts = name.split(".")
     leaf = parts[-1]
     words = _WORDS.get(leaf, leaf.replace("_", " "))
+    amp = re.fullmatch(r"dte_amp_(\d+)", leaf)
+    words = f"DTE harmonic {amp.group(1)} amplitude" if amp else words
     owner = ""
     for part in parts[:-1]:
         m = re.fullmatch(r"(\w+)\[(\d+)\]", part)

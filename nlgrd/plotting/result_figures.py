@@ -80,7 +80,8 @@ def plot_multipliers(multipliers, ax=None, title: str | None = None):
 
 def plot_tori(frame: pd.DataFrame, quantity: str = "dte_rms", ax=None, title: str | None = None):
     """Tori over speed (:meth:`~nlgrd.nonlinear.tracing.torus_sweep.TorusResult.to_frame`):
-    each converged torus an open square at its value against pinion speed, as a sweep
+    each converged torus an open square at its value against the reference shaft speed
+    (``shaft_speed [rpm]``), as a sweep
     draws a torus answer; a speed without a torus a cross on the bottom edge.
 
     Parameters
@@ -88,7 +89,8 @@ def plot_tori(frame: pd.DataFrame, quantity: str = "dte_rms", ax=None, title: st
     frame : pandas.DataFrame
         The tori's table.
     quantity : str
-        A column's quantity (``dte_rms``, ``force_max``, ``secondary_frequency``, ...).
+        A column's quantity: ``MESH.QUANTITY`` or a bare one, the first mesh's
+        (``dte_rms``, ``force_max``, ``secondary_frequency``, ...).
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure when None.
     title : str, optional
@@ -103,14 +105,15 @@ def plot_tori(frame: pd.DataFrame, quantity: str = "dte_rms", ax=None, title: st
     ModelError
         (``quantity``) No column of that quantity.
     """
-    cols = [c for c in frame.columns if c.split(" [")[0] == quantity]
+    names = [c.split(" [")[0] for c in frame.columns]
+    cols = [c for c, n in zip(frame.columns, names, strict=True) if quantity in (n, n.split(".", 1)[-1])]
     if not cols:
         raise ModelError(
             "quantity", f"no torus column {quantity!r}; the columns are {', '.join(frame.columns)}"
         )
     col = cols[0]
     ax = get_ax(ax)
-    x = frame["pinion_speed [rpm]"].to_numpy(float)
+    x = frame["shaft_speed [rpm]"].to_numpy(float)
     ok = frame["converged"].to_numpy(bool)
     y = np.where(ok, frame[col].to_numpy(float), np.nan)
     if np.any(ok):
@@ -125,7 +128,7 @@ def plot_tori(frame: pd.DataFrame, quantity: str = "dte_rms", ax=None, title: st
             label="quasi-periodic (torus HB)",
         )
     mark_not_converged(ax, x[~ok], "C0", "torus HB", "no torus")
-    ax.set_xlabel(axis_label("pinion_speed [rpm]"))
+    ax.set_xlabel(axis_label("shaft_speed [rpm]"))
     ax.set_ylabel(axis_label(col))
     if title:
         ax.set_title(title)
@@ -135,13 +138,13 @@ def plot_tori(frame: pd.DataFrame, quantity: str = "dte_rms", ax=None, title: st
 
 def plot_found_orbits(frame: pd.DataFrame, ax=None, title: str | None = None):
     """Orbits found by a search (``OrbitSearchResult.to_frame``): each orbit's largest
-    alternating amplitude against mesh frequency, a marker per period, stable filled,
+    alternating amplitude against the base frequency, a marker per period, stable filled,
     unstable open, stability not computed half-filled.
 
     Parameters
     ----------
     frame : pandas.DataFrame
-        One row per orbit: ``mesh_frequency [Hz]``, ``period``, ``amplitude [um]``,
+        One row per orbit: ``base_frequency [Hz]``, ``period``, ``amplitude [um]``,
         ``stable`` (tri-state).
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new figure when None.
@@ -160,7 +163,7 @@ def plot_found_orbits(frame: pd.DataFrame, ax=None, title: str | None = None):
         marker = PERIOD_MARKERS[min(int(p), len(PERIOD_MARKERS)) - 1]
         draw_points(
             ax,
-            frame["mesh_frequency [Hz]"].to_numpy(float)[rows],
+            frame["base_frequency [Hz]"].to_numpy(float)[rows],
             frame["amplitude [um]"].to_numpy(float)[rows],
             codes[rows],
             f"C{i % 10}",
@@ -169,7 +172,7 @@ def plot_found_orbits(frame: pd.DataFrame, ax=None, title: str | None = None):
             lines=False,
             ms=5,
         )
-    ax.set_xlabel(axis_label("mesh_frequency [Hz]"))
+    ax.set_xlabel(axis_label("base_frequency [Hz]"))
     ax.set_ylabel("largest alternating amplitude [µm]")
     if title:
         ax.set_title(title)

@@ -22,7 +22,7 @@ def draw_branches(ax, branches: pd.DataFrame, x: str, quantity: str) -> None:
     branches : DataFrame
         The followed branches, a column "branch" naming each (``nlgrd sweep --search-at``).
     x : str
-        Abscissa column ("mesh_frequency [Hz]" or "pinion_speed [rpm]").
+        Abscissa column ("base_frequency [Hz]" or "shaft_speed [rpm]").
     quantity : str
         The plotted metric (its column is named "<quantity> [unit]").
     """

@@ -15,6 +15,7 @@ from nlgrd.errors import ModelError
 from nlgrd.rotor.assembly import LinearModel, assemble
 from nlgrd.rotor.rigid_body import check_balanced, rigid_body_modes
 from nlgrd.rotor.system import RotorSystem
+from nlgrd.units import um
 
 DofSpec = int | tuple[int | str, int, str]
 
@@ -156,7 +157,9 @@ class StaticResult:
     model: LinearModel
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per node: position and the six displacements."""
+        """One row per node: its shaft and node, its position ``x [m]``, the displacements
+        ``ux``, ``uy``, ``uz`` [um] and the rotations ``θx``, ``θy``, ``θz`` [rad]; a model of
+        matrices (no rotor): ``dof`` and ``value [m or rad]``."""
         if self.model.system is None:
             return pd.DataFrame({"dof": np.arange(len(self.q)), "value [m or rad]": self.q})
         rows = []
@@ -169,9 +172,9 @@ class StaticResult:
                         "shaft": s,
                         "node": node,
                         "x [m]": x,
-                        "ux [m]": v[0],
-                        "uy [m]": v[1],
-                        "uz [m]": v[2],
+                        "ux [um]": um(v[0]),
+                        "uy [um]": um(v[1]),
+                        "uz [um]": um(v[2]),
                         "θx [rad]": v[3],
                         "θy [rad]": v[4],
                         "θz [rad]": v[5],

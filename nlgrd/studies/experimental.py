@@ -33,10 +33,12 @@ from numpy.typing import ArrayLike, NDArray
 from nlgrd.errors import ModelError
 from nlgrd.nonlinear.results.jumps import Jump, find_jumps
 
-#: Abscissa columns of a data file and the matching sweep-table column.
+#: Abscissa columns of a data file and the matching sweep-table column (docs/conventions.md,
+#: "Column names": the reference shaft's speed, the pinion's on a one-mesh model, and the
+#: base frequency, its mesh frequency).
 X_COLUMNS = {
-    "pinion_speed_rpm": "pinion_speed [rpm]",
-    "mesh_frequency_hz": "mesh_frequency [Hz]",
+    "pinion_speed_rpm": "shaft_speed [rpm]",
+    "mesh_frequency_hz": "base_frequency [Hz]",
 }
 #: Units of the abscissa columns.
 X_UNITS = {"pinion_speed_rpm": "rpm", "mesh_frequency_hz": "Hz"}
@@ -548,7 +550,7 @@ def directions_of(frame: pd.DataFrame, x_col: str, y_col: str) -> dict[str, tupl
     frame : pandas.DataFrame
         A sweep table (``to_frame()`` of a sweep result) with a ``direction`` column.
     x_col : str
-        Column of the abscissa, e.g. ``"pinion_speed [rpm]"``.
+        Column of the abscissa, e.g. ``"shaft_speed [rpm]"``.
     y_col : str
         Column of the values, e.g. ``"dslr [-]"``.
 

@@ -34,6 +34,7 @@ from nlgrd.nonlinear.results.link_results import (  # re-exported: the tables li
     metric_names,
     output_names,
     points_outputs,
+    with_amplitudes,
 )
 from nlgrd.nonlinear.results.metrics import PointMetrics
 from nlgrd.nonlinear.tracing.auto_period import beyond_period_one, check_period
@@ -517,6 +518,7 @@ def link_sweep(
                 rows[i] = row
     columns = {c: np.array([row[c] for row in rows], dtype=float) for c in blank}  # faster than rows
     table = pd.DataFrame(columns, columns=list(blank))
+    table = with_amplitudes(table, model, res, np.isin(np.arange(len(res)), ok))
     return LinkSweepResult(res, table, bearing_columns(model))
 
 
@@ -564,7 +566,8 @@ def link_continuation(
         model.receptance.prepare(int(H) * top)
         res = continuation(model.reduced, omega_start, omega_end, int(H), **options)
     usable = np.asarray(res.curve.converged, dtype=bool)
-    return LinkContinuationResult(res, link_rows(model, res.curve, usable))
+    links = with_amplitudes(link_rows(model, res.curve, usable), model, res.curve, usable)
+    return LinkContinuationResult(res, links)
 
 
 def needs_links(system) -> bool:

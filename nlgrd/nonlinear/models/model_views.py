@@ -190,7 +190,8 @@ class LinkView:
             )[0]
             mine = self.values(o.harmonics, o.omega, o.period)
             return any(
-                int(r.period[i]) == o.period and same_outputs(res.links.iloc[i].to_dict(), mine) for i in here
+                int(r.period[i]) == o.period and same_outputs(res.links.iloc[i][self.outputs].to_dict(), mine)
+                for i in here
             )
 
         return known

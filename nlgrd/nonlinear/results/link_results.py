@@ -13,6 +13,7 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from nlgrd.errors import ModelError
+from nlgrd.nonlinear.fourier.harmonics import real_to_complex
 from nlgrd.nonlinear.results.bearing_loads import (
     BEARING_OUTPUTS,
     bearing_names,
@@ -29,11 +30,13 @@ __all__ = [
     "bearing_columns",
     "link_column",
     "link_rows",
+    "mesh_amplitudes",
     "metric_names",
     "output_columns",
     "output_names",
     "point_outputs",
     "points_outputs",
+    "with_amplitudes",
     "with_links",
     "with_speed",
 ]
@@ -104,8 +107,10 @@ NOT_JUMP_QUANTITIES = ("dte_mean", "dte_p2p", "force_min")
 
 
 def _jumps_on(column: str) -> bool:
-    """Whether the default jumps ask ``column`` (not one of :data:`NOT_JUMP_QUANTITIES`)."""
-    return parse_column(column)[1] not in NOT_JUMP_QUANTITIES
+    """Whether the default jumps ask ``column`` (not one of :data:`NOT_JUMP_QUANTITIES`,
+    not a harmonic amplitude ``dte_amp_<k>``)."""
+    quantity = parse_column(column)[1]
+    return quantity not in NOT_JUMP_QUANTITIES and not quantity.startswith("dte_amp_")
 
 
 def link_column(links: pd.DataFrame, quantity: str | None, bearings: Sequence[str] = ()) -> str:
@@ -190,8 +195,25 @@ class LinkSweepResult:
         -------
         pandas.DataFrame
         """
-        frame = with_links(self.result.to_frame(), self.links)
+        frame = with_links(self.result.to_frame(), self._answered_amplitudes())
         return with_speed(frame, self.result.omega, self.speed_per_base, self.speed_unit)
+
+    def _answered_amplitudes(self) -> pd.DataFrame:
+        """:attr:`links` with the first mesh's ``dte_amp_<k>`` of the points a time
+        integration or a torus answered: the mesh result's amplitudes (a torus's: of its
+        mesh-synchronous part), as the one-mesh table wrote them."""
+        timed = np.asarray(self.result.time_answered, dtype=bool)
+        amps = [c for c in self.links.columns if parse_column(c)[1].startswith("dte_amp_")]
+        if not (timed.any() and amps):
+            return self.links
+        first = parse_column(amps[0])[0]
+        links = self.links.copy()
+        A = np.asarray(self.result.amplitudes, dtype=float)
+        for k in range(A.shape[1]):
+            name = f"{first}.dte_amp_{k} [m]"
+            if name in links.columns:
+                links.loc[timed, name] = A[timed, k]
+        return links
 
     def jumps(self, quantities: str | Sequence[str] | None = None, rtol: float = 0.1, ratio: float = 3.0):
         """Jumps of each sweep direction in the links' outputs (:meth:`SweepResult.jumps`
@@ -383,6 +405,57 @@ def points_outputs(model, harmonics, omegas, known: dict | None = None) -> list[
     for row, b in zip(rows, link_bearing_outputs_of_points(model, zs, ws), strict=True):
         row.update(b)
     return rows
+
+
+def mesh_amplitudes(model, res: SweepResult, usable: NDArray) -> pd.DataFrame:
+    """Every gear mesh's DTE harmonic amplitudes |δ_k| = sqrt(a_k² + b_k²) at k ω, k = 0..H
+    (ω the sweep's frequency, H :attr:`SweepResult.H`; k = 0 the mean's magnitude), from the
+    points' harmonics on ω/``base`` (every ``base``-th of them): the one-mesh table's
+    ``dte_amp_k``, per mesh.
+
+    Parameters
+    ----------
+    model : nlgrd.nonlinear.models.link_model.LinkModel
+        The model whose links and slices of the coordinates are used.
+    res : SweepResult
+        The points (harmonics of all link coordinates).
+    usable : ndarray of bool
+        Per point: whether it has outputs (NaN elsewhere).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per point, ``<mesh>.dte_amp_<k> [m]`` columns.
+    """
+    ok = np.asarray(usable, dtype=bool)
+    base, H = int(res.base), int(res.H)
+    cols: dict[str, NDArray] = {}
+    for link, sl in zip(model.links, model.receptance.slices, strict=True):
+        if getattr(link, "kind", "") != "gear mesh":
+            continue
+        z = np.asarray(res.harmonics, dtype=float)[:, sl.start, :]
+        amp = np.abs(real_to_complex(z))[:, ::base][:, : H + 1]
+        amp[~ok] = np.nan
+        cols.update({f"{link.name}.dte_amp_{k} [m]": amp[:, k] for k in range(amp.shape[1])})
+    return pd.DataFrame(cols, index=range(len(ok)))
+
+
+def with_amplitudes(links: pd.DataFrame, model, res: SweepResult, usable: NDArray) -> pd.DataFrame:
+    """``links`` with every gear mesh's :func:`mesh_amplitudes` after its columns.
+
+    Parameters
+    ----------
+    links : pandas.DataFrame
+        One row per point of ``res``: ``<link>.<quantity>`` columns.
+    model, res, usable
+        As :func:`mesh_amplitudes`.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    amps = mesh_amplitudes(model, res, usable)
+    return pd.concat([links.reset_index(drop=True), amps], axis=1) if amps.shape[1] else links
 
 
 def link_rows(model, res: SweepResult, usable: NDArray) -> pd.DataFrame:

@@ -27,7 +27,7 @@ from nlgrd.nonlinear.fourier.harmonics import (
     sample,
 )
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh
-from nlgrd.units import um
+from nlgrd.units import column, um
 
 #: What the CSV's ``response`` column says where a sweep found no stable periodic orbit.
 NO_STABLE = "no stable mesh-periodic response"
@@ -112,6 +112,8 @@ class TimeHistory:
         e [m] and e' [m/s].
     force : ndarray
         W = k_h f(δ - e) + c_m (δ' - e') [N].
+    name : str
+        The mesh's link name, the owner of its columns (a one-mesh model's: ``mesh0``).
     """
 
     t: NDArray
@@ -120,6 +122,7 @@ class TimeHistory:
     lste: NDArray
     lste_dot: NDArray
     force: NDArray
+    name: str = "mesh0"
 
     @property
     def mesh_deflection(self) -> NDArray:
@@ -127,7 +130,9 @@ class TimeHistory:
         return self.delta - self.lste
 
     def to_frame(self):
-        """The period as a table: time [s], δ, e and δ - e [µm], W [N].
+        """The period as a table: ``time [s]``, ``<mesh>.delta [um]`` (δ, as a link time
+        response names the mesh coordinate), ``<mesh>.lste [um]`` (e),
+        ``<mesh>.deflection [um]`` (δ - e) and ``<mesh>.force [N]`` (W).
 
         Returns
         -------
@@ -138,10 +143,10 @@ class TimeHistory:
         return pd.DataFrame(
             {
                 "time [s]": self.t,
-                "dte [um]": um(self.delta),
-                "lste [um]": um(self.lste),
-                "mesh_deflection [um]": um(self.mesh_deflection),
-                "mesh_force [N]": self.force,
+                column("delta", "um", self.name): um(self.delta),
+                column("lste", "um", self.name): um(self.lste),
+                column("deflection", "um", self.name): um(self.mesh_deflection),
+                column("force", "N", self.name): self.force,
             }
         )
 
@@ -164,7 +169,8 @@ class LastPeriod:
     history: TimeHistory
 
     def to_frame(self):
-        """The last period (:meth:`TimeHistory.to_frame`): time [s], δ, e and δ - e [µm], W [N].
+        """The last period (:meth:`TimeHistory.to_frame`): ``time [s]``, the mesh's δ, e and
+        δ - e [µm] and W [N] as ``<mesh>.delta``, ``.lste``, ``.deflection``, ``.force``.
 
         Returns
         -------

@@ -226,6 +226,8 @@ class LinkTorus:
         The periodic model.
     bearing_names : list of str
         The linear bearings' names, as the link sweep's columns.
+    mesh_names : tuple of str
+        Every gear mesh's link name, in the model's order (the first: the metrics law's).
     """
 
     def __init__(self, model):
@@ -234,6 +236,12 @@ class LinkTorus:
         self.reduced = model.reduced
         self.bearing_names = bearing_names(model.system)
         self._mesh = getattr(model.reduced.metrics, "mesh", None)
+        self._meshes = [
+            (lk.name, lk.mesh, sl.start)
+            for lk, sl in zip(model.links, model.receptance.slices, strict=True)
+            if hasattr(lk, "mesh")
+        ]
+        self.mesh_names = tuple(name for name, _, _ in self._meshes)
         picks = [getattr(lk, "converged_outputs", None) or () for lk in model.links]
         self._checked = [f"{lk.name}.{q}" for lk, qs in zip(model.links, picks, strict=True) for q in qs]
         scales = model.reduced.output_scales
@@ -265,6 +273,26 @@ class LinkTorus:
             return out
         return torus_outputs(sol, self._mesh, coord=self._mesh.coord)
 
+    def mesh_outputs(self, sol: qp.TorusSolution, first: NDArray | None = None) -> NDArray:
+        """:func:`torus_outputs` of every gear mesh (SI), in :attr:`mesh_names`' order.
+
+        Parameters
+        ----------
+        sol : TorusSolution
+            A torus.
+        first : ndarray, optional
+            :meth:`outputs` of ``sol`` (the first mesh's), if computed already.
+
+        Returns
+        -------
+        ndarray (len(mesh_names), len(TORUS_OUTPUTS))
+        """
+        out = np.full((len(self._meshes), len(TORUS_OUTPUTS)), np.nan)
+        for j, (_, mesh, coord) in enumerate(self._meshes):
+            reuse = j == 0 and first is not None
+            out[j] = first if reuse else torus_outputs(sol, mesh, SAMPLES, coord=coord)
+        return out
+
     def _values(self, sol: qp.TorusSolution, outputs: NDArray) -> NDArray:
         """The checked link outputs and ω₂ of ``sol`` (``outputs``: its :meth:`outputs`)."""
         known = None if self._mesh is None else {int(self._mesh.coord): outputs}
@@ -288,6 +316,14 @@ class LinkTorus:
         diff = np.abs(b - a)
         rel = np.where(diff == 0, 0.0, diff / np.where(den > 0, den, 1.0))
         return ch, float(np.max(rel))
+
+    def mesh_change(self, mesh_outputs: NDArray, fine: qp.TorusSolution) -> NDArray:
+        """The relative change of every gear mesh's :data:`CHECKED` outputs from a torus
+        (its :meth:`mesh_outputs`) to ``fine`` [-], (len(mesh_names), len(CHECKED)); the
+        first mesh's is :meth:`change`'s first value."""
+        idx = [list(TORUS_OUTPUTS).index(c) for c in CHECKED]
+        big = self.mesh_outputs(fine, self.outputs(fine) if self._mesh is not None else None)
+        return big[:, idx] / mesh_outputs[:, idx] - 1
 
     def bearing_force_max(self, sol: qp.TorusSolution) -> NDArray:
         """Each linear bearing's largest radial force over the torus [N]."""

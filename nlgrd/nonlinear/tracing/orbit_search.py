@@ -40,7 +40,7 @@ follows a found orbit over frequency.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -57,7 +57,7 @@ from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 from nlgrd.nonlinear.tracing.auto_period import period_only
 from nlgrd.nonlinear.tracing.landing import SAME_ORBIT_RTOL
 from nlgrd.nonlinear.tracing.subharmonic import follow_period
-from nlgrd.units import column, hz, um, written
+from nlgrd.units import column, floor_rounding, hz, um, written, written_frame
 
 #: Perturbed starts per period by default.
 N_STARTS = 40
@@ -70,6 +70,9 @@ START_RANGE = (0.1, 10.0)
 PERIOD_TOL_FACTOR = 1e4
 #: Every SHAPED_EVERY-th perturbed start is the linear response's shape scaled [-].
 SHAPED_EVERY = 4
+#: The owner of a single-DOF model's mesh metrics in :meth:`OrbitSearchResult.to_frame`
+#: (a one-mesh model's mesh link name).
+ONE_MESH = "mesh0"
 #: The golden ratio's fractional part: the step of the starts' amplitude sequence.
 _GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
 
@@ -94,6 +97,11 @@ class FoundOrbit:
         Which start reached it first.
     metrics : MeshMetrics or None
         Output metrics of the model's first mesh over the whole orbit (None without a mesh).
+    columns : dict of str to float
+        Every link's and linear bearing's outputs over the whole orbit,
+        ``<link>.<quantity> [SI unit]`` (the search's ``outputs``: a link model's
+        :func:`~nlgrd.nonlinear.results.link_results.point_outputs`); empty when the search
+        was not given them.
     """
 
     omega: float
@@ -103,6 +111,7 @@ class FoundOrbit:
     dominant_multiplier: complex
     start: str
     metrics: MeshMetrics | None = None
+    columns: dict = field(default_factory=dict)
 
     @property
     def stable(self) -> bool:
@@ -150,10 +159,13 @@ class OrbitSearchResult(list):
     """
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per orbit: mesh frequency [Hz], period, ``stable`` (NA where not
-        computed), max |μ| and the dominant multiplier [-], the largest alternating
-        amplitude [um], the start that reached it, and the first mesh's metrics (NaN
-        without a mesh).
+        """One row per orbit: ``base_frequency [Hz]``, ``period``, ``stable`` (NA where not
+        computed), ``floquet_max [-]`` and the dominant multiplier [-], the largest
+        alternating amplitude ``amplitude [um]``, the ``start`` that reached it, and every
+        link's and linear bearing's outputs ``<link>.<quantity> [unit]`` in written units
+        (:attr:`FoundOrbit.columns`, as a link sweep's table writes them); an orbit search
+        on a model without link names (a single-DOF pair) writes its one mesh's metrics
+        as ``mesh0``'s (NaN without a mesh).
 
         Returns
         -------
@@ -164,7 +176,7 @@ class OrbitSearchResult(list):
         stable[~np.isfinite(fmax)] = pd.NA
         mu = np.array([o.dominant_multiplier for o in self], dtype=complex)
         data = {
-            "mesh_frequency [Hz]": hz(np.array([o.omega for o in self], dtype=float)),
+            "base_frequency [Hz]": hz(np.array([o.omega for o in self], dtype=float)),
             "period": pd.array([o.period for o in self], dtype="Int64"),
             "stable": stable,
             "floquet_max [-]": fmax,
@@ -173,6 +185,9 @@ class OrbitSearchResult(list):
             "amplitude [um]": um(np.array([o.amplitude for o in self], dtype=float)),
             "start": [o.start for o in self],
         }
+        if any(o.columns for o in self):  # every link's, as a link sweep writes them
+            links = pd.DataFrame([o.columns for o in self], dtype=float)
+            return pd.concat([pd.DataFrame(data), floor_rounding(written_frame(links))], axis=1)
         for i, name in enumerate(METRIC_NAMES):
             si = METRIC_UNITS[name]
             values = np.array(
@@ -181,14 +196,14 @@ class OrbitSearchResult(list):
             if si is None:  # a flag: tri-state, NA without a mesh
                 flag = pd.array(values == 1.0, dtype="boolean")
                 flag[np.isnan(values)] = pd.NA
-                data[column(name, None)] = flag
+                data[column(name, None, ONE_MESH)] = flag
             else:
                 unit, scaled = written(values, si)
-                data[column(name, unit)] = scaled
+                data[column(name, unit, ONE_MESH)] = scaled
         return pd.DataFrame(data)
 
     def plot(self, ax=None):
-        """Each orbit's largest alternating amplitude against mesh frequency, a marker per
+        """Each orbit's largest alternating amplitude against the base frequency, a marker per
         period, stable filled and unstable open (:func:`nlgrd.plotting.result_figures.plot_found_orbits`).
 
         Parameters
@@ -266,6 +281,7 @@ def search_orbits(
     tol: float = 1e-10,
     max_iter: int = 80,
     shorter_periods: bool = True,
+    outputs: Callable[[NDArray, float, int], dict] | None = None,
 ) -> OrbitSearchResult:
     """Periodic orbits of the given periods at one mesh frequency, from many starts.
 
@@ -299,6 +315,11 @@ def search_orbits(
     shorter_periods : bool
         An orbit found on the period-ν model whose minimal period p is shorter is listed
         as period p (True; once, with the period-p orbits) or dropped (False).
+    outputs : callable, optional
+        ``outputs(harmonics, omega, p)``: every link's outputs of a period-p orbit at mesh
+        frequency ω, ``<link>.<quantity> [SI unit]`` (a link model's:
+        :meth:`nlgrd.nonlinear.models.model_views.LinkView.values`); each orbit's
+        :attr:`FoundOrbit.columns`.
 
     Returns
     -------
@@ -333,7 +354,8 @@ def search_orbits(
         if ss is not None:
             fmax, dom = dominant_multiplier(floquet_multipliers(ss, model.nonlinearities, z, base))
         met = model.metrics.of(z, base)
-        found.append(FoundOrbit(float(omega), p, z, float(fmax), complex(dom), label, met))
+        cols = {} if outputs is None else dict(outputs(z, float(omega), p))
+        found.append(FoundOrbit(float(omega), p, z, float(fmax), complex(dom), label, met, cols))
 
     for nu in periods:
         model = model_of(nu)

@@ -28,7 +28,7 @@ from nlgrd.nonlinear.hb.solvers import solve
 from nlgrd.nonlinear.stability.floquet_mode import dominant_floquet_mode
 from nlgrd.nonlinear.tracing.link_torus import LinkTorus
 from nlgrd.nonlinear.tracing.torus_outputs import CHECKED, TORUS_OUTPUTS
-from nlgrd.units import hz
+from nlgrd.units import column, hz
 
 #: Largest relative speed step continued from the previous torus; beyond it the torus is
 #: started afresh from the periodic orbit.
@@ -76,6 +76,14 @@ class TorusResult:
         The convergence estimate per point: the largest of ``change`` for one mesh, the
         largest over every link's checked outputs and ω₂ for a link model [-]; NaN where
         not checked (default: the largest of ``change``).
+    meshes : tuple of str
+        Every gear mesh's link name, the first the one ``outputs`` holds (none: a model
+        without a gear mesh; default ``("mesh0",)``).
+    mesh_outputs : ndarray (n, len(meshes), len(TORUS_OUTPUTS)), optional
+        Every mesh's :func:`torus_outputs` per point (SI); default ``outputs`` as the one
+        mesh's.
+    mesh_change : ndarray (n, len(meshes), len(CHECKED)), optional
+        Every mesh's ``change`` [-]; default ``change`` as the one mesh's.
     """
 
     omega: NDArray
@@ -93,10 +101,18 @@ class TorusResult:
     bearing_names: list
     solutions: list
     error: NDArray | None = None
+    meshes: tuple = ("mesh0",)
+    mesh_outputs: NDArray | None = None
+    mesh_change: NDArray | None = None
 
     def __post_init__(self):
         if self.error is None:
             object.__setattr__(self, "error", np.max(np.abs(self.change), axis=1))
+        for name, one in (("mesh_outputs", self.outputs), ("mesh_change", self.change)):
+            if getattr(self, name) is None:
+                if len(self.meshes) > 1:
+                    raise ModelError(name, f"every mesh's values are needed for {len(self.meshes)} meshes")
+                object.__setattr__(self, name, np.asarray(one)[:, None, :][:, : len(self.meshes)])
 
     def output(self, name: str) -> NDArray:
         """One output column (SI).
@@ -115,16 +131,21 @@ class TorusResult:
         return self.outputs[:, list(TORUS_OUTPUTS).index(name)]
 
     def to_frame(self) -> pd.DataFrame:
-        """The table, units in the column names (`dte_rms [um]`, `force_max [N]`,
-        `secondary_frequency [Hz]`, `torus_error [-]`: the largest convergence change).
+        """The table (docs/conventions.md, "Column names"): ``base_frequency [Hz]``,
+        ``shaft_speed [rpm]``, every gear mesh's outputs ``<mesh>.<quantity> [unit]``
+        (``<mesh>.dte_rms [um]``, ``<mesh>.force_max [N]``, ...), ``secondary_frequency [Hz]``,
+        every mesh's convergence changes ``<mesh>.dte_rms_change [-]`` and
+        ``<mesh>.force_max_change [-]``, ``secondary_frequency_change [-]``, ``torus_error [-]``
+        (the largest convergence change), ``<bearing>.force_max [N]`` and ``floquet_max [-]``
+        (the periodic orbit's |μ| where the torus was started from it).
 
         Returns
         -------
         pandas.DataFrame
         """
         cols = {
-            "mesh_frequency [Hz]": hz(self.omega),
-            "pinion_speed [rpm]": self.rpm,
+            "base_frequency [Hz]": hz(self.omega),
+            "shaft_speed [rpm]": self.rpm,
             "response": np.where(self.converged, "quasi-periodic", ""),
             "converged": self.converged,
             "residual [-]": self.residual,
@@ -132,26 +153,36 @@ class TorusResult:
             "H": self.H,
             "H2": self.H2,
         }
-        for j, (name, (unit, factor)) in enumerate(TORUS_OUTPUTS.items()):
-            cols[f"{name} [{unit}]"] = self.outputs[:, j] * factor
-        for j, name in enumerate(CHECKED):
-            cols[f"{name}_change [-]"] = self.change[:, j]
+        names = list(TORUS_OUTPUTS)
+        for m, mesh in enumerate(self.meshes):
+            for j, (name, (unit, factor)) in enumerate(TORUS_OUTPUTS.items()):
+                if name != "secondary_frequency":  # of the torus, not of a mesh
+                    cols[column(name, unit, mesh)] = self.mesh_outputs[:, m, j] * factor
+        unit, factor = TORUS_OUTPUTS["secondary_frequency"]
+        secondary = self.outputs[:, names.index("secondary_frequency")]
+        cols[column("secondary_frequency", unit)] = secondary * factor
+        for m, mesh in enumerate(self.meshes):
+            for j, name in enumerate(CHECKED):
+                if name != "secondary_frequency":
+                    cols[column(f"{name}_change", "-", mesh)] = self.mesh_change[:, m, j]
+        cols["secondary_frequency_change [-]"] = self.change[:, list(CHECKED).index("secondary_frequency")]
         cols["torus_error [-]"] = self.error
         for j, name in enumerate(self.bearing_names):
-            cols[f"{name} force_max [N]"] = self.bearing_force_max[:, j]
-        cols["floquet_multiplier_abs [-]"] = np.abs(self.multiplier)
+            cols[column("force_max", "N", name)] = self.bearing_force_max[:, j]
+        cols["floquet_max [-]"] = np.abs(self.multiplier)
         cols["seconds [s]"] = self.seconds
         return pd.DataFrame(cols)
 
     def plot(self, quantity: str = "dte_rms", ax=None):
-        """One output of the tori against pinion speed, open squares as a sweep draws a
-        torus answer, a speed without a torus a cross on the bottom edge
+        """One output of the tori against the reference shaft speed, open squares as a
+        sweep draws a torus answer, a speed without a torus a cross on the bottom edge
         (:func:`nlgrd.plotting.result_figures.plot_tori`).
 
         Parameters
         ----------
         quantity : str
-            A column's quantity of :meth:`to_frame` (``dte_rms``, ``secondary_frequency``, ...).
+            A column's quantity of :meth:`to_frame`: ``MESH.QUANTITY`` or a bare quantity
+            (the first mesh's: ``dte_rms``, ``secondary_frequency``, ...).
         ax : matplotlib.axes.Axes, optional
             Axes to draw on; a new figure when None.
 
@@ -277,6 +308,9 @@ def torus_sweep(
     res, its, secs = np.full(n, np.nan), np.zeros(n, dtype=int), np.zeros(n)
     sols: list = [None] * n
     names = target.bearing_names
+    meshes = tuple(target.mesh_names)
+    mesh_out = np.full((n, len(meshes), len(TORUS_OUTPUTS)), np.nan)
+    mesh_ch = np.full((n, len(meshes), len(CHECKED)), np.nan)
     bear = np.full((n, len(names)), np.nan)
     error = np.full(n, np.nan)
     hist: list[tuple[float, qp.TorusSolution]] = []
@@ -307,6 +341,7 @@ def torus_sweep(
             sols[i] = sol
             hist = (hist + [(float(w), sol)])[-2:]
             out[i] = target.outputs(sol)
+            mesh_out[i] = target.mesh_outputs(sol, out[i]) if meshes else mesh_out[i]
             bear[i] = target.bearing_force_max(sol)
             res[i], its[i] = sol.residual, sol.iterations
             if fine is not None:
@@ -321,6 +356,7 @@ def torus_sweep(
                 )
                 if big.converged:
                     change[i], error[i] = target.change(out[i], sol, big)
+                    mesh_ch[i] = target.mesh_change(mesh_out[i], big) if meshes else mesh_ch[i]
         else:
             hist = []
         secs[i] = time.perf_counter() - t0
@@ -342,6 +378,9 @@ def torus_sweep(
         names,
         sols,
         error,
+        meshes,
+        mesh_out,
+        mesh_ch,
     )
 
 
