@@ -176,6 +176,9 @@ def test_unbalance_at_rate_zero_is_the_linear_response():
     np.testing.assert_allclose(r, lin, rtol=1e-3)
     assert res.link == "rub" and res.kinds["rub"] == "bearing clearance"
     assert "rub.displacement_max [um]" in res.to_frame()
+    assert res.jump() is None and "rub" in res.plot().get_ylabel()  # per link, no mesh needed
+    with pytest.raises(ModelError, match="not a gear mesh"):
+        res.dte_rms  # noqa: B018
 
 
 def test_unbalance_against_the_rub_ring_at_rate_zero_is_the_integrator():
@@ -272,3 +275,27 @@ def test_ramp_jump_on_a_mesh_and_clearance_model_approaches_the_fold():
     print(f"HB last high-branch point {fold:.0f} Hz; ramp jumps at 2000 and 1000 Hz/s: {jumps}")
     assert jumps[0] < jumps[1] <= fold + 1.0
     assert fold - 4 * 25.0 < jumps[1]
+
+
+def test_two_stage_train_cycles_are_base_periods():
+    """The two-stage train (base a common divisor: mesh0 at base harmonic 5, mesh1 at 2;
+    their LSTE up to harmonics 150 and 60): at rate 0 each cycle of the ramp is one base
+    period of the constant-speed integrator from the same state, to 1e-9 (rounding), with
+    128 steps per period of the faster mesh."""
+    model = build_link_model(damped("two_stage"))
+    w = 2 * np.pi * 358.75
+    ns = 128 * 5
+    tr = link_time_response(model, w, steps_per_period=ns, max_periods=4, min_periods=4)
+    res = ramp_from(model, tr.state, w, 0.0, 4 * 2 * np.pi / w, steps_per_period=ns, block=ns)
+    ref = [cycle_metrics(model, y) for y in per_period(model, w, tr.state, ns, 4)]
+    assert res.omega.size >= 3 and set(res.outputs) == {"mesh0", "mesh1"}
+    for k in range(res.omega.size):
+        for lk in ("mesh0", "mesh1"):
+            for q in ("dte_rms [m]", "dte_mean [m]"):
+                np.testing.assert_allclose(res.outputs[lk][q][k], ref[k][lk][q], rtol=1e-9)
+    np.testing.assert_allclose(res.rpm, 358.75 * 60 * 0.2, rtol=1e-12)  # the reference shaft
+    frame = res.to_frame()
+    assert {"mesh1.dte_rms [um]", "base_frequency [Hz]", "shaft_speed [rpm]"} <= set(frame)
+    assert res.plot(link="mesh1").get_ylabel() == "RMS of alternating DTE [µm]"
+    with pytest.raises(ModelError, match="no link"):
+        res.jump(link="B9")
