@@ -299,3 +299,27 @@ def test_two_stage_train_cycles_are_base_periods():
     assert res.plot(link="mesh1").get_ylabel() == "RMS of alternating DTE [µm]"
     with pytest.raises(ModelError, match="no link"):
         res.jump(link="B9")
+
+
+def test_unbalance_force_under_a_ramp_is_the_inertial_force_of_the_mass():
+    """The ramp's unbalance force (:class:`nlgrd.timedomain.ramp_links.RampForcing`, found
+    from the model's harmonics at constant speeds) against the inertial force of the mass
+    itself, -m d²r/dt² with r = e (cos φ, sin φ), φ = θ + phase:
+    m e (φ'² cos φ + φ'' sin φ, φ'² sin φ - φ'' cos φ), at a slow speed and a fast change
+    (φ''/φ'² up to 0.5, so the tangential term is half the force) to 1e-12 of the force."""
+    from nlgrd.timedomain.ramp_links import RampForcing
+
+    system, model = unbalance_rotor()
+    u = system.unbalance[0]
+    force = RampForcing(model, 10.0)
+    theta = np.linspace(0.0, 7.0, 29)
+    omega = np.linspace(10.0, 14.0, 29)
+    acc = -50.0
+    f = force.at(theta, omega, acc)[:, force.d :]
+    phi = theta + u.phase
+    me = u.amount
+    ref = me * np.stack(
+        [omega**2 * np.cos(phi) + acc * np.sin(phi), omega**2 * np.sin(phi) - acc * np.cos(phi)], axis=1
+    )
+    assert list(force.dofs) == list(system.dofs.node_dofs(u.shaft, u.node)[1:3])
+    np.testing.assert_allclose(f, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
