@@ -470,7 +470,7 @@ def _one_mesh_ramp(model, link, state, w0, rate, dt, n_blocks, alpha, block, spe
     step of :func:`~nlgrd.timedomain.ramp_links.multi_link_ramp` with the link solve in
     closed form (:func:`~nlgrd.timedomain.links.backlash_force`) and the LSTE forcing
     c_m e' folded into the one scalar input along w, G = g(δ - e) - c_m e' (the same
-    recurrence: tests/test_run_down.py compares the two to 1e-12)."""
+    recurrence: tests/test_run_down_links.py compares the two to 1e-12)."""
     rec = model.receptance
     lm = rec.model
     mesh = link.mesh
