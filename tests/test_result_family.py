@@ -174,17 +174,14 @@ def _ramp():
     from nlgrd.timedomain.run_down import RampResult
 
     w = 2 * np.pi * np.array([3000.0, 2990.0, 2980.0])
+    mesh = {
+        "dte_mean [m]": np.full(3, 1e-6),
+        "dte_rms [m]": np.array([2e-6, 3e-6, 1e-6]),
+        "elastic_force_max [N]": np.full(3, 900.0),
+        "contact_loss_fraction [-]": np.zeros(3),
+    }
     return RampResult(
-        w,
-        np.array([0.0, 1e-3, 2e-3]),
-        np.full(3, 1e-6),
-        np.array([2e-6, 3e-6, 1e-6]),
-        np.full(3, 900.0),
-        np.zeros(3),
-        100.0,
-        1e-5,
-        1 / 25,
-        500.0,
+        w, np.array([0.0, 1e-3, 2e-3]), {"mesh0": mesh}, {"mesh0": "gear mesh"}, 100.0, 1e-5, 1 / 25
     )
 
 

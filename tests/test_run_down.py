@@ -138,13 +138,3 @@ def test_bad_ramps_are_refused(model):
         run_down(model, w, 0.5 * w, 0.0)
     with pytest.raises(ModelError, match="omega_stop"):
         run_down(model, w, 2 * w, 1.0)
-
-
-def test_a_model_of_several_links_is_refused_in_one_line():
-    """A ramp is built for one gear mesh: the mesh + clearance rotor (two links) stops with
-    one ModelError naming the field, not a traceback from inside the step."""
-    model = build_link_model(load_model(KUBO.parent.parent / "models" / "two_shaft_clearance.toml"))
-    assert len(model.links) == 2
-    with pytest.raises(ModelError, match="one gear mesh") as err:
-        run_down(model, 2 * np.pi * 2000.0, 2 * np.pi * 1500.0, 100.0)
-    assert err.value.key == "gear_pairs" and "\n" not in str(err.value)

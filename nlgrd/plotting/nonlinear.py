@@ -602,8 +602,9 @@ def plot_spectrum(
     return ax
 
 
-def plot_ramp(rpm, dte_rms, rpm_jump=None, ax=None, label: str | None = None):
-    """DTE RMS per mesh cycle of a speed ramp against pinion speed, its jump marked.
+def plot_ramp(rpm, dte_rms, rpm_jump=None, ax=None, label: str | None = None, ylabel: str | None = None):
+    """DTE RMS per cycle of a speed ramp (or another link's level) against shaft speed, its
+    jump marked.
 
     Parameters
     ----------
@@ -617,6 +618,8 @@ def plot_ramp(rpm, dte_rms, rpm_jump=None, ax=None, label: str | None = None):
         Axes to draw on; a new figure when None.
     label : str, optional
         Legend label of the curve (default "run-down (time integration)").
+    ylabel : str, optional
+        Label of the y axis (default "RMS of alternating DTE [µm]").
 
     Returns
     -------
@@ -631,5 +634,5 @@ def plot_ramp(rpm, dte_rms, rpm_jump=None, ax=None, label: str | None = None):
             rpm_jump, color=line.get_color(), ls="--", lw=1, label=f"{text}: jump at {rpm_jump:.0f} rpm"
         )
     ax.set_xlabel("pinion speed [rpm]")
-    ax.set_ylabel("RMS of alternating DTE [µm]")
+    ax.set_ylabel(ylabel or "RMS of alternating DTE [µm]")
     return ax

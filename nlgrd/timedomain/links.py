@@ -134,6 +134,71 @@ def backlash_force(x_lin: float, stiffness: float, b: float, compliance: float) 
     return 0.0
 
 
+def pointwise_forces(links, slices, y: NDArray, th: float) -> tuple[NDArray, NDArray]:
+    """The links' forces g(y, θ) (d,) [N] and their block-diagonal tangent (d, d) [N/m] at
+    one instant, from each link's ``pointwise``.
+
+    Parameters
+    ----------
+    links : sequence of NonlinearLink
+        The links.
+    slices : sequence of slice
+        Each link's coordinates in y.
+    y : ndarray (d,)
+        Link coordinates [m].
+    th : float
+        Base angle θ [rad].
+
+    Returns
+    -------
+    tuple of ndarray
+        g (d,) [N] and ∂g/∂y (d, d) [N/m].
+    """
+    d = y.shape[0]
+    g = np.zeros(d)
+    T = np.zeros((d, d))
+    for link, sl in zip(links, slices, strict=True):
+        gi, ti = link.pointwise(y[sl], th)
+        g[sl] = gi
+        T[sl, sl] = ti
+    return g, T
+
+
+def newton_links(forces, ap: float, S: NDArray, y_lin) -> tuple[NDArray, NDArray]:
+    """The implicit step of the links, y = y_lin - (1 + α) S g(y), by Newton
+    with the links' pointwise tangents: the one link solve of every HHT-α integrator
+    (:class:`LinkIntegrator`, the speed ramp of :mod:`nlgrd.timedomain.run_down`).
+
+    Parameters
+    ----------
+    forces : callable
+        ``forces(y)`` returns g(y) (d,) [N] and ∂g/∂y (d, d) [N/m] at the step's end.
+    ap : float
+        1 + α [-].
+    S : ndarray (d, d)
+        Pᵀ K_eff⁻¹ P [m/N].
+    y_lin : float or ndarray (d,)
+        The step's link coordinates without the link forces [m].
+
+    Returns
+    -------
+    tuple of ndarray
+        y (d,) [m] and g (d,) [N]; stops when the residual is below 1e-13 of |y| (50
+        iterations at most).
+    """
+    y0 = np.atleast_1d(np.asarray(y_lin, dtype=float))
+    y, eye = y0.copy(), np.eye(y0.size)
+    for _ in range(50):
+        gy, Ty = forces(y)
+        res = y - y0 + ap * (S @ gy)
+        if abs(res).max() <= 1e-13 * (abs(y).max() + 1e-12):
+            break
+        y = y - np.linalg.solve(eye + ap * (S @ Ty), res)
+    else:
+        gy = forces(y)[0]
+    return y, gy
+
+
 class LinkIntegrator:
     """Fixed-step HHT-α integration of the reduced equations at one base frequency, period
     by period: the one time integrator of nlgrd's FE and link models.
@@ -297,7 +362,6 @@ class LinkIntegrator:
         self._loads = Fb if Fb.shape[0] == 1 else ap * np.roll(Fb, -1, axis=0) - alpha * Fb
         self._link_loads = ap * np.roll(phi, -1, axis=0) - alpha * phi
         self.theta = 2 * np.pi * np.arange(self.ns) / self.ns
-        self._eye = np.eye(self.d)
         self._solve_link = self._newton_link
         if self.d == 1 and isinstance(links[0], GearMeshLink):  # one mesh: the closed-form step
             self._mesh = self._mesh_law(links[0].mesh)
@@ -328,20 +392,13 @@ class LinkIntegrator:
 
     def _newton_link(self, y_lin, j: int):
         """Link coordinates and forces at phase j + 1 by Newton on d (floats when d = 1)."""
-        y0 = np.atleast_1d(np.asarray(y_lin, dtype=float))
-        y, th, ap = y0.copy(), self.theta[(j + 1) % self.ns], self.step.ap
-        for _ in range(50):
-            gy, Ty = self.link_forces(y, th)
-            res = y - y0 + ap * (self.S @ gy)
-            if abs(res).max() <= 1e-13 * (abs(y).max() + 1e-12):
-                break
-            y = y - np.linalg.solve(self._eye + ap * (self.S @ Ty), res)
-        else:
-            gy = self.link_forces(y, th)[0]
+        th = self.theta[(j + 1) % self.ns]
+        y, gy = newton_links(lambda y: self.link_forces(y, th), self.step.ap, self.S, y_lin)
         return (float(y[0]), float(gy[0])) if np.ndim(y_lin) == 0 else (y, gy)
 
     def link_forces(self, y: NDArray, th: float) -> tuple[NDArray, NDArray]:
-        """The links' forces g(y, θ) (d,) [N] and their tangent (d, d) [N/m].
+        """The links' forces g(y, θ) (d,) [N] and their tangent (d, d) [N/m]
+        (:func:`pointwise_forces`).
 
         Parameters
         ----------
@@ -355,14 +412,7 @@ class LinkIntegrator:
         tuple of ndarray
             g (d,) [N] and ∂g/∂y (d, d) [N/m].
         """
-        d = self.d
-        g = np.zeros(d)
-        T = np.zeros((d, d))
-        for link, sl in zip(self.links, self.slices, strict=True):
-            gi, ti = link.pointwise(y[sl], th)
-            g[sl] = gi
-            T[sl, sl] = ti
-        return g, T
+        return pointwise_forces(self.links, self.slices, y, th)
 
     def start(self, state0: tuple | None = None) -> NDArray:
         """The extended state from (q, q'[, q'']); default at rest at the static position
