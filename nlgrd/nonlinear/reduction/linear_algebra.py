@@ -63,6 +63,53 @@ def expm(X: NDArray) -> NDArray[np.float64]:
     return R
 
 
+def expm_times(C: NDArray, times) -> list[NDArray]:
+    """exp(C t) for several times t: :func:`expm`'s Padé [13/13] and scaling of X = C t, its
+    even powers X²ᵏ = t²ᵏ C²ᵏ (k <= 6) from those of C, formed once for all the times.
+    A time then takes one product (U = X (...)), the solve and its squarings instead of six
+    products and the squarings: a contact state that holds on two or three intervals of a
+    period (the backlash's). The same approximant as :func:`expm` evaluated in another order:
+    equal to rounding. One time, or powers of C that overflow: :func:`expm` per time.
+
+    Parameters
+    ----------
+    C : ndarray (n, n)
+        A real square matrix (a scaled state matrix [1/s]).
+    times : sequence of float
+        The times t [s].
+
+    Returns
+    -------
+    list of ndarray (n, n)
+        exp(C t) per time, in order.
+    """
+    if len(times) < 2:
+        return [expm(C * t) for t in times]
+    P = {1: C, 2: C @ C}
+    P[4] = P[2] @ P[2]
+    P[6], P[8] = P[4] @ P[2], P[4] @ P[4]
+    P[10], P[12] = P[8] @ P[2], P[6] @ P[6]
+    if not np.isfinite(P[12]).all():
+        return [expm(C * t) for t in times]
+    n = C.shape[0]
+    n1c, n4c = float(np.linalg.norm(C, 1)), float(np.linalg.norm(P[4], 1))
+    stack = np.stack([np.eye(n)] + [P[k] for k in range(2, 14, 2)]).reshape(7, n * n)
+    b, k2, out = np.array(_PADE13), np.arange(0, 14, 2), []
+    for t in times:
+        t = float(t)
+        n1, n4 = n1c * abs(t), n4c * t**4
+        alpha = max(n4**0.25, (n4 * n1) ** 0.2)
+        s = max(0, int(np.ceil(np.log2(alpha / _THETA13)))) if alpha > _THETA13 else 0
+        tau = t * 2.0**-s
+        even = ((b[k2] * tau**k2) @ stack).reshape(n, n)  # Σ b_2k X²ᵏ
+        U = tau * (C @ ((b[k2 + 1] * tau**k2) @ stack).reshape(n, n))  # X Σ b_2k+1 X²ᵏ
+        R = np.linalg.solve(even - U, even + U)
+        for _ in range(s):
+            R = R @ R
+        out.append(R)
+    return out
+
+
 def _jacobi_scaled(A: NDArray, rtol: float) -> tuple[NDArray, NDArray] | None:
     """(S A S, 1/S), S = diag(A)^-½; None if A is asymmetric or has a diagonal below 0
     beyond ``rtol`` max|diag|. Rows whose diagonal is within that of 0 (free coordinates)

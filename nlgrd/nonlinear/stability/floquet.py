@@ -16,7 +16,9 @@ intervals, exact because the backlash force is continuous (no saltation).
   (:func:`~nlgrd.nonlinear.reduction.linear_algebra.mesh_block`), the state scaled to
   (w_s η, η') so that a Padé exponential (:func:`~nlgrd.nonlinear.reduction.linear_algebra.expm`)
   needs few squarings, M⁻¹ by one Cholesky solve per state space, the last interval
-  merged with the first (cyclic shifts of a product have its eigenvalues).
+  merged with the first (cyclic shifts of a product have its eigenvalues), the intervals
+  of one contact state from its state matrix's powers formed once
+  (:func:`~nlgrd.nonlinear.reduction.linear_algebra.expm_times`).
 - ``"auto"`` (default): ``"dense"`` up to a state dimension of ``DENSE_STATE_LIMIT`` (of
   the state space, or of its mesh block in step 2), above it the *dominant* multipliers
   only, those that decide stability:
@@ -59,6 +61,7 @@ from nlgrd.errors import ModelError
 from nlgrd.nonlinear.reduction.linear_algebra import (
     _moved,
     expm,
+    expm_times,
     mesh_block,
     psd_null_space,
     psd_to_tolerance,
@@ -269,10 +272,10 @@ def _dominant(Phi: NDArray) -> NDArray[np.complex128]:
     for target in SQUARING_CHECKS:
         for _ in range(target - done):
             R = R @ R
-            m = np.max(np.abs(R))
+            m = max(float(R.max()), -float(R.min()))  # max |R| without a temporary
             if not (m > 0 and np.isfinite(m)):
                 return np.linalg.eigvals(Phi)
-            R /= m
+            R *= 2.0 ** -np.frexp(m)[1]  # a power of 2: the scaling adds no rounding
         done = target
         Q, Rq, _ = sla.qr(R, pivoting=True, mode="economic", check_finite=False)
         dd = np.abs(np.diag(Rq))
@@ -655,8 +658,12 @@ def _exponentials(prep: _Prepared, states, seq, times: NDArray) -> tuple[list[ND
         C = base.copy()
         C[N:, :N] = -k / ws
         Cs.append(C)
-    Cs = [Cs[i] for i, _ in seq]
-    return [expm(C * t) for C, t in zip(Cs, times, strict=True)], Cs
+    Es: list = [None] * len(seq)
+    for j, C in enumerate(Cs):  # a state's intervals share its powers (expm_times)
+        at = [k for k, (i, _) in enumerate(seq) if i == j]
+        for k, E in zip(at, expm_times(C, times[at]), strict=True):
+            Es[k] = E
+    return Es, [Cs[i] for i, _ in seq]
 
 
 def monodromy(
@@ -695,9 +702,12 @@ def _sensitivity(Es: list[NDArray], Cs: list[NDArray], Phi: NDArray) -> NDArray:
     m = len(Es)
     nrm = np.linalg.norm(Phi, 1)
     g = np.array([np.linalg.norm(C, 1) for C in Cs])
+    right, left = [Es[0]], [Es[-1]]  # E_i..E_1 and E_m..E_i+1, one product each
     for i in range(1, m - 1):
-        left, right = _product(Es[i + 1 :]), _product(Es[: i + 1])
-        g[i] *= np.linalg.norm(left, 1) * np.linalg.norm(right, 1) / nrm
+        right.append(Es[i] @ right[-1])
+        left.append(left[-1] @ Es[m - 1 - i])
+    for i in range(1, m - 1):
+        g[i] *= np.linalg.norm(left[m - 2 - i], 1) * np.linalg.norm(right[i], 1) / nrm
     return g
 
 
