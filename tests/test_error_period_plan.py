@@ -12,10 +12,15 @@ hand (f the shaft frequency, r = 50 mm): 300 m/s at f = 954.93 Hz.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+import nlgrd
+from nlgrd.errors import ModelError
+from nlgrd.io.model_checks import MAX_PITCH_LINE_VELOCITY
 from nlgrd.io.model_file import load_model
 from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
 from nlgrd.nonlinear.models.link_model import build_link_model
@@ -46,3 +51,24 @@ def test_the_plan_is_named_after_its_base(tmp_path, extra, n):
     assert plan.name == ("mesh" if n == 1 else f"mesh/{n}")
     words = LinkView(build_link_model(system), None).words()
     assert f"base frequency = {plan.name} ({order:.6g} x the shaft speed)" in words
+
+
+def test_hz_is_checked_as_the_plans_base_through_the_api(tmp_path):
+    """``nlgrd.sweep(hz=...)`` on the mesh/25 model: hz is the shaft frequency here, so
+    2 % below the hand limit (936 Hz: 294 m/s) is swept and 2 % above (974 Hz: 306 m/s) is
+    refused with one ModelError naming ``hz``; read as a mesh frequency (the former
+    one-mesh reading) both would pass at 12 m/s. The same limit in rpm of the shaft."""
+    system = _model(tmp_path, SPACING)
+    r = system.gear_pairs[0].geometry.operating_pitch_radius_pinion
+    assert r == pytest.approx(0.05)
+    limit = MAX_PITCH_LINE_VELOCITY / (2 * math.pi * r)  # [Hz] of the shaft = the base here
+    res = nlgrd.sweep(system, hz=[0.98 * limit], H=25, directions="up", stability=False, time_domain=False)
+    assert bool(res.result.converged[0])
+    with pytest.raises(ModelError) as err:
+        nlgrd.sweep(system, hz=[0.5 * limit, 1.02 * limit], H=25)
+    assert err.value.key == "hz" and "pitch-line velocity of 306 m/s" in err.value.message
+    with pytest.raises(ModelError) as err:
+        nlgrd.sweep(system, rpm=[1.02 * limit * 60], H=25)
+    assert err.value.key == "rpm" and "306 m/s" in err.value.message
+    model = build_link_model(system)
+    np.testing.assert_allclose(model.receptance.plan.speed_per_base, 1.0, rtol=1e-12)
