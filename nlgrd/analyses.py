@@ -136,15 +136,21 @@ def _with_speed(result, system: RotorSystem, rpm):
 
 
 def _omegas(system: RotorSystem, rpm, hz, name: str = "rpm") -> NDArray:
-    """Base frequencies [rad/s] from reference shaft speeds [rpm] or base frequencies [Hz]."""
+    """Base frequencies [rad/s] from reference shaft speeds [rpm] or base frequencies [Hz],
+    their top checked (:func:`~nlgrd.io.model_checks.check_speed_range`)."""
+    from nlgrd.io.model_checks import check_speed_range
+
     if (rpm is None) == (hz is None):
         raise ModelError(name, "give the speeds either as rpm (reference shaft) or as hz (base frequency)")
     if hz is not None:
         omegas = 2 * math.pi * np.atleast_1d(np.asarray(hz, dtype=float))
     else:
         omegas = np.atleast_1d(np.asarray(rpm, dtype=float)) * math.pi / 30 / _speed_per_base(system)
+    key = name if rpm is not None else "hz"
     if omegas.ndim != 1 or omegas.size < 1 or not np.all(np.isfinite(omegas)) or np.any(omegas <= 0):
-        raise ModelError(name if rpm is not None else "hz", "must be positive finite speeds")
+        raise ModelError(key, "must be positive finite speeds")
+    top = float(np.max(rpm if rpm is not None else hz))  # as the CLI and a study check theirs
+    check_speed_range(system, top, rpm is not None, key, f"{top:g} {'rpm' if rpm is not None else 'Hz'}")
     return omegas
 
 

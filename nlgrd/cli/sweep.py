@@ -146,10 +146,6 @@ def cmd_sweep(args) -> int:
     grid = None if args.continuation else values  # the values as typed, written in the CSV
     nu = period if period != "auto" and period >= 3 else 1  # --period N: searched and followed
     top, in_rpm = float(max(values)), args.rpm is not None
-    if revolution > 1 and not in_rpm:  # the base is mesh / N: checked as the shaft speed it is
-        from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
-
-        top, in_rpm = top * 60 * FrequencyPlan.of_model(system).speed_per_base, True
     check_speed_range(system, top, in_rpm, option, repr(text))
     pyplot()
     from types import SimpleNamespace

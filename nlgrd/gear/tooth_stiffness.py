@@ -469,28 +469,6 @@ def pair_stiffness(geometry: GearGeometry, position: ArrayLike) -> NDArray:
     return pair_compliance(geometry, position).stiffness
 
 
-def pair_stiffness_at_roll_angle(
-    geometry: GearGeometry, roll_angle: ArrayLike, member: str = "pinion"
-) -> NDArray:
-    """Single tooth-pair stiffness [N/m] where ``member`` has roll angle ξ [rad].
-
-    Parameters
-    ----------
-    geometry : GearGeometry
-        The gear pair.
-    roll_angle : array_like
-        Roll angle ξ of ``member`` at the contact point [rad].
-    member : {"pinion", "gear"}
-        Whose roll angle is given.
-
-    Returns
-    -------
-    ndarray
-        k_t [N/m], shaped like ``roll_angle``.
-    """
-    return pair_stiffness(geometry, geometry.position_from_roll_angle(roll_angle, member))
-
-
 def pitch_point_stiffness(geometry: GearGeometry) -> float:
     """Single tooth-pair stiffness at the pitch point [N/m].
 

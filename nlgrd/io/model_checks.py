@@ -128,8 +128,10 @@ def check_pitch_line_velocity(gear_pair, omega: float, key: str, given: str) -> 
 def check_speed_range(system: RotorSystem, top: float, in_rpm: bool, key: str, given: str) -> None:
     """Refuse a speed range whose top moves any gear pair's pitch circle faster than
     :data:`MAX_PITCH_LINE_VELOCITY`, with the speeds read as every analysis reads them: rpm
-    of the reference shaft, or Hz of the base frequency (the mesh frequency of a single
-    mesh; the frequency plan's base on a link model).
+    of the reference shaft, or Hz of the base frequency of the model's frequency plan
+    (:meth:`~nlgrd.nonlinear.links.frequency_plan.FrequencyPlan.of_model`: the mesh
+    frequency of one mesh, the mesh frequency / N when its errors repeat every N mesh
+    cycles, the common period of several meshes).
 
     Parameters
     ----------
@@ -150,17 +152,11 @@ def check_speed_range(system: RotorSystem, top: float, in_rpm: bool, key: str, g
         When a gear pair's pitch-line velocity exceeds the limit.
     """
     from nlgrd.nonlinear.links.frequency_plan import FrequencyPlan
-    from nlgrd.nonlinear.models.link_model import needs_links
 
     pairs = [g for g in system.gear_pairs if hasattr(g, "geometry")]
     if not pairs:
         return
-    if not needs_links(system):  # one mesh: its frequency is the base
-        gp = pairs[0]
-        per_speed = gp.geometry.teeth_pinion * abs(system.shafts[gp.pinion_shaft].speed_ratio)
-        mesh = top * math.pi / 30 * per_speed if in_rpm else 2 * math.pi * top
-        check_pitch_line_velocity(gp, mesh, key, given)
-        return
+    # the reference shaft's speed [rad/s]; Hz are of the plan's base (mesh, mesh/N, common)
     speed = top * math.pi / 30
     if not in_rpm:
         speed = 2 * math.pi * top * FrequencyPlan.of_model(system).speed_per_base

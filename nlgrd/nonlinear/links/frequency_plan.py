@@ -31,7 +31,8 @@ class FrequencyPlan:
         Reference shaft speed Ω per unit base frequency, Ω = ``speed_per_base`` ω [-]: 1
         when the base is the shaft speed, 1 / (N_p |s_p|) when it is the mesh frequency.
     name : str
-        "shaft", "mesh" or "common" (a common divisor of several mesh frequencies).
+        "shaft", "mesh", "mesh/N" (the mesh frequency / N: errors that repeat every N
+        mesh cycles) or "common" (a common divisor of several mesh frequencies).
     """
 
     speed_per_base: float = 1.0
@@ -127,7 +128,8 @@ class FrequencyPlan:
         -------
         FrequencyPlan
             "shaft" without meshes, "mesh" when all excitations sit at one mesh
-            frequency, else "common".
+            frequency, "mesh/N" when their errors repeat every N mesh cycles (each
+            mesh's :attr:`~nlgrd.gear.mesh.GearMesh.error_period` N), else "common".
         """
         meshes = [  # a mesh's excitation repeats every error_period mesh cycles
             Fraction(g.geometry.teeth_pinion, g.error_period)
@@ -140,8 +142,10 @@ class FrequencyPlan:
             return cls(1.0, "shaft")
         den = math.lcm(*(q.denominator for q in orders))
         base = Fraction(math.gcd(*(int(q * den) for q in orders)), den)
-        if not others and len(set(meshes)) == 1:
-            name = "mesh"
+        periods = {g.error_period for g in system.gear_pairs}
+        if not others and len(set(meshes)) == 1 and len(periods) == 1:
+            n = periods.pop()  # the base is the mesh frequency / the error period
+            name = "mesh" if n == 1 else f"mesh/{n}"
         else:
             name = "shaft" if base == 1 else "common"
         return cls(1.0 / float(base), name)

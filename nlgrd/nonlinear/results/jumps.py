@@ -45,7 +45,11 @@ def find_jumps(
     """Jumps in one sweep direction: steps much larger than their neighbours.
 
     A step i -> i+1 (in sweep order) is a jump when |Δv| exceeds ``rtol`` times the
-    range of v over the sweep and ``ratio`` times both neighbouring steps.
+    range of v over the sweep and ``ratio`` times both neighbouring steps. The first and
+    the last step (of the finite points) have one neighbour only and are never a jump
+    here: a steep flank at the sweep's end cannot be told from a jump (notebook 01's up
+    sweep from 2000 rpm, tests/test_jump_criterion.py); a solver that left its branch
+    there says so itself (:meth:`~nlgrd.nonlinear.results.sweep_results.SweepResult.jumps`).
 
     Parameters
     ----------
@@ -72,9 +76,8 @@ def find_jumps(
     dv = np.abs(np.diff(v))
     rng = np.ptp(v) + 1e-300
     out = []
-    for i, step in enumerate(dv):
-        left = dv[i - 1] if i > 0 else 0.0
-        right = dv[i + 1] if i + 1 < dv.size else 0.0
+    for i in range(1, dv.size - 1):  # a step with a neighbour on each side
+        step, left, right = dv[i], dv[i - 1], dv[i + 1]
         if step > rtol * rng and step > ratio * left and step > ratio * right:
             out.append(Jump(direction, float(w[i]), float(w[i + 1]), float(v[i]), float(v[i + 1])))
     return out

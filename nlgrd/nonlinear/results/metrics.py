@@ -23,7 +23,6 @@ from nlgrd.nonlinear.fourier.harmonics import (
     differentiate,
     n_harmonics,
     real_to_complex,
-    resize_harmonics,
     sample,
 )
 from nlgrd.nonlinear.laws.force_laws import BacklashMesh
@@ -478,24 +477,3 @@ def metrics_from_history(history: TimeHistory, mesh: BacklashMesh, H: int = 15) 
         contact_loss_fraction=float(np.mean(np.abs(x) <= mesh.half_backlash)),
         back_contact=bool(np.any(x < -mesh.half_backlash)),
     )
-
-
-def harmonic_amplitudes(harmonics, H: int | None = None) -> NDArray:
-    """|δ_k|, k = 0..H, of real harmonics.
-
-    Parameters
-    ----------
-    harmonics : array_like
-        Real harmonics [δ_0, a_1, b_1, ...] (flattened to 1-D), in any unit (δ [m]).
-    H : int, optional
-        Truncate or zero-pad to H harmonics first; default: as given.
-
-    Returns
-    -------
-    ndarray (H+1,)
-        |X_k| = sqrt(a_k² + b_k²) (k = 0: |δ_0|), in the unit of ``harmonics``.
-    """
-    z = np.asarray(harmonics, dtype=float).reshape(-1)
-    if H is not None:
-        z = resize_harmonics(z, H)
-    return np.abs(real_to_complex(z))

@@ -11,11 +11,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 from nlgrd.nonlinear.stability.tangent import tangent_pieces
 
 if TYPE_CHECKING:  # pragma: no cover
-    from nlgrd.nonlinear.hb.harmonic_balance import HarmonicSolution, ReducedModel
     from nlgrd.nonlinear.reduction.state_space import LinearStateSpace
 
 
@@ -109,37 +107,3 @@ def hill_multipliers(
     lam = np.linalg.eigvals(A)
     lam = lam[np.argsort(np.abs(lam.imag))][: 2 * N]
     return np.exp(lam * 2 * np.pi / omega)
-
-
-def harmonic_solution_stability(
-    model: ReducedModel, solution: HarmonicSolution, method: str = "monodromy"
-) -> HarmonicSolution:
-    """Attach Floquet multipliers (``method`` "monodromy" or "hill") to a converged solution.
-
-    "monodromy" is :func:`floquet_multipliers` with its default method: above
-    ``DENSE_STATE_LIMIT`` only the dominant multipliers are attached.
-
-    Parameters
-    ----------
-    model : ReducedModel
-        Gives the nonlinearities and the linear state space at ``solution.omega``.
-    solution : HarmonicSolution
-        A solution of ``model``.
-    method : {"monodromy", "hill"}
-        :func:`floquet_multipliers` or :func:`hill_multipliers` (``"hill"``; any other
-        value is the monodromy).
-
-    Returns
-    -------
-    HarmonicSolution
-        A copy with ``multipliers`` attached; ``solution`` itself when it did not converge
-        or the model has no state space.
-    """
-    ss = model.linear_state_space(solution.omega)
-    if ss is None or not solution.converged:
-        return solution
-    if method == "hill":
-        mu = hill_multipliers(ss, model.nonlinearities, solution.harmonics, solution.omega)
-    else:
-        mu = floquet_multipliers(ss, model.nonlinearities, solution.harmonics, solution.omega)
-    return solution.with_multipliers(mu)
