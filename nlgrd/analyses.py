@@ -224,6 +224,8 @@ def sweep(
             "coexisting", f"searches period-1 orbits beside the sweep: give period auto or 1, got {period!r}"
         )
     if isinstance(system, ReducedModel):
+        if period not in ("auto", 1):
+            raise ModelError("period", f"a model built from matrices is swept at period 1, got {period!r}")
         return _matrix_sweep(
             system, hz, rpm, H, directions, stability, progress, coexisting, coexisting_progress, options
         )
