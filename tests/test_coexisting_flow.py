@@ -65,8 +65,9 @@ def lifted_branch(res) -> list[tuple[str, float]]:
 @pytest.fixture(scope="module")
 def chain_with_defaults():
     """``nlgrd.sweep`` of the preloaded chain with defaults, 51 frequencies 1.25-1.45 rad/s
-    both ways, ``coexisting=True`` (~10 min of CPU under load: the sweep, four jumps'
-    searches, nine branches cut on the exact flow, their bifurcations)."""
+    both ways, ``coexisting=True``: the sweep, the searches beside its three settled
+    jumps, nine branches cut on the exact flow and their bifurcations (428 s of CPU, 21 min
+    at load 4-6, 2026-12-07)."""
     import time
     import warnings
 
@@ -80,7 +81,7 @@ def chain_with_defaults():
     return res
 
 
-@pytest.mark.slow  # the default sweep and the coexisting search (~10 min of CPU)
+@pytest.mark.slow  # the default sweep and the coexisting search (~7 min of CPU)
 def test_the_default_flow_reports_the_lifted_off_branch(chain_with_defaults):
     """Neither default sweep visits the lifted-off branch; ``coexisting=True`` reports it,
     and on its down part its period doubling, Neimark-Sacker point and fold, in that order,
@@ -107,22 +108,42 @@ def test_the_default_flow_reports_the_lifted_off_branch(chain_with_defaults):
     assert lifted_branch(replace(res, coexisting=None)) == []  # coexisting=False: nothing
 
 
-@pytest.mark.slow  # with the fixture above
-def test_the_branches_are_in_the_table_and_the_figure(chain_with_defaults):
+def test_the_branches_are_in_the_table_and_the_figure():
     """The sweep's rows first (``branch`` "sweep", the sweep's own table unchanged), then each
-    branch's rows, stable and unstable with their outputs; ``plot`` draws them."""
+    branch's rows, stable and unstable with their outputs (a sweep that has no stable
+    response there writes none); the bifurcations' table flags each; ``plot`` draws the
+    branch under its name. A sweep of six rows, one branch with an unstable row."""
     import matplotlib
 
+    from nlgrd.nonlinear.models.link_coexisting import metric_links
+    from nlgrd.nonlinear.results.coexisting_results import Bifurcation, CoexistingBranch
+    from nlgrd.nonlinear.results.link_results import LinkSweepResult
+
     matplotlib.use("Agg")
-    res = chain_with_defaults
+    sweep = _branch([True] * 6, [0.5] * 6)
+    branch = _branch(
+        [True, True, False, False, True, True], [0.5, 0.5, -1.2, -1.3, 0.5, 0.5], values=np.arange(6.0) + 2
+    )
+    found = (Bifurcation("down", "period doubling", 1.35, 1.3, 1.4, True),)
+    co = CoexistingBranch("coexisting 1", branch, metric_links(branch, branch.converged), found)
+    plain = LinkSweepResult(sweep, metric_links(sweep, sweep.converged))
+    res = replace(plain, coexisting=(co,))
     frame = res.to_frame()
     mine = frame[frame["branch"] == "sweep"].drop(columns="branch").reset_index(drop=True)
-    pd.testing.assert_frame_equal(mine, replace(res, coexisting=None).to_frame())
-    rows = frame[frame["branch"] != "sweep"]
-    assert set(rows["branch"]) == {b.name for b in res.coexisting}
-    conv = rows["converged"].astype(bool)
-    assert np.isfinite(rows.loc[conv, "model.force_max [N]"].to_numpy(float)).all()
-    assert (~rows.loc[conv, "stable"].astype(bool)).any()  # unstable rows drawn too
+    pd.testing.assert_frame_equal(mine, plain.to_frame())
+    rows = frame[frame["branch"] == "coexisting 1"]
+    assert len(rows) == 6 and list(rows["verdict"]) == [
+        "stable",
+        "stable",
+        "unstable",
+        "unstable",
+        "stable",
+        "stable",
+    ]
+    np.testing.assert_allclose(rows["model.force_max [N]"].to_numpy(float), np.arange(6.0) + 2)
+    assert "branch" not in plain.to_frame().columns  # no search: the table as before
+    table = res.bifurcations()
+    assert list(table["confirmed"]) == [True] and list(table["kind"]) == ["period doubling"]
     labels = [t.get_text() for t in res.plot().get_legend().get_texts()]
     assert any("coexisting 1" in t for t in labels), labels
 
@@ -198,12 +219,13 @@ def test_cli_refuses_coexisting_with(extra, tmp_path, capsys):
     assert status == 2 and len(err) == 1 and "--coexisting" in err[0], err
 
 
-@pytest.mark.slow  # Kubo's rig over its up jump at H = 5: the sweep and two searches at H = 9
 def test_an_fe_model_over_its_jump(tmp_path, capsys):
     """Kubo's rig (an FE model with a mesh of varying stiffness: no exact flow) swept up
     over its jump (10 000 -> 10 500 rpm at H = 5) with ``--coexisting``: exit 0, the
     branches (if any) in the CSV under their names with the one line saying what is done
-    instead of the hop test, every bifurcation in the table unconfirmed; no traceback."""
+    instead of the hop test, every bifurcation in the table unconfirmed; no traceback. The
+    sweep and two searches at H = 9: 6 s of CPU, 18 s at load 4 (2026-12-07: two branches,
+    10 000 rpm alone and 10 000-11 000 rpm)."""
     out = tmp_path / "k.csv"
     argv = ["sweep", str(ROOT / "data/case_studies/kubo.toml"), "--rpm", "9500:11000:4", "--harmonics", "5"]
     status = main([*argv, "--direction", "up", "--coexisting", "--no-time-domain", "--out", str(out)])
