@@ -176,12 +176,12 @@ def cmd_sweep(args) -> int:
     res = view.sweep(
         omegas, args.harmonics, args.direction, not args.no_stability, period, ProgressBar("sweep")
     )
-    found = _coexisting(model, res) if getattr(args, "coexisting", False) else None
+    beside = _coexisting(model, res) if getattr(args, "coexisting", False) else None
     res = time_answers(args, system, res, period, view.time_model())
-    if found is not None:  # the branches beside the harmonic-balance sweep's jumps
+    if beside is not None:  # the branches beside the harmonic-balance sweep's jumps
         import dataclasses
 
-        res = dataclasses.replace(res, coexisting=found.coexisting, coexisting_note=found.coexisting_note)
+        res = dataclasses.replace(res, coexisting=beside.coexisting, coexisting_note=beside.coexisting_note)
     found = None
     if search is not None:
         from nlgrd.nonlinear.models.model_views import search_beside
