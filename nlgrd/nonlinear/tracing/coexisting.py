@@ -30,7 +30,10 @@ Each branch is returned as a SweepResult of its own; the sweep is not changed.
 its folds and its changes of stability.
 
 Only the :class:`~nlgrd.nonlinear.hb.harmonic_balance.ReducedModel` contract is used: any
-model, any law.
+model, any law. The default flows offer it as an option (``nlgrd.sweep(...,
+coexisting=True)``, ``nlgrd sweep --coexisting``:
+:func:`nlgrd.nonlinear.models.link_coexisting.with_coexisting`, which also locates and
+flags the branches' bifurcations).
 
 Hops. A branch is followed by natural continuation in ω
 (:func:`~nlgrd.nonlinear.tracing.subharmonic.follow_period`): past a fold Newton may land
