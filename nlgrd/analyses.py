@@ -166,14 +166,19 @@ def sweep(
     progress: Callable[[int, int], None] | None = None,
     time_domain: bool = True,
     time_options: dict | None = None,
+    coexisting: bool = False,
+    coexisting_progress: Callable[[int, int], None] | None = None,
     **options,
 ):
     """Up and/or down harmonic-balance sweep of any model.
 
     Parameters
     ----------
-    system : RotorSystem
-        The model (one mesh or several, clearances, unbalance).
+    system : RotorSystem or ReducedModel
+        The model (one mesh or several, clearances, unbalance), or a model built from
+        matrices (:class:`~nlgrd.nonlinear.hb.harmonic_balance.ReducedModel`: speeds as
+        ``hz``, period 1, H chosen on the library's ladder, no time-domain answers; its
+        outputs ``model.<quantity> [unit]``, its first law's).
     rpm, hz : array_like
         Reference shaft speeds [rpm] or base frequencies [Hz]; one of them.
     H : int, optional
@@ -194,6 +199,14 @@ def sweep(
         "time domain" or "chaotic", values with their uncertainty).
     time_options : dict, optional
         Options of :func:`nlgrd.timedomain.time_answer.time_answer` (``max_periods``, ...).
+    coexisting : bool
+        Also search for the period-1 branches that coexist with the sweep's beside its
+        jumps (at most 4) and follow them over the grid
+        (:func:`nlgrd.nonlinear.models.link_coexisting.with_coexisting`: minutes; needs
+        ``stability``). The result's table gains a ``branch`` column and their rows, its
+        ``bifurcations()`` their bifurcations, each ``confirmed`` on the exact flow or not.
+    coexisting_progress : callable, optional
+        ``coexisting_progress(i, n)`` per frequency searched at.
     **options
         Further options of :func:`nlgrd.nonlinear.models.link_model.link_sweep` and
         :func:`nlgrd.nonlinear.tracing.sweep.sweep` (``tol``, ``jump``, ...;
@@ -205,14 +218,35 @@ def sweep(
         Every link's and linear bearing's outputs per point, with ``to_frame()``,
         ``jumps()`` and ``plot()``.
     """
+    from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
     from nlgrd.nonlinear.models.link_model import link_sweep
+    from nlgrd.nonlinear.tracing.harmonic_convergence import LADDER
     from nlgrd.timedomain.sweep_answers import answer_sweep
 
+    if coexisting and not stability:
+        raise ModelError("coexisting", "the coexisting branches need stability: drop stability=False")
+    if coexisting and period not in ("auto", 1):
+        raise ModelError(
+            "coexisting", f"searches period-1 orbits beside the sweep: give period auto or 1, got {period!r}"
+        )
+    if isinstance(system, ReducedModel):
+        if period not in ("auto", 1):
+            raise ModelError("period", f"a model built from matrices is swept at period 1, got {period!r}")
+        return _matrix_sweep(
+            system, hz, rpm, H, directions, stability, progress, coexisting, coexisting_progress, options
+        )
     omegas = _omegas(system, rpm, hz)
     m = model(system)
     rtol = {"rtol": options.pop("harmonic_rtol")} if "harmonic_rtol" in options else {}
     kw = dict(directions=directions, stability=stability, progress=progress, period=period)
     res = link_sweep(m, omegas, H, **kw, **rtol, **options)
+    if coexisting:
+        from nlgrd.nonlinear.models.link_coexisting import with_coexisting
+
+        ladder = [h * m.top_order for h in LADDER]
+        found = with_coexisting(
+            res, m.reduced, model=m, ladder=ladder, jumps=res.jumps(), progress=coexisting_progress
+        )
     res = answer_sweep(
         res,
         system=system,
@@ -223,7 +257,35 @@ def sweep(
         **rtol,
         **(time_options or {}),
     )
+    if coexisting:  # the branches beside the harmonic-balance sweep's jumps, kept
+        import dataclasses
+
+        res = dataclasses.replace(res, coexisting=found.coexisting, coexisting_note=found.coexisting_note)
     return _with_speed(res, system, rpm)
+
+
+def _matrix_sweep(m, hz, rpm, H, directions, stability, progress, coexisting, coexisting_progress, options):
+    """:func:`sweep` of a model built from matrices (a ReducedModel): period 1, no links."""
+    from nlgrd.nonlinear.models.link_coexisting import metric_links, with_coexisting
+    from nlgrd.nonlinear.results.link_results import LinkSweepResult
+    from nlgrd.nonlinear.tracing.harmonic_convergence import converged_sweep
+    from nlgrd.nonlinear.tracing.sweep import sweep as hb_sweep
+
+    if rpm is not None or hz is None:
+        raise ModelError("hz", "a model built from matrices has no shaft: give its base frequencies as hz")
+    omegas = 2 * math.pi * np.atleast_1d(np.asarray(hz, dtype=float))
+    if omegas.ndim != 1 or not np.all(np.isfinite(omegas)) or np.any(omegas <= 0):
+        raise ModelError("hz", "must be positive finite frequencies")
+    if "harmonic_rtol" in options:
+        options["rtol"] = options.pop("harmonic_rtol")
+    kw = dict(stability=stability, progress=progress, **options)
+    if H is None:
+        res = converged_sweep(m, omegas, directions, **kw)
+    else:
+        kw.pop("rtol", None)
+        res = hb_sweep(m, omegas, int(H), directions, **kw)
+    out = LinkSweepResult(res, metric_links(res, res.converged & ~np.asarray(res.no_stable, dtype=bool)))
+    return with_coexisting(out, m, progress=coexisting_progress) if coexisting else out
 
 
 def continuation(

@@ -5,6 +5,10 @@ refused in one line on stderr (exit 2) for a reason of physics listed in REFUSAL
 refusal that exists only because of the code path is an ``xfail(strict=True)`` in
 PATH_ONLY, so that it fails the day it is fixed and is then moved out of the table.
 
+``--coexisting`` at this size finds no jump to search beside (3 points below the first
+strong resonance): the cell checks the flow (the ``branch`` column, the bifurcations'
+table, no refusal); the branches themselves: tests/test_coexisting_flow.py.
+
 The numbers themselves are checked elsewhere (tests/test_cli*.py, tests/test_link_*.py,
 tests/test_orbit_search.py ...); this is the coverage of options by models."""
 
@@ -53,6 +57,7 @@ def _options(model: str) -> dict[str, list[str]]:
         "search-at": ["--search-at", mid, "--search-periods", "1"],
         "period 3": ["--period", "3", "--search-at", mid],
         "no-stability": ["--no-stability"],
+        "coexisting": ["--coexisting"],
     }
 
 
@@ -118,6 +123,8 @@ def test_every_sweep_option_on_every_shipped_model(model, option, tmp_path, caps
             assert (tmp_path / f"s_{name}.csv").exists()
     if option == "search-at":
         _check_search(out, tmp_path / "s_orbits.csv")
+    if option == "coexisting":  # the branches' rows (none without a jump) and bifurcations
+        assert "branch" in pd.read_csv(out).columns and (tmp_path / "s_bifurcations.csv").exists()
 
 
 def _check_search(sweep_csv: Path, orbits_csv: Path) -> None:

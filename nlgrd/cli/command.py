@@ -227,6 +227,15 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help=f"periods sought by --search-at, in mesh periods (default {DEFAULT_PERIODS}; at most 6)",
     )
+    sw.add_argument(
+        "--coexisting",
+        action="store_true",
+        help="also search beside the sweep's jumps (at most 4) for the mesh-periodic branches that "
+        "coexist with its own and that no sweep visits, and follow them over the grid, stable or "
+        "not (minutes): their rows are appended to the CSV (column branch: 'sweep', 'coexisting k'), "
+        "drawn on the PNG, and their bifurcations written to <out>_bifurcations.csv, each confirmed "
+        "on the exact flow or flagged unconfirmed",
+    )
     sw.add_argument("--no-stability", action="store_true", help="skip the Floquet stability of each point")
     sw.add_argument(
         "--no-time-domain",

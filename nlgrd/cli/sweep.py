@@ -140,6 +140,8 @@ def cmd_sweep(args) -> int:
             "periods (each start solves the whole revolution); sweep with --period auto",
             args.model,
         )
+    if getattr(args, "coexisting", False):
+        _check_coexisting_options(args, period)
     if period != "auto" and period >= 3:
         _check_period_options(args, period)
         search = (search[0] if search is not None else default_search(values), (period,))
@@ -170,7 +172,12 @@ def cmd_sweep(args) -> int:
     res = view.sweep(
         omegas, args.harmonics, args.direction, not args.no_stability, period, ProgressBar("sweep")
     )
+    beside = _coexisting(model, res) if getattr(args, "coexisting", False) else None
     res = time_answers(args, system, res, period, view.time_model())
+    if beside is not None:  # the branches beside the harmonic-balance sweep's jumps
+        import dataclasses
+
+        res = dataclasses.replace(res, coexisting=beside.coexisting, coexisting_note=beside.coexisting_note)
     found = None
     if search is not None:
         from nlgrd.nonlinear.models.model_views import search_beside
@@ -186,7 +193,55 @@ def cmd_sweep(args) -> int:
     )
     if extra is not None:
         print(f"wrote {extra[1]}")
+    if res.coexisting is not None:
+        _coexisting_summary(res, unit, out)
     return _summary(args, view, res, unit, out, png, found is not None)
+
+
+def _check_coexisting_options(args, period) -> None:
+    """``--coexisting`` searches period-1 orbits beside a sweep's jumps: a sweep with stability."""
+    if args.continuation:
+        raise ModelError("--coexisting", "searches beside a sweep's jumps, not a --continuation")
+    if args.no_stability:
+        raise ModelError(
+            "--coexisting", "the coexisting branches need their Floquet stability: drop --no-stability"
+        )
+    if period not in ("auto", 1):
+        raise ModelError(
+            "--coexisting", f"searches mesh-periodic orbits: give --period auto or 1, got {period}"
+        )
+
+
+def _coexisting(model, res):
+    """``res`` with its coexisting branches
+    (:func:`~nlgrd.nonlinear.models.link_coexisting.with_coexisting`)."""
+    from nlgrd.nonlinear.models.link_coexisting import with_coexisting
+    from nlgrd.nonlinear.tracing.harmonic_convergence import LADDER
+
+    return with_coexisting(
+        res,
+        model.reduced,
+        model=model,
+        ladder=[h * model.top_order for h in LADDER],
+        jumps=res.jumps(),
+        progress=ProgressBar("coexisting: searches"),
+        locate_progress=ProgressBar("coexisting: bifurcations"),
+    )
+
+
+def _coexisting_summary(res, unit, out) -> None:
+    """One line on the coexisting branches (how many, their ranges, their bifurcations), the
+    note where the model cannot be shot, and the bifurcations' table written."""
+    parts = []
+    for b in res.coexisting:
+        span = b.span()
+        where = f"{unit(span[0])}-{unit(span[1])} {unit.name}" if span else "no converged point"
+        n, sure = len(b.bifurcations), sum(f.confirmed for f in b.bifurcations)
+        parts.append(f"{b.name} {where} ({n} bifurcations, {sure} confirmed)")
+    jumps = "" if res.jumps() else " (the sweep has no jump to search beside)"
+    print(f"coexisting: {len(res.coexisting)} branches{jumps}" + (": " + "; ".join(parts) if parts else ""))
+    if res.coexisting_note and res.coexisting:
+        print(res.coexisting_note)
 
 
 def time_answers(args, system, res, period, model=None):
@@ -363,6 +418,8 @@ def _write_sweep(
     )
     with Outputs() as files:
         files.csv(frame, out)
+        if getattr(res, "coexisting", None) is not None:
+            files.csv(res.bifurcations(), _beside(out, "bifurcations"))
         if found is not None:
             files.csv(floor_rounding(written_frame(found[0])), _beside(out, "orbits"))
             files.csv(found[1], _beside(out, "branches"))
@@ -436,6 +493,8 @@ def _summary(args, view, res, unit, out, png, orbits: bool = False) -> int:
     wrote = f"wrote {out} and {png}" + (
         f", {_beside(out, 'orbits')} and {_beside(out, 'branches')}" if orbits else ""
     )
+    if getattr(res, "coexisting", None) is not None:
+        wrote += f"; the coexisting branches' bifurcations {_beside(out, 'bifurcations')}"
     if len(bad):
         print(
             f"not converged (NaN in the CSV, flagged converged = False) at {unit.name}: "

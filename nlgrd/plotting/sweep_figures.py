@@ -47,7 +47,9 @@ def plot_link_sweep(
     Parameters
     ----------
     frame : DataFrame
-        The sweep's table (``LinkSweepResult.to_frame()`` with the range's column ``x``).
+        The sweep's table (``LinkSweepResult.to_frame()`` with the range's column ``x``);
+        with a ``branch`` column, the rows of each coexisting branch (all but "sweep") are
+        drawn as the followed branches are (:func:`draw_branches`).
     x : str
         Abscissa column ("shaft_speed [rpm]" or "base_frequency [Hz]").
     column : str
@@ -69,13 +71,18 @@ def plot_link_sweep(
     new = ax is None
     if new:
         _, ax = plt.subplots(figsize=(7, 4))
+    coexisting = None
+    if "branch" in frame.columns:
+        mine = (frame["branch"] == "sweep").to_numpy(dtype=bool)
+        frame, coexisting = frame[mine], frame[~mine]
     plot_sweep_frame(frame, x, column, ax, label="sweep", jumps=jumps)
     ax.set_xlabel(axis_label(x))
     ax.set_ylabel(axis_label(column))
     if title:
         ax.set_title(title, fontsize=9)
-    if branches is not None:
-        draw_branches(ax, branches, x, column.split(" [")[0])
+    for part in (branches, coexisting):
+        if part is not None and len(part):
+            draw_branches(ax, part, x, column.split(" [")[0])
     place_legend(ax, fontsize=7)
     if new:
         ax.figure.tight_layout()

@@ -175,6 +175,11 @@ class LinkSweepResult:
         (:func:`with_speed`); None: not known, no speed column.
     speed_unit : {"Hz", "rpm"}
         How the speeds were given: "rpm" puts the shaft speed first.
+    coexisting : tuple of CoexistingBranch or None
+        The coexisting branches searched beside the sweep's jumps
+        (:mod:`nlgrd.nonlinear.results.coexisting_results`); None: not searched.
+    coexisting_note : str
+        One line on how they were checked where the model has no exact flow ("" else).
 
     :attr:`links` holds the outputs in SI units as the engine computed them; the table
     (:meth:`to_frame`) writes them in the units of docs/conventions.md ("Column names").
@@ -185,18 +190,50 @@ class LinkSweepResult:
     bearings: tuple = ()
     speed_per_base: float | None = None
     speed_unit: str = "Hz"
+    coexisting: tuple | None = None
+    coexisting_note: str = ""
 
     def to_frame(self) -> pd.DataFrame:
         """The sweep's table: ``base_frequency [Hz]`` (a one-mesh model's mesh frequency)
         and ``shaft_speed [rpm]`` (:func:`with_speed`), the points' columns
         and every link's and linear bearing's ``<name>.<quantity> [unit]`` in written units.
+        With :attr:`coexisting` searched, a ``branch`` column: "sweep" on the sweep's rows,
+        then the rows of each coexisting branch ("coexisting k", stable and unstable rows
+        with their outputs; :func:`~nlgrd.nonlinear.results.coexisting_results.with_branches`).
 
         Returns
         -------
         pandas.DataFrame
         """
         frame = with_links(self.result.to_frame(), self._answered_amplitudes())
-        return with_speed(frame, self.result.omega, self.speed_per_base, self.speed_unit)
+        frame = with_speed(frame, self.result.omega, self.speed_per_base, self.speed_unit)
+        if self.coexisting is None:
+            return frame
+        from nlgrd.nonlinear.results.coexisting_results import with_branches
+
+        parts = [
+            with_speed(
+                with_links(_all_rows(b.result).to_frame(), b.links),
+                b.result.omega,
+                self.speed_per_base,
+                self.speed_unit,
+            )
+            for b in self.coexisting
+        ]
+        return with_branches(frame, parts, [b.name for b in self.coexisting])
+
+    def bifurcations(self) -> pd.DataFrame:
+        """The bifurcations reported on the coexisting branches, each ``confirmed`` on the
+        exact flow or not (:func:`~nlgrd.nonlinear.results.coexisting_results.bifurcation_frame`;
+        empty when none was searched).
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        from nlgrd.nonlinear.results.coexisting_results import bifurcation_frame
+
+        return bifurcation_frame(self.coexisting or (), self.speed_per_base)
 
     def _answered_amplitudes(self) -> pd.DataFrame:
         """:attr:`links` with the first mesh's ``dte_amp_<k>`` of the points a time
@@ -266,6 +303,14 @@ class LinkSweepResult:
         column = written_name(link_column(self.links, quantity, self.bearings))
         jumps = jump_table(self.jumps())  # the jumps the command line lists
         return plot_link_sweep(self.to_frame(), "base_frequency [Hz]", column, None, ax=ax, jumps=jumps)
+
+
+def _all_rows(branch: SweepResult) -> SweepResult:
+    """A coexisting branch whose table keeps the outputs of its unstable rows too (a branch
+    is drawn stable and unstable; its ``stable`` column tells which)."""
+    from dataclasses import replace
+
+    return replace(branch, no_stable=np.zeros(len(branch), dtype=bool))
 
 
 def metric_names(link) -> list[str]:

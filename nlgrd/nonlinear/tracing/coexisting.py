@@ -30,7 +30,10 @@ Each branch is returned as a SweepResult of its own; the sweep is not changed.
 its folds and its changes of stability.
 
 Only the :class:`~nlgrd.nonlinear.hb.harmonic_balance.ReducedModel` contract is used: any
-model, any law.
+model, any law. The default flows offer it as an option (``nlgrd.sweep(...,
+coexisting=True)``, ``nlgrd sweep --coexisting``:
+:func:`nlgrd.nonlinear.models.link_coexisting.with_coexisting`, which also locates and
+flags the branches' bifurcations).
 
 Hops. A branch is followed by natural continuation in ω
 (:func:`~nlgrd.nonlinear.tracing.subharmonic.follow_period`): past a fold Newton may land
@@ -136,7 +139,7 @@ PD_OFFSET = 1.5e-3
 PD_KICKS = (0.05, 0.2)
 
 
-def search_frequencies(result: SweepResult, max_jumps: int = MAX_JUMPS) -> list[float]:
+def search_frequencies(result: SweepResult, max_jumps: int = MAX_JUMPS, jumps=None) -> list[float]:
     """The rows beside the sweep's first ``max_jumps`` jumps that leave a real branch end:
     each jump's last frequency on the branch it leaves and its first on the branch it lands
     on, each once.
@@ -153,6 +156,9 @@ def search_frequencies(result: SweepResult, max_jumps: int = MAX_JUMPS) -> list[
         A sweep (:meth:`~nlgrd.nonlinear.results.sweep_results.SweepResult.jumps`).
     max_jumps : int
         Jumps taken, at most [-].
+    jumps : list of Jump, optional
+        The sweep's jumps; default ``result.jumps()`` (a link sweep gives its links' own,
+        :meth:`~nlgrd.nonlinear.results.link_results.LinkSweepResult.jumps`).
 
     Returns
     -------
@@ -162,7 +168,7 @@ def search_frequencies(result: SweepResult, max_jumps: int = MAX_JUMPS) -> list[
     out: list[float] = []
     settled = result.converged & result.verdict_converged
     taken = 0
-    for jump in result.jumps():
+    for jump in result.jumps() if jumps is None else jumps:
         if taken >= max_jumps:
             break
         rows = np.nonzero(result.direction == jump.direction)[0]
@@ -197,6 +203,9 @@ def coexisting_branches(
     n_starts: int = N_STARTS,
     rtol: float = OUTPUT_RTOL,
     tol: float = 1e-10,
+    ladder=None,
+    jumps=None,
+    progress=None,
 ) -> list[SweepResult]:
     """Period-1 branches found beside the sweep's jumps that the sweep does not visit
     (module notes), each followed over the sweep's grid with settled verdicts.
@@ -219,6 +228,13 @@ def coexisting_branches(
         Largest accepted estimated relative error of the branches' outputs [-].
     tol : float
         Newton's tolerance (relative residual).
+    ladder : sequence of int, optional
+        The rungs of H (:func:`~nlgrd.nonlinear.tracing.harmonic_convergence.next_harmonics`;
+        a link model's: the ladder times its ``top_order``); default the library's.
+    jumps : list of Jump, optional
+        The sweep's jumps (:func:`search_frequencies`).
+    progress : callable, optional
+        ``progress(i, n)`` after each of the n frequencies searched at.
 
     Returns
     -------
@@ -227,16 +243,20 @@ def coexisting_branches(
         found, converged where the branch exists, ``verdict_converged`` where its verdict
         is settled; ``source`` names where it was found.
     """
+    rungs = {} if ladder is None else {"ladder": ladder}
     if H is None:
-        H = next_harmonics(next_harmonics(int(result.H)))
-    H_check = next_harmonics(H)
+        H = next_harmonics(next_harmonics(int(result.H), **rungs), **rungs)
+    H_check = next_harmonics(H, **rungs)
     omegas = np.unique(np.asarray(result.omega, dtype=float))
 
     def model_of(nu: int) -> ReducedModel:
         return model
 
     branches: list[SweepResult] = []
-    for w in search_frequencies(result, max_jumps):
+    at = search_frequencies(result, max_jumps, jumps)
+    for k, w in enumerate(at):
+        if progress is not None:
+            progress(k, len(at))
         for orbit in search_orbits(model_of, w, H, (1,), n_starts=n_starts, tol=tol):
             z = np.asarray(orbit.harmonics)
             if _known(z, w, [result, *branches]):
@@ -248,6 +268,8 @@ def coexisting_branches(
             branch = cut_at_first_hop(model, branch)
             state = "stable" if orbit.stable else "unstable"
             branches.append(replace(branch, source=f"{branch.source}; found at {w:.6g} rad/s ({state})"))
+    if progress is not None and at:
+        progress(len(at), len(at))
     return branches
 
 
