@@ -22,12 +22,7 @@ STALL_WINDOW = 25
 
 
 def _newton(
-    problem: ReducedProblem,
-    z: NDArray,
-    tol: float,
-    max_iter: int,
-    stall: bool = False,
-    max_step: float | None = None,
+    problem: ReducedProblem, z: NDArray, tol: float, max_iter: int, stall: bool = False
 ) -> tuple[NDArray, float, int, str]:
     """Damped Newton with Armijo backtracking on ||R||²; returns (z, relres, iterations, msg).
 
@@ -36,8 +31,6 @@ def _newton(
     fell by less than 10 % over ``STALL_WINDOW`` iterations: Newton is then stuck near a
     minimum of ||R|| that is not a root, as when started from a branch that has folded
     away. Without it, slow progress at grazing points is given all ``max_iter``.
-    ``max_step`` caps each Newton direction's largest component (a trust region in the
-    unit of z).
     """
     R, J, scale = problem.residual_jacobian(z)
     rel = np.max(np.abs(R)) / scale
@@ -58,9 +51,6 @@ def _newton(
             dz = -np.linalg.solve(J, R)
         except np.linalg.LinAlgError:
             dz = -np.linalg.lstsq(J, R, rcond=None)[0]
-        longest = float(np.max(np.abs(dz), initial=0.0))
-        if max_step is not None and longest > max_step:
-            dz *= max_step / longest
         if not np.all(np.isfinite(dz)):
             msg = "singular Jacobian"
             break
@@ -191,7 +181,6 @@ def solve(
     fallback: bool = True,
     relaxation: float = 1.0,
     stall: bool = False,
-    max_step: float | None = None,
 ) -> HarmonicSolution:
     """Solve the reduced harmonic-balance problem at one frequency.
 
@@ -218,10 +207,6 @@ def solve(
     stall : bool
         Let Newton give up early when it stalls (see ``_newton``): for sweeps that have a
         better move than grinding on, such as following the curve through a fold.
-    max_step : float, optional
-        Newton only: the largest change of any harmonic per iteration (unit of z, [m]),
-        e.g. a fraction of a law's gap (:func:`~nlgrd.nonlinear.tracing.orbit_search.search_orbits`);
-        None: the full Newton step.
 
     Returns
     -------
@@ -248,7 +233,7 @@ def solve(
     if not np.all(np.isfinite(z)):
         z = problem.linear_solution()
     if method == "newton":
-        zr, rel, it, msg = _newton(problem, z, tol, max_iter, stall, max_step)
+        zr, rel, it, msg = _newton(problem, z, tol, max_iter, stall)
     elif method == "quasi-linear":
         zr, rel, it, msg = _quasi_linear(problem, z, tol, max_iter, relaxation)
     elif method == "hybr":

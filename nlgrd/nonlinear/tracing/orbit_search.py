@@ -25,10 +25,6 @@ period-ν harmonic balance (base ω/ν, :mod:`nlgrd.nonlinear.tracing.subharmoni
   from an arbitrary initial state (:meth:`nlgrd.timedomain.sdof.TimeResponse.harmonics`
   of ``integrate(pair.subharmonic(nu), omega / nu, state0)``).
 
-Newton's step from each start is capped to :data:`STEP_FRACTION` times the largest of those
-length scales per iteration, so that its path does not turn on rounding (the same orbits
-under every BLAS kernel).
-
 Each converged orbit is classified by its minimal period p
 (:func:`~nlgrd.nonlinear.fourier.periods.period_of`): its components at base harmonics that
 are not multiples of ν/p are below :data:`PERIOD_TOL_FACTOR` times Newton's tolerance
@@ -72,12 +68,6 @@ START_RANGE = (0.1, 10.0)
 #: size) is solver error, not motion: the orbit has the shorter period [-]. The harmonics of
 #: a converged orbit are known to about the tolerance times the Jacobian's conditioning.
 PERIOD_TOL_FACTOR = 1e4
-#: Newton's step in the search is capped to this multiple of the model's largest length
-#: scale (:func:`start_scales`) per iteration [-]: a full Newton step from a far start
-#: crosses whole contact regimes, and its path then turns on rounding (a start reached
-#: Kubo's period-2 orbit under one BLAS kernel only); capped, the paths are the same on
-#: every kernel (tests/test_period_doubling_fe.py).
-STEP_FRACTION = 0.5
 #: Every SHAPED_EVERY-th perturbed start is the linear response's shape scaled [-].
 SHAPED_EVERY = 4
 #: The owner of a single-DOF model's mesh metrics in :meth:`OrbitSearchResult.to_frame`
@@ -373,15 +363,13 @@ def search_orbits(
         tries = [
             (np.asarray(z, dtype=float), f"user start {i}") for i, (p, z) in enumerate(starts) if p == nu
         ]
-        # the linear response's harmonics, one row per nonlinear coordinate
-        z_lin = problem.linear_solution().reshape(problem.n_coords, -1)
-        scales = [amplitude] if amplitude is not None else start_scales(model.nonlinearities, z_lin)
-        if n_starts:
+        if n_starts:  # the linear response's harmonics, one row per nonlinear coordinate
+            z_lin = problem.linear_solution().reshape(problem.n_coords, -1)
+            scales = [amplitude] if amplitude is not None else start_scales(model.nonlinearities, z_lin)
             tries += perturbed_starts(z_lin, nu, scales, int(n_starts), rng)
         own = max((nl.scale() for nl in model.nonlinearities), default=0.0)
-        cap = STEP_FRACTION * max(scales) if scales else None
         for z0, label in tries:
-            sol = solve(problem, z0, tol=tol, max_iter=max_iter, fallback=False, stall=True, max_step=cap)
+            sol = solve(problem, z0, tol=tol, max_iter=max_iter, fallback=False, stall=True)
             if not sol.converged:
                 continue
             z = sol.harmonics
