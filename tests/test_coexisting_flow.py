@@ -65,25 +65,33 @@ def lifted_branch(res) -> list[tuple[str, float]]:
 @pytest.fixture(scope="module")
 def chain_with_defaults():
     """``nlgrd.sweep`` of the preloaded chain with defaults, 51 frequencies 1.25-1.45 rad/s
-    both ways, ``coexisting=True``: the sweep, the searches beside its three settled
-    jumps, nine branches cut on the exact flow and their bifurcations (428 s of CPU, 21 min
-    at load 4-6, 2026-12-07)."""
+    both ways, then its coexisting branches (``with_coexisting``, what ``coexisting=True``
+    runs) beside the first jump of the up sweep, which leaves the closed stop at 1.382 rad/s:
+    the lifted-off branch starts there. ``coexisting=True`` searches beside every settled
+    jump (nine branches, 428 s of CPU at load 4-6, 2026-12-07, the same lifted-off branch
+    and figures); the one jump costs 64 s + about 140 s. The flag's wiring is tested fast on
+    Kubo (:func:`test_an_fe_model_over_its_jump`)."""
     import time
     import warnings
 
+    from nlgrd.nonlinear.models.link_coexisting import with_coexisting
     from nlgrd.nonlinear.tracing.harmonic_convergence import HarmonicsWarning
 
     t0 = time.process_time()
+    chain = preloaded_chain()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", HarmonicsWarning)
-        res = nlgrd.sweep(preloaded_chain(), hz=np.linspace(1.25, 1.45, 51) / (2 * np.pi), coexisting=True)
+        res = nlgrd.sweep(chain, hz=np.linspace(1.25, 1.45, 51) / (2 * np.pi))
+        first = [j for j in res.result.jumps() if j.direction == "up"][:1]
+        assert abs(first[0].omega_from - 1.382) < 1e-9, first  # leaving the closed stop
+        res = with_coexisting(res, chain, jumps=first)
     print(f"{len(res.coexisting)} branches, {time.process_time() - t0:.0f} s CPU")
     return res
 
 
-@pytest.mark.slow  # the default sweep and the coexisting search (~7 min of CPU)
+@pytest.mark.slow  # the default sweep and the coexisting search beside one jump (~3.5 min of CPU)
 def test_the_default_flow_reports_the_lifted_off_branch(chain_with_defaults):
-    """Neither default sweep visits the lifted-off branch; ``coexisting=True`` reports it,
+    """Neither default sweep visits the lifted-off branch; the coexisting branches report it,
     and on its down part its period doubling, Neimark-Sacker point and fold, in that order,
     each confirmed on the exact flow and within 1e-3 rad/s of the reference's (the issue's
     acceptance; the library locates them to 1e-6 relative, the fold to 1e-9). Every other

@@ -473,47 +473,9 @@ def first_jump(default_both):
     return model, branches
 
 
-@pytest.mark.slow  # on top of the default sweep and first_jump: locate_bifurcations on the
-# branches (~80 s of CPU)
-def test_coexisting_branch_beside_the_default_sweeps_jump(first_jump):
-    """Neither default sweep visits the lifted-off branch (stable only where the closed stop
-    is stable too). coexisting_branches searches beside the sweep's first jump (the up
-    sweep leaving the closed stop at 1.382 rad/s, its fold), follows the new orbits at the
-    rung above H', settles their verdicts and cuts each branch at its first hop
-    (cut_at_first_hop); locate_bifurcations on the branch followed down from the
-    lifted-off orbit at 1.382 rad/s (flip-unstable there) reports, in sweep order, its
-    period doubling, Neimark-Sacker point and fold, each the reference's (:data:`PD_LIFTED`,
-    :data:`NS_LIFTED`, :data:`FOLD`, piecewise_reference to 1e-9) within 1e-3 rad/s (the
-    issue's acceptance; achieved 3e-7 for the bisected PD and NS, whose bracket is 1e-6
-    relative, and 2e-10 for the fold, located to 1e-9 relative). Every other bifurcation
-    reported on any of the branches is one of the reference's too, within 1e-3 rad/s
-    (:data:`LIFTED_UP`; a fold at :data:`BRANCH_END` within its bracket): none is
-    unchecked."""
-    import time
-
-    model, branches = first_jump
-    t1 = time.process_time()
-    found = [locate_bifurcations(model, b) for b in branches]
-    print(f"bifurcations {time.process_time() - t1:.1f} s CPU")
-    for b, f in zip(branches, found, strict=True):
-        print(b.source, f)
-    down = [[(k, w) for d, k, w in f if d == "down"] for f in found]
-    lifted = [f for f in down if any(k == "Neimark-Sacker" for k, _ in f)]
-    assert len(lifted) == 1, down
-    ref = [("period doubling", PD_LIFTED), ("Neimark-Sacker", NS_LIFTED), ("fold", FOLD)]
-    assert [k for k, _ in lifted[0]] == [k for k, _ in ref], lifted
-    errors = [abs(w - v) for (_, w), (_, v) in zip(lifted[0], ref, strict=True)]
-    print("errors", errors)
-    assert max(errors) < 1e-3
-    known = [*ref, *LIFTED_UP.items()]
-    unchecked = [
-        (d, k, w)
-        for f in found
-        for d, k, w in f
-        if not any(k == kr and abs(w - wr) < 1e-3 for kr, wr in known)
-        and not (k == "fold" and BRANCH_END[0] - 1e-4 <= w <= BRANCH_END[1] + 1e-4)
-    ]
-    assert unchecked == [], unchecked
+# The lifted-off branch beside this first jump, its PD, NS and fold against the reference and
+# every other bifurcation reported against the checked ones: tests/test_coexisting_flow.py
+# (test_the_default_flow_reports_the_lifted_off_branch, through the flow's with_coexisting).
 
 
 @pytest.mark.slow  # on top of first_jump: the period-2 branches (~20 s) and their
