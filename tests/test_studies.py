@@ -11,9 +11,10 @@ comparisons below test the machinery, not the solver (which other modules check)
   difference is a real difference of the numbers.
 - A worker process killed (SIGKILL, by its pid) after the first finished task: the
   study completes and its summary equals the undisturbed one.
-- ``nlgrd study`` interrupted by SIGINT after some tasks: exit 130; the rerun computes
-  exactly the tasks that were not finished (counted in its output) and leaves the
-  finished records untouched (their bytes compared).
+- ``nlgrd study`` interrupted by SIGINT after three tasks (the fourth held until the
+  signal): exit 130; the rerun computes exactly the tasks that were not finished
+  (counted in its output) and leaves the finished records untouched (their bytes
+  compared).
 - The embedded cluster's listening sockets, read from this process and its children
   with psutil: all on the loopback interface, the dashboard's among them.
 """
@@ -169,30 +170,62 @@ def test_a_killed_worker_does_not_change_the_results(study_file, serial):
     assert (out / "summary.csv").read_bytes() == (serial / "summary.csv").read_bytes()
 
 
+#: ``nlgrd study`` as the console script runs it, its fourth task held until SIGINT: the
+#: interrupt always finds three tasks finished and thirteen to go (polling for task files
+#: raced the 0.3 s tasks: under load all 16 could finish first, exit 0).
+GATED_STUDY = """
+import sys, time
+from pathlib import Path
+from nlgrd.cli.command import main
+from nlgrd.studies import study_runner
+
+real, started = study_runner.run_task, []
+
+def gated(spec):
+    if len(started) == 3:
+        Path(sys.argv[1]).touch()  # three tasks written: the test may interrupt
+        while True:
+            time.sleep(60)  # SIGINT raises KeyboardInterrupt here
+    started.append(spec.key)
+    return real(spec)
+
+study_runner.run_task = gated
+raise SystemExit(main(sys.argv[2:]))
+"""
+
+
 @pytest.mark.slow
 def test_an_interrupted_study_resumes_without_recomputing(study_file, serial, tmp_path):
     study = tmp_path / "s16.toml"
     shutil.copy(study_file, study)
     out = tmp_path / "out"
+    gate = tmp_path / "gate"
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    cmd = [*NLGRD, "study", str(study), "--executor", "serial", "--out", str(out), "--no-progress"]
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    _wait_for(
-        lambda: len(list((out / "tasks").glob("*.json"))) >= 3 if (out / "tasks").exists() else False,
-        120,
-        "three finished tasks",
+    args = ["study", str(study), "--executor", "serial", "--out", str(out), "--no-progress"]
+    p = subprocess.Popen(
+        [sys.executable, "-c", GATED_STUDY, str(gate), *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
     )
-    p.send_signal(signal.SIGINT)
-    _, err = p.communicate(timeout=60)
+    try:
+        _wait_for(lambda: gate.exists() or p.poll() is not None, 120, "three finished tasks")
+        assert p.poll() is None, p.communicate()[1]
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
     assert p.returncode == 130, err
     assert "rerun to resume" in err and "Traceback" not in err
     records = {f: f.read_bytes() for f in (out / "tasks").glob("*.json")}
-    k = len(records)
-    assert 3 <= k < 16
+    assert len(records) == 3
     assert not (out / "summary.csv").exists()
-    rerun = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300)
+    rerun = subprocess.run([*NLGRD, *args], capture_output=True, text=True, env=env, timeout=300)
     assert rerun.returncode == 0, rerun.stderr
-    assert f"computed {16 - k}, skipped (finished before) {k}" in rerun.stdout
+    assert "computed 13, skipped (finished before) 3" in rerun.stdout
     assert all(f.read_bytes() == b for f, b in records.items())
     assert (out / "summary.csv").read_bytes() == (serial / "summary.csv").read_bytes()
 
