@@ -26,7 +26,7 @@ from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.results.coexisting_results import Bifurcation, CoexistingBranch
 from nlgrd.nonlinear.results.link_results import LinkSweepResult, _jumps_on, bearing_columns, link_rows
 from nlgrd.nonlinear.results.metrics import METRIC_UNITS
-from nlgrd.nonlinear.results.sweep_results import SweepResult
+from nlgrd.nonlinear.results.sweep_results import SweepResult, without_rows
 from nlgrd.nonlinear.stability.shooting import shootable
 from nlgrd.nonlinear.stability.verdicts import locate_bifurcations
 from nlgrd.nonlinear.tracing.coexisting import coexisting_branches
@@ -88,15 +88,7 @@ def _cut_at_first_jump(branch: SweepResult, outputs: pd.DataFrame, skip=()) -> S
         past = (branch.direction == jump.direction) & (sign * (branch.omega - jump.omega_from) > 0)
         if not np.any(drop & (branch.direction == jump.direction)):  # the first jump only
             drop |= past
-    if not drop.any():
-        return branch
-    keep = ~drop
-    return replace(
-        branch,
-        converged=branch.converged & keep,
-        stable=branch.stable & keep,
-        no_stable=branch.no_stable & keep,
-    )
+    return without_rows(branch, drop)
 
 
 def _verdict_changes(branch: SweepResult) -> list[tuple[str, str, float, float]]:

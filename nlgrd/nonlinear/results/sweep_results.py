@@ -515,6 +515,37 @@ def assemble_result(
     )
 
 
+def without_rows(branch: SweepResult, drop: NDArray) -> SweepResult:
+    """``branch`` with the rows ``drop`` marked off it: not converged, neither stable nor
+    without a stable response, and with no verdict pending (a cut followed branch:
+    :func:`~nlgrd.nonlinear.tracing.coexisting.cut_at_first_hop`, and its stand-in on a
+    model without an exact flow).
+
+    Parameters
+    ----------
+    branch : SweepResult
+        The rows.
+    drop : ndarray of bool
+        Per row: whether it is off the branch.
+
+    Returns
+    -------
+    SweepResult
+        ``branch`` itself when nothing is dropped.
+    """
+    drop = np.asarray(drop, dtype=bool)
+    if not drop.any():
+        return branch
+    keep = ~drop
+    return replace(
+        branch,
+        converged=branch.converged & keep,
+        stable=branch.stable & keep,
+        no_stable=branch.no_stable & keep,
+        verdict_converged=branch.verdict_converged | drop,
+    )
+
+
 @dataclass(frozen=True)
 class ContinuationResult:
     """A solution curve in (ω, z) with stability per point.

@@ -83,7 +83,7 @@ import numpy as np
 from nlgrd.nonlinear.fourier.periods import period_of
 from nlgrd.nonlinear.hb.harmonic_balance import ReducedModel
 from nlgrd.nonlinear.hb.solvers import solve
-from nlgrd.nonlinear.results.sweep_results import SweepResult, dominant_multiplier
+from nlgrd.nonlinear.results.sweep_results import SweepResult, dominant_multiplier, without_rows
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 from nlgrd.nonlinear.stability.shooting import orbit_harmonics, polish, shoot_orbit, shootable
 from nlgrd.nonlinear.stability.verdicts import (
@@ -474,13 +474,4 @@ def cut_at_first_hop(model: ReducedModel, branch: SweepResult) -> SweepResult:
                     drop[rows[confirmed + 1 :]] = True
                     break
             last, confirmed = (w, orbit.state), n
-    if not drop.any():
-        return branch
-    keep = ~drop
-    return replace(
-        branch,
-        converged=branch.converged & keep,
-        stable=branch.stable & keep,
-        no_stable=branch.no_stable & keep,
-        verdict_converged=branch.verdict_converged | drop,
-    )
+    return without_rows(branch, drop)
