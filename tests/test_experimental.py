@@ -214,12 +214,12 @@ def test_compare_shift_and_offset(tmp_path):
 
 def test_compare_reads_a_link_table_and_a_single_dof_table(tmp_path):
     """A data set in Hz against a link table (``base_frequency [Hz]``, the mesh's
-    ``mesh0.dte_rms [um]``) and against a single-DOF table (``mesh_frequency [Hz]``,
+    ``mesh0.dte_rms [um]``) and against a single-DOF table (``base_frequency [Hz]``,
     ``dte_rms [um]``): the same scores (the same curves under the two tables' names)."""
     x = np.linspace(1000, 3000, 101)
     up, down = s_curve(x / 2000)
     link = sweep_frame(x, up, down, "base_frequency [Hz]", "mesh0.dte_rms [um]")
-    one = sweep_frame(x, up, down, "mesh_frequency [Hz]", "dte_rms [um]")
+    one = sweep_frame(x, up, down, "base_frequency [Hz]", "dte_rms [um]")
     rows = [(a, b + 0.1, "up") for a, b in zip(x[::5], up[::5], strict=True)]
     p = write(
         tmp_path / "kb.csv",

@@ -62,8 +62,8 @@ def jump_intervals(frame, column="dte_rms [um]", ratio=1.25):
     """Grid intervals where a sweep's value changes by more than ``ratio`` between neighbours."""
     out = set()
     for d in ("up", "down"):
-        x = frame[frame.direction == d].sort_values("mesh_frequency [Hz]")
-        f, v = x["mesh_frequency [Hz]"].to_numpy(), x[column].to_numpy()
+        x = frame[frame.direction == d].sort_values("base_frequency [Hz]")
+        f, v = x["base_frequency [Hz]"].to_numpy(), x[column].to_numpy()
         for i in range(len(f) - 1):
             r = v[i + 1] / v[i]
             if r > ratio or r < 1 / ratio:
@@ -98,12 +98,11 @@ def check_case(case):
 
     def names(frame):
         """The mesh's columns without their prefix (one mesh: base frequency = mesh frequency)."""
-        frame = frame.rename(columns={"base_frequency [Hz]": "mesh_frequency [Hz]"})
         return frame.rename(columns=lambda c: c.removeprefix("mesh0."))
 
     hb, td = names(hb), names(td)
     assert hb["converged"].all(), hb[~hb["converged"]]
-    key = ["direction", "mesh_frequency [Hz]"]
+    key = ["direction", "base_frequency [Hz]"]
     hb, td = hb.sort_values(key).reset_index(drop=True), td.sort_values(key).reset_index(drop=True)
     # an unstable periodic solution is no steady state of the time integration: where the
     # integration finds no periodic state, Floquet must call the HB solution unstable

@@ -59,7 +59,7 @@ def test_one_mesh_sweep_draws_its_jumps(swept):
     jumps = swept.jumps()
     assert sorted(j.direction for j in jumps) == ["down", "up"]
     ax = swept.plot("dte_rms")
-    _check_arrows(ax, jumps, swept.to_frame(), "mesh_frequency [Hz]", "dte_rms [um]")
+    _check_arrows(ax, jumps, swept.to_frame(), "base_frequency [Hz]", "dte_rms [um]")
     plt.close(ax.figure)
 
 

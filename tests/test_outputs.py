@@ -47,7 +47,7 @@ def test_unconverged_points_are_na_in_every_numeric_and_flag_column():
     df = res.to_frame()
     bad = ~df["converged"].to_numpy(bool)
     assert bad.sum() >= 3 and (~bad).sum() >= 1
-    meta = {"mesh_frequency [Hz]", "direction", "converged"}
+    meta = {"base_frequency [Hz]", "direction", "converged"}
     for col in df.columns:
         if col not in meta:
             assert df.loc[bad, col].isna().all(), col

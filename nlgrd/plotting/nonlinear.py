@@ -82,7 +82,7 @@ def _stability(frame: pd.DataFrame) -> np.ndarray:
 
 def plot_sweep_frame(
     frame: pd.DataFrame,
-    x: str = "mesh_frequency [Hz]",
+    x: str = "base_frequency [Hz]",
     y: str = "dte_rms [um]",
     ax=None,
     label: str | None = None,
@@ -311,7 +311,7 @@ def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        One row per point: "mesh_frequency [Hz]", "direction", "converged", "stable",
+        One row per point: "base_frequency [Hz]", "direction", "converged", "stable",
         "floquet_max [-]" (NaN when not computed), "value" and "response" ("periodic", or
         "no stable response" where no stable periodic response was found).
     """
@@ -321,7 +321,7 @@ def sweep_table(result, quantity: str = "dte_rms") -> pd.DataFrame:
     unc = getattr(result, "uncertainty", None) or {}
     return pd.DataFrame(
         {
-            "mesh_frequency [Hz]": hz(np.asarray(result.omega, dtype=float)),
+            "base_frequency [Hz]": hz(np.asarray(result.omega, dtype=float)),
             "direction": np.asarray(result.direction).astype(str),
             "converged": np.asarray(result.converged, dtype=object),
             "stable": np.asarray(result.stable, dtype=object),
@@ -419,7 +419,7 @@ def jump_table(jumps, per_hz: float = 1.0) -> pd.DataFrame:
 def _in_unit(table: pd.DataFrame, xaxis: tuple[str, float]) -> pd.DataFrame:
     """``table`` with column "x": its mesh frequency [Hz] in the unit of ``xaxis``."""
     table = table.copy()
-    table["x"] = table["mesh_frequency [Hz]"] * float(xaxis[1])
+    table["x"] = table["base_frequency [Hz]"] * float(xaxis[1])
     return table
 
 

@@ -281,9 +281,10 @@ def answered_table(hb: pd.DataFrame, answered: pd.DataFrame, value: str = "dte_r
         did not converge) and the harmonic balance's ``response`` in :data:`HB_RESPONSE`,
         beside it.
     """
-    freq = "base_frequency [Hz]" if "base_frequency [Hz]" in hb else "mesh_frequency [Hz]"
+    freq = "base_frequency [Hz]"
     if (
         len(hb) != len(answered)
+        or freq not in hb
         or freq not in answered
         or not np.array_equal(hb[freq].to_numpy(float), answered[freq].to_numpy(float))
     ):

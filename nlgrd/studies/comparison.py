@@ -18,10 +18,6 @@ from nlgrd.studies.experimental import (
     directions_of,
 )
 
-#: A single-DOF table's (``SweepResult.to_frame``) name of the data sets' abscissa beside the
-#: link table's (``nlgrd.sweep``): its mesh frequency.
-ONE_MESH_ABSCISSAE = {"base_frequency [Hz]": "mesh_frequency [Hz]"}
-
 
 def frame_columns(data: ExperimentalSet, frame: pd.DataFrame) -> tuple[str, str]:
     """The columns of ``frame`` a data set is compared with: its abscissa and its quantity,
@@ -43,8 +39,6 @@ def frame_columns(data: ExperimentalSet, frame: pd.DataFrame) -> tuple[str, str]
         has neither form: :func:`directions_of` then names the missing one).
     """
     x, q = data.frame_x_column, data.frame_column
-    if x not in frame and ONE_MESH_ABSCISSAE.get(x) in frame:
-        x = ONE_MESH_ABSCISSAE[x]
     if q not in frame:
         q = next((c for c in frame.columns if c.endswith(f".{q}") and "_uncertainty" not in c), q)
     return x, q

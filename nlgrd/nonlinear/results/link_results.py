@@ -66,10 +66,7 @@ def with_links(frame: pd.DataFrame, links: pd.DataFrame) -> pd.DataFrame:
 
 #: The point columns of :meth:`SweepResult.to_frame` a link table renames
 #: (docs/conventions.md, "Column names").
-POINT_RENAMES = {
-    "mesh_frequency [Hz]": "base_frequency [Hz]",
-    "subharmonic_amp [um]": "subharmonic_amplitude [um]",
-}
+POINT_RENAMES = {"subharmonic_amp [um]": "subharmonic_amplitude [um]"}
 
 
 def with_speed(frame: pd.DataFrame, omega: NDArray, speed_per_base: float | None, unit: str = "Hz"):

@@ -389,7 +389,7 @@ class SweepResult:
         iterations = pd.array(np.asarray(self.iterations), dtype="Int64")
         iterations[~ok] = pd.NA
         data = {
-            "mesh_frequency [Hz]": hz(self.omega),
+            "base_frequency [Hz]": hz(self.omega),
             "direction": self.direction,
             "converged": ok,
             RESIDUAL_COLUMNS[self.residual_kind]: num(self.residual),
