@@ -79,6 +79,12 @@ DENSE_LIMIT = 300
 #: Up to this many DOFs coupled to a link or a forced DOF, ``method="auto"`` takes the
 #: pole-residue form; above, the banded LU where the band is narrow (the single path's rule).
 POLES_LIMIT = 100
+#: Frequencies solved by the banded LU after which ``method="auto"`` takes the pole-residue
+#: form where it applies: its set-up (one eigendecomposition per harmonic) costs about as
+#: many banded solves (two_shaft.toml, 110 coupled DOFs, H 9/17/33: 840-1630), and a
+#: point then costs ~0.1 against 0.8-2.3 ms. A count, not a time: the switch does not
+#: depend on the machine (benchmarks/README.md, "the pole-residue form after 1000 solves").
+POLES_AFTER = 1000
 #: Dynamic attachment vectors at j / ATTACHMENT_POINTS of the top frequency (docs/verification.md).
 ATTACHMENT_POINTS = 32
 #: A modal basis farther than this from direct solves warns.
@@ -211,6 +217,9 @@ class LinkReceptance:
         # solves per (ω, H, DOFs out), 4096 for the recovery; out: the bearings' (u_y, u_z), then recovered
         self._band_sols, self._band_out, self._recovery = BoundedCache(64), (), BoundedCache(4096)
         self.method = self._auto_method(poles_apply) if method == "auto" else method
+        # "auto" on the banded LU: the pole-residue form once POLES_AFTER frequencies were solved
+        switch = method == "auto" and poles_apply and self.method == "banded"
+        self._band_left = POLES_AFTER if switch else None
         if self.method == "banded" and self.n_coords:
             out = tuple(int(i) for b in system.bearings for i in system.dofs.node_dofs(b.shaft, b.node)[1:3])
             same = np.array_equal(self._band_solver(out).keep, self._band_solver(()).keep)
@@ -241,6 +250,12 @@ class LinkReceptance:
         if solver.banded:
             return "banded"
         return "poles" if poles_apply else "direct"
+
+    def _poles_when_due(self) -> None:
+        """``method="auto"`` on the banded LU: take the pole-residue form once
+        :data:`POLES_AFTER` frequencies were solved (κ_k then differs by ~1e-13)."""
+        if self._band_left is not None and self._band_left <= 0:
+            self.method, self._band_left = "poles", None
 
     def _dense_matrices(self, dense: Callable) -> dict[str, NDArray]:
         m = self.model
@@ -442,6 +457,8 @@ class LinkReceptance:
             rhs = self.forces(omega, H)[1:] if f is None else f
             drhs = df
         sol = self._band_solver(dofs).solve_forced(np.arange(1, H + 1), omega, derivative, rhs, drhs)
+        if self._band_left is not None:
+            self._band_left -= 1
         if not derivative or self.n_coords == 1:
             self._band_sols.put(key, sol)
             self._recovery.put(key, sol)  # Z_k⁻¹ P, Z_k⁻¹ f_k at the DOFs out, for recover
@@ -511,6 +528,7 @@ class LinkReceptance:
         """
 
         def make():
+            self._poles_when_due()
             d, speed = self.n_coords, self.plan.speed(omega)
             ext, phi = self._force_parts(omega, H)
             kap = np.empty((H + 1, d, d), dtype=complex)
@@ -592,6 +610,7 @@ class LinkReceptance:
         """
 
         def make():
+            self._poles_when_due()
             d, s_ = self.n_coords, self.plan.speed_per_base
             speed = s_ * omega
             m = self.model
