@@ -79,15 +79,17 @@ def test_kappa_derivative_against_differences_of_dense_solves(system, method):
 
 def test_auto_takes_the_pole_form_after_enough_banded_solves(system, monkeypatch):
     """``method="auto"`` starts two_shaft on the banded LU (110 coupled DOFs, above
-    POLES_LIMIT) and takes the pole-residue form once POLES_AFTER frequencies were solved
-    (set here to 3 so that the test stays short). κ_k before and after the switch, and
-    dκ_k/dω after it, equal dense solves (1e-9, as every strategy above) and a
+    POLES_LIMIT) and takes the pole-residue form once POLES_AFTER n² frequencies were
+    solved (n = 110 DOFs in its band; set here to 3 frequencies so that the test stays
+    short). κ_k before and after the switch, and dκ_k/dω after it, equal dense solves
+    (1e-9, as every strategy above) and a
     fourth-order difference of them (1e-6): the switch changes the method, not the
     numbers. The same model with ``method="banded"`` never switches."""
     import nlgrd.nonlinear.reduction.link_reduction as lr
 
-    monkeypatch.setattr(lr, "POLES_AFTER", 3)
+    monkeypatch.setattr(lr, "POLES_AFTER", 2.5 / 110**2)  # ceil(2.5) = 3 frequencies
     rec = build_link_model(system).receptance
+    assert rec._band_solver(()).band.n == 110
     fixed = build_link_model(system, method="banded").receptance
     assert rec.method == "banded"
     H, seen = 6, []
