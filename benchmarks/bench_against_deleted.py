@@ -6,10 +6,13 @@ Run from the repository root, with a worktree of the last commit that had the ol
     git worktree add ../wt-old bbfba76
     .venv/bin/python benchmarks/bench_against_deleted.py --old ../wt-old --repeats 3
 
-Case (b) of ``benchmarks/bench_nonlinear.py --cases 4``: ``data/models/two_shaft.toml`` as
-in the file (each tree's own copy; whether the two are the same bytes is printed), 40 base
-frequencies 1000-2900 Hz both ways, H chosen, stability, period "auto" (the link engine;
-the old ``geared_sweep`` has no period option), model built inside the timing. Each run is
+``--case b`` (the default), case (b) of ``benchmarks/bench_nonlinear.py --cases 4``:
+``data/models/two_shaft.toml`` as in the file (each tree's own copy; whether the two are
+the same bytes is printed), 40 base frequencies 1000-2900 Hz both ways, H chosen,
+stability, period "auto" (the link engine; the old ``geared_sweep`` has no period option),
+model built inside the timing. ``--case a``, case (a): the same rotor with every shaft
+element split in two (252 DOFs), mesh damping ratio 0.1, 2 x 500 mesh frequencies 0.5-1.5
+x the gear pair's mode, H = 5, no stability, model built before the clock. Each run is
 a fresh subprocess (``PYTHONPATH`` set to the tree measured, one BLAS thread), old and
 link alternating, so both see the same load; the best of ``--repeats`` by CPU time is kept
 per engine and the ratio link / old printed (target <= 1.10), with the load average
