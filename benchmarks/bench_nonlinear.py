@@ -38,9 +38,9 @@ compares against it. Four cases, each printed as a table (figures and machine in
    ``data/models/two_shaft.toml`` at 40 base frequencies 1000-2900 Hz both ways (H chosen,
    stability, period "auto", without the time-domain answers), with CPU and wall time,
    corrector evaluations of the landing searches, sweeps per ladder and Floquet calls. Issue
-   33's target (link / old <= 1.10) against the deleted single-mesh engine: 1.01-1.14 on
-   case 1's sweep, missed on the two_shaft sweep (1.33-1.36; ``bench_against_deleted.py``
-   runs both side by side, benchmarks/README.md); ``--before FILE`` compares with a table
+   33's target (link / old <= 1.10) against the deleted single-mesh engine is measured by
+   ``bench_against_deleted.py --case a`` and ``--case b``, both engines side by side
+   (figures in benchmarks/README.md); ``--before FILE`` compares with a table
    this case printed before (another library version's run), row by row.
 
 How it measures

@@ -77,6 +77,38 @@ def test_kappa_derivative_against_differences_of_dense_solves(system, method):
     assert np.max(np.max(np.abs(dk - fd), axis=(1, 2)) / scale) < 1e-6
 
 
+def test_auto_takes_the_pole_form_after_enough_banded_solves(system, monkeypatch):
+    """``method="auto"`` starts two_shaft on the banded LU (110 coupled DOFs, above
+    POLES_LIMIT) and takes the pole-residue form once POLES_AFTER n² frequencies were
+    solved (n = 110 DOFs in its band; set here to 3 frequencies so that the test stays
+    short). κ_k before and after the switch, and dκ_k/dω after it, equal dense solves
+    (1e-9, as every strategy above) and a
+    fourth-order difference of them (1e-6): the switch changes the method, not the
+    numbers. The same model with ``method="banded"`` never switches."""
+    import nlgrd.nonlinear.reduction.link_reduction as lr
+
+    monkeypatch.setattr(lr, "POLES_AFTER", 2.5 / 110**2)  # ceil(2.5) = 3 frequencies
+    rec = build_link_model(system).receptance
+    assert rec._band_solver(()).band.n == 110
+    fixed = build_link_model(system, method="banded").receptance
+    assert rec.method == "banded"
+    H, seen = 6, []
+    for f in (900.0, 1700.0, 2500.0, 3300.0, 4100.0):
+        om = 2 * np.pi * f
+        seen.append(rec.method)
+        fixed.terms(om, H)
+        kap = rec.terms(om, H)[0][1:]
+        ref = dense_kappa(rec, om, H)
+        assert np.max(np.abs(kap - ref) / np.abs(ref)) < 1e-9, (rec.method, f)
+    assert seen == ["banded"] * 4 + ["poles"] and rec.method == "poles" and fixed.method == "banded"
+    om = 2 * np.pi * 2300.0
+    dk = rec.derivatives(om, H)[0][1:]
+    eps = 1e-6 * om
+    r = [dense_kappa(rec, om + j * eps, H) for j in (-2, -1, 1, 2)]
+    fd = (r[0] - 8 * r[1] + 8 * r[2] - r[3]) / (12 * eps)
+    assert np.max(np.max(np.abs(dk - fd), axis=(1, 2)) / np.max(np.abs(fd), axis=(1, 2))) < 1e-6
+
+
 def test_mean_of_free_drive_train_is_the_static_load(system):
     """The example's drive train is held in torsion only by the mesh: κ_0 = 0 to 1e-9 k_h
     (the structure adds no stiffness along δ) and F_0 = W_0 = T_p / r_bp to 1e-9."""

@@ -36,7 +36,9 @@ Four ways to solve with Z_k (``method``; "auto" as the single-mesh path decides:
   where the band is wider than ``BAND_LIMIT`` or the identity ill-conditioned); all
   harmonics of a frequency at once, Z_k⁻¹ P and Z_k⁻¹ f_k kept at the DOFs recovered last
   (the default for one link coordinate above :data:`POLES_LIMIT` coupled DOFs, and with
-  tabulated bearings or a loss factor, where the band is narrow).
+  tabulated bearings or a loss factor, where the band is narrow). Where the pole-residue
+  form applies, "auto" takes it after :data:`POLES_AFTER` n² banded frequencies (a long
+  sweep or a landing search repays its set-up; a short run never pays it).
 """
 
 from __future__ import annotations
@@ -79,6 +81,15 @@ DENSE_LIMIT = 300
 #: Up to this many DOFs coupled to a link or a forced DOF, ``method="auto"`` takes the
 #: pole-residue form; above, the banded LU where the band is narrow (the single path's rule).
 POLES_LIMIT = 100
+#: Frequencies solved by the banded LU, per squared DOF of its band (n²), after which
+#: ``method="auto"`` takes the pole-residue form where it applies: its set-up (one
+#: eigendecomposition of the 2n companion per harmonic, ∝ n³) then costs about as many
+#: banded solves (∝ n): measured 660-1060 at n 110 (two_shaft.toml), 2450-4160 at n 210
+#: (its elements split in two), where 0.09 n² is 1089 and 3969; a point then costs
+#: 7-9 against 67-165 µs per harmonic. A count, not a time: the switch does not depend on
+#: the machine. Switching at break-even costs at most twice the better choice made in
+#: advance (benchmarks/README.md, "the pole-residue form after 0.09 n² solves").
+POLES_AFTER = 0.09
 #: Dynamic attachment vectors at j / ATTACHMENT_POINTS of the top frequency (docs/verification.md).
 ATTACHMENT_POINTS = 32
 #: A modal basis farther than this from direct solves warns.
@@ -113,7 +124,8 @@ class LinkReceptance:
     method : {"auto", "poles", "direct", "modal", "banded"}
         How Z_k is solved (module docstring); "auto": :meth:`_auto_method` (the single-mesh
         path's rule: "poles" up to :data:`POLES_LIMIT` coupled DOFs, "banded" above where
-        the band is narrow, "poles" kept for several link coordinates). Before issue 33 it was "poles" up to
+        the band is narrow, then "poles" after :data:`POLES_AFTER` n² banded frequencies where
+        it applies; "poles" kept for several link coordinates). Before issue 33 it was "poles" up to
         :data:`DENSE_LIMIT` DOFs and "modal" above (once :meth:`prepare` knows the
         highest frequency; "direct" until then and with tabulated bearings or a loss
         factor).
@@ -211,6 +223,9 @@ class LinkReceptance:
         # solves per (ω, H, DOFs out), 4096 for the recovery; out: the bearings' (u_y, u_z), then recovered
         self._band_sols, self._band_out, self._recovery = BoundedCache(64), (), BoundedCache(4096)
         self.method = self._auto_method(poles_apply) if method == "auto" else method
+        # "auto" on the banded LU: the pole-residue form once POLES_AFTER n² frequencies were solved
+        switch = method == "auto" and poles_apply and self.method == "banded"
+        self._band_left = int(np.ceil(POLES_AFTER * self._band_solver(()).band.n ** 2)) if switch else None
         if self.method == "banded" and self.n_coords:
             out = tuple(int(i) for b in system.bearings for i in system.dofs.node_dofs(b.shaft, b.node)[1:3])
             same = np.array_equal(self._band_solver(out).keep, self._band_solver(()).keep)
@@ -241,6 +256,12 @@ class LinkReceptance:
         if solver.banded:
             return "banded"
         return "poles" if poles_apply else "direct"
+
+    def _poles_when_due(self) -> None:
+        """``method="auto"`` on the banded LU: take the pole-residue form once
+        :data:`POLES_AFTER` n² frequencies were solved (κ_k then differs by ~1e-13)."""
+        if self._band_left is not None and self._band_left <= 0:
+            self.method, self._band_left = "poles", None
 
     def _dense_matrices(self, dense: Callable) -> dict[str, NDArray]:
         m = self.model
@@ -442,6 +463,8 @@ class LinkReceptance:
             rhs = self.forces(omega, H)[1:] if f is None else f
             drhs = df
         sol = self._band_solver(dofs).solve_forced(np.arange(1, H + 1), omega, derivative, rhs, drhs)
+        if self._band_left is not None:
+            self._band_left -= 1
         if not derivative or self.n_coords == 1:
             self._band_sols.put(key, sol)
             self._recovery.put(key, sol)  # Z_k⁻¹ P, Z_k⁻¹ f_k at the DOFs out, for recover
@@ -511,6 +534,7 @@ class LinkReceptance:
         """
 
         def make():
+            self._poles_when_due()
             d, speed = self.n_coords, self.plan.speed(omega)
             ext, phi = self._force_parts(omega, H)
             kap = np.empty((H + 1, d, d), dtype=complex)
@@ -592,6 +616,7 @@ class LinkReceptance:
         """
 
         def make():
+            self._poles_when_due()
             d, s_ = self.n_coords, self.plan.speed_per_base
             speed = s_ * omega
             m = self.model
