@@ -205,7 +205,9 @@ def test_search_finds_the_period_two_orbit_from_the_flip():
     lives beside it. With no perturbed starts (``n_starts=0``) and the linear response as
     the one user start of period 1, the search finds the period-1 orbit and, from its
     critical Floquet mode, the period-2 orbit; without ``stability`` there are no
-    multipliers, so no flip, and period 1 alone. Reference: time integration from the static
+    multipliers, so no flip, and period 1 alone; with period 2 alone sought, from the
+    linear response spread onto ω/2, the period-1 orbit Newton reaches there is flipped
+    too. Reference: time integration from the static
     state (:func:`nlgrd.timedomain.sdof.integrate`, DOP853 at rtol 1e-10, steady to 1e-8
     per cycle of two mesh periods) settles on the same orbit: all 37 harmonics of ω/2
     within 1e-4 of their norm for one of the two shifts by a mesh period (measured 6e-7;
@@ -214,6 +216,8 @@ def test_search_finds_the_period_two_orbit_from_the_flip():
     shift 0.4 off."""
     from test_period_doubling import PAIR as FLIP_PAIR
     from test_period_doubling import WN as FLIP_WN
+
+    from nlgrd.nonlinear.fourier.periods import spread
 
     def flip_model(nu):
         return FLIP_PAIR.subharmonic(nu).reduced_model()
@@ -233,3 +237,11 @@ def test_search_finds_the_period_two_orbit_from_the_flip():
     assert tr.converged and min(off) < 1e-4 < 0.1 < max(off), off
     no_flip = search_orbits(flip_model, w, 9, (1, 2), n_starts=0, starts=[(1, z_lin)], stability=False)
     assert [(o.period, o.start) for o in no_flip] == [(1, "user start 0")]
+    # period 1 not sought: the period-1 orbit Newton reaches on the period-2 model is listed
+    # as period 1 and flipped as well
+    alone = search_orbits(flip_model, w, 9, (2,), n_starts=0, starts=[(2, spread(z_lin, 2))])
+    assert [(o.period, o.start.split(",")[0]) for o in alone] == [
+        (1, "user start 0"),
+        (2, "flip of the period-1 orbit from user start 0"),
+    ]
+    assert same_motion(alone[1].harmonics, found[1].harmonics, 2)
