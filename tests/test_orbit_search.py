@@ -197,3 +197,51 @@ def test_search_on_two_nonlinear_coordinates_and_with_user_starts_only():
     again = search_orbits(model_of, w, 9, periods=(1,), n_starts=0, starts=[(1, ref.harmonics[-1])])
     assert len(again) == 1 and again[0].start == "user start 0"
     assert search_orbits(model_of, w, 9, periods=(1,), n_starts=0) == []
+
+
+def test_search_finds_the_period_two_orbit_from_the_flip():
+    """The single-DOF pair of tests/test_period_doubling.py (LSTE 10 µm, ζ 0.03) at 1.30 ω_n:
+    its period-1 orbit is flip-unstable (real multiplier -1.32) and a stable period-2 orbit
+    lives beside it. With no perturbed starts (``n_starts=0``) and the linear response as
+    the one user start of period 1, the search finds the period-1 orbit and, from its
+    critical Floquet mode, the period-2 orbit; without ``stability`` there are no
+    multipliers, so no flip, and period 1 alone; with period 2 alone sought, from the
+    linear response spread onto ω/2, the period-1 orbit Newton reaches there is flipped
+    too. Reference: time integration from the static
+    state (:func:`nlgrd.timedomain.sdof.integrate`, DOP853 at rtol 1e-10, steady to 1e-8
+    per cycle of two mesh periods) settles on the same orbit: all 37 harmonics of ω/2
+    within 1e-4 of their norm for one of the two shifts by a mesh period (measured 6e-7;
+    1e-4 is the worst amplitude difference along this period-2 branch in
+    tests/test_period_doubling.py, from H = 18 of the base and the integrator), the other
+    shift 0.4 off."""
+    from test_period_doubling import PAIR as FLIP_PAIR
+    from test_period_doubling import WN as FLIP_WN
+
+    from nlgrd.nonlinear.fourier.periods import spread
+
+    def flip_model(nu):
+        return FLIP_PAIR.subharmonic(nu).reduced_model()
+
+    w = 1.30 * FLIP_WN
+    z_lin = flip_model(1).at(w, 9).linear_solution().reshape(1, -1)
+    found = search_orbits(flip_model, w, 9, (1, 2), n_starts=0, starts=[(1, z_lin)])
+    assert [(o.period, o.stable, o.start) for o in found] == [
+        (1, False, "user start 0"),
+        (2, True, "flip of the period-1 orbit from user start 0, start +0.2 x its size"),
+    ]
+    mu = found[0].dominant_multiplier
+    assert abs(mu.imag) < 1e-9 and mu.real < -1.3
+    tr = integrate(FLIP_PAIR.subharmonic(2), w / 2, None, tol=1e-8, max_periods=600)
+    td = tr.harmonics(18)
+    off = [np.linalg.norm(shifted(found[1].harmonics[0], 2, s) - td) / np.linalg.norm(td) for s in (0, 1)]
+    assert tr.converged and min(off) < 1e-4 < 0.1 < max(off), off
+    no_flip = search_orbits(flip_model, w, 9, (1, 2), n_starts=0, starts=[(1, z_lin)], stability=False)
+    assert [(o.period, o.start) for o in no_flip] == [(1, "user start 0")]
+    # period 1 not sought: the period-1 orbit Newton reaches on the period-2 model is listed
+    # as period 1 and flipped as well
+    alone = search_orbits(flip_model, w, 9, (2,), n_starts=0, starts=[(2, spread(z_lin, 2))])
+    assert [(o.period, o.start.split(",")[0]) for o in alone] == [
+        (1, "user start 0"),
+        (2, "flip of the period-1 orbit from user start 0"),
+    ]
+    assert same_motion(alone[1].harmonics, found[1].harmonics, 2)

@@ -23,7 +23,24 @@ period-ν harmonic balance (base ω/ν, :mod:`nlgrd.nonlinear.tracing.subharmoni
   generator: the same starts on every machine;
 - user starts: harmonics of ω/ν, typically the last ν mesh periods of a time integration
   from an arbitrary initial state (:meth:`nlgrd.timedomain.sdof.TimeResponse.harmonics`
-  of ``integrate(pair.subharmonic(nu), omega / nu, state0)``).
+  of ``integrate(pair.subharmonic(nu), omega / nu, state0)``);
+- flips: a period-ν orbit born in a period doubling sits beside a period-ν/2 orbit whose
+  dominant Floquet multiplier is real and below -1
+  (:func:`~nlgrd.nonlinear.tracing.subharmonic.flip_unstable`), and leaves it along that
+  orbit's critical mode. From each such orbit found, Newton starts from the starts of
+  :func:`~nlgrd.nonlinear.tracing.subharmonic.branch_off` (the mode scaled to
+  :data:`~nlgrd.nonlinear.tracing.subharmonic.BRANCH_OFF_SCALES` times the orbit's size
+  (:func:`~nlgrd.nonlinear.tracing.subharmonic.orbit_size`; the laws' length for an orbit
+  at rest at zero), + then - the mode, smallest first, up to the first size that reaches
+  period ν): found
+  by construction, not by a lucky perturbed start whose Newton path rounding decides
+  (Kubo's rig at 3055.6 Hz, tests/test_period_doubling_fe.py). Only with ``stability``:
+  the flip needs the multipliers.
+
+The periods are searched in ascending order, so the period-ν/2 orbits are known when
+period ν is sought. For each period the starts are tried in this order: the user starts,
+the flips of the period-ν/2 orbits found so far, the perturbed starts, and the flips of the
+period-ν/2 orbits that these found (listed with their shorter period).
 
 Each converged orbit is classified by its minimal period p
 (:func:`~nlgrd.nonlinear.fourier.periods.period_of`): its components at base harmonics that
@@ -56,7 +73,13 @@ from nlgrd.nonlinear.results.sweep_results import STABLE_RTOL, SweepResult, domi
 from nlgrd.nonlinear.stability.floquet import floquet_multipliers
 from nlgrd.nonlinear.tracing.auto_period import period_only
 from nlgrd.nonlinear.tracing.landing import SAME_ORBIT_RTOL
-from nlgrd.nonlinear.tracing.subharmonic import follow_period
+from nlgrd.nonlinear.tracing.subharmonic import (
+    BRANCH_OFF_SCALES,
+    critical_mode,
+    flip_unstable,
+    follow_period,
+    orbit_size,
+)
 from nlgrd.units import column, floor_rounding, hz, um, written, written_frame
 
 #: Perturbed starts per period by default.
@@ -297,10 +320,11 @@ def search_orbits(
     H : int
         Mesh harmonics of each orbit: a period-ν orbit is solved with ν H base harmonics [-].
     periods : sequence of int
-        The periods ν sought [-].
+        The periods ν sought [-], searched in ascending order.
     starts : sequence of (int, array_like)
         User starts: (ν, real harmonics of ω/ν of the nonlinear coordinates [m]), e.g. from
-        a time integration; tried before the perturbed ones.
+        a time integration; tried first (then the flips, then the perturbed starts: module
+        notes).
     n_starts : int
         Perturbed starts per period [-] (module notes).
     amplitude : float, optional
@@ -309,7 +333,8 @@ def search_orbits(
     seed : int
         Seed of the starts' phases.
     stability : bool
-        Floquet multipliers of each orbit found (needs the model's linear state space).
+        Floquet multipliers of each orbit found (needs the model's linear state space);
+        without them no period-2ν orbit is started from a flip-unstable period-ν one.
     tol, max_iter : float, int
         Newton's tolerance (relative residual) and iteration limit per start.
     shorter_periods : bool
@@ -357,28 +382,58 @@ def search_orbits(
         cols = {} if outputs is None else dict(outputs(z, float(omega), p))
         found.append(FoundOrbit(float(omega), p, z, float(fmax), complex(dom), label, met, cols))
 
+    def attempt(problem, z0: NDArray, nu: int, model: ReducedModel, label: str) -> bool:
+        """Newton from z0 on the period-ν problem; whether it reached a period-ν orbit."""
+        sol = solve(problem, z0, tol=tol, max_iter=max_iter, fallback=False, stall=True)
+        if not sol.converged:
+            return False
+        z = sol.harmonics
+        p = period_of(z, nu, rtol, size=max(own, float(np.max(np.abs(z[:, 0])))))
+        if p == nu:
+            keep(z, nu, model, label)
+        elif shorter_periods:
+            keep(*_on_period(model_of(p), omega, p, H, on_shorter_period(z, nu, p), tol, max_iter), label)
+        return p == nu
+
+    flipped: set[int] = set()  # id() of the orbits whose flip was tried
+
+    def from_flips(problem, nu: int, model: ReducedModel) -> None:
+        """Branch-off starts from each flip-unstable period-ν/2 orbit found and not yet tried."""
+        for o in [o for o in found if 2 * o.period == nu and id(o) not in flipped]:
+            flipped.add(id(o))
+            if not flip_unstable(o.dominant_multiplier):
+                continue
+            zs, phi = critical_mode(problem, o.harmonics, 2)
+            a = orbit_size(o.harmonics) or own
+            tag = f"flip of the period-{o.period} orbit from {o.start}"
+            for s in BRANCH_OFF_SCALES if a > 0 else ():
+                hits = [
+                    attempt(
+                        problem,
+                        (zs + sign * s * a * phi).reshape(o.harmonics.shape[0], -1),
+                        nu,
+                        model,
+                        f"{tag}, start {sign * s:+g} x its size",
+                    )
+                    for sign in (1.0, -1.0)
+                ]
+                if any(hits):  # the smallest start that reaches period ν, both signs
+                    break
+
     for nu in periods:
         model = model_of(nu)
         problem = model.at(omega / nu, nu * H)
-        tries = [
-            (np.asarray(z, dtype=float), f"user start {i}") for i, (p, z) in enumerate(starts) if p == nu
-        ]
+        own = max((nl.scale() for nl in model.nonlinearities), default=0.0)
+        for i, (p, z) in enumerate(starts):
+            if p == nu:
+                attempt(problem, np.asarray(z, dtype=float), nu, model, f"user start {i}")
+        from_flips(problem, nu, model)
         if n_starts:  # the linear response's harmonics, one row per nonlinear coordinate
             z_lin = problem.linear_solution().reshape(problem.n_coords, -1)
             scales = [amplitude] if amplitude is not None else start_scales(model.nonlinearities, z_lin)
-            tries += perturbed_starts(z_lin, nu, scales, int(n_starts), rng)
-        own = max((nl.scale() for nl in model.nonlinearities), default=0.0)
-        for z0, label in tries:
-            sol = solve(problem, z0, tol=tol, max_iter=max_iter, fallback=False, stall=True)
-            if not sol.converged:
-                continue
-            z = sol.harmonics
-            p = period_of(z, nu, rtol, size=max(own, float(np.max(np.abs(z[:, 0])))))
-            if p == nu:
-                keep(z, nu, model, label)
-            elif shorter_periods:
-                z = on_shorter_period(z, nu, p)
-                keep(*_on_period(model_of(p), omega, p, H, z, tol, max_iter), label)
+            for z0, label in perturbed_starts(z_lin, nu, scales, int(n_starts), rng):
+                attempt(problem, z0, nu, model, label)
+        from_flips(problem, nu, model)  # period-ν/2 orbits found on the way (shorter_periods)
     return OrbitSearchResult(sorted(found, key=lambda o: (o.period, o.amplitude)))
 
 
@@ -390,7 +445,7 @@ def _periods(periods) -> tuple[int, ...]:
         out.append(int(p))
     if not out:
         raise ModelError("periods", "at least one period")
-    return tuple(dict.fromkeys(out))
+    return tuple(sorted(set(out)))
 
 
 def _on_period(model: ReducedModel, omega: float, p: int, H: int, z: NDArray, tol: float, max_iter: int):

@@ -58,10 +58,10 @@ def branch_off(
 
     The harmonic-balance Jacobian of the period-ν problem at the period-1 orbit ``z1``
     (spread onto the base) couples the subharmonic positions only among themselves; the
-    right singular vector of their block's smallest singular value is the critical
-    mode. Newton starts from z1 ± s a φ (a the larger of the orbit's largest alternating
-    amplitude and its mean, s in ``scales``, smallest first) and the first converged orbit
-    of period ν is returned.
+    right singular vector of their block's smallest singular value is the critical mode φ
+    (:func:`critical_mode`). Newton starts from z1 + s a φ and then z1 - s a φ (a the
+    larger of the orbit's largest alternating amplitude and its mean, :func:`orbit_size`;
+    s in ``scales``, smallest first) and the first converged orbit of period ν is returned.
 
     Parameters
     ----------
@@ -82,16 +82,8 @@ def branch_off(
         The period-ν orbit (its ``message`` names the start), None when every start
         converged back to period 1 or failed.
     """
-    n, H = problem.n_coords, problem.H
-    z1 = np.atleast_2d(np.asarray(z1, dtype=float))
-    H1 = H // nu
-    zs = spread(np.pad(z1, ((0, 0), (0, max(0, 2 * H1 + 1 - z1.shape[1]))))[:, : 2 * H1 + 1], nu)
-    zs = np.pad(zs, ((0, 0), (0, 2 * H + 1 - zs.shape[1]))).reshape(-1)
-    sub = np.tile(subharmonic_mask(H, nu), n)
-    J = problem.residual_jacobian(zs)[1]
-    phi = np.zeros(zs.size)
-    phi[sub] = np.linalg.svd(J[np.ix_(sub, sub)])[2][-1]
-    a = max(float(np.max(amplitudes(z1), initial=0.0)), float(np.max(np.abs(z1[:, 0])))) or 1.0
+    zs, phi = critical_mode(problem, z1, nu)
+    a = orbit_size(z1) or 1.0
     for s in scales:
         for sign in (1.0, -1.0):
             sol = solve(problem, zs + sign * s * a * phi, tol=tol, max_iter=max_iter, fallback=False)
@@ -107,6 +99,73 @@ def branch_off(
                     f"period {nu} from the critical mode, start {sign * s:+g} x amplitude",
                 )
     return None
+
+
+def flip_unstable(mu: complex) -> bool:
+    """Whether a dominant Floquet multiplier says period doubling: real (imaginary part
+    within 1e-6 of its modulus) and below -1.
+
+    Parameters
+    ----------
+    mu : complex
+        The dominant multiplier (NaN: not computed) [-].
+
+    Returns
+    -------
+    bool
+    """
+    mu = complex(mu)
+    return bool(abs(mu.imag) <= 1e-6 * abs(mu) and mu.real < -1)
+
+
+def orbit_size(z: ArrayLike) -> float:
+    """The size that scales :func:`branch_off`'s starts: the larger of an orbit's largest
+    alternating amplitude and its largest |mean| [m].
+
+    Parameters
+    ----------
+    z : array_like (n, 2H+1)
+        Real harmonics of the orbit [m].
+
+    Returns
+    -------
+    float
+        The size [m] (0 for an orbit at rest at zero).
+    """
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    return max(float(np.max(amplitudes(z), initial=0.0)), float(np.max(np.abs(z[:, 0]))))
+
+
+def critical_mode(problem: ReducedProblem, z1: ArrayLike, nu: int = 2) -> tuple[NDArray, NDArray]:
+    """The period-1 orbit spread onto the period-ν problem's base and its critical mode
+    (module notes): the right singular vector of the subharmonic block's smallest singular
+    value, of unit norm, its largest component positive (the SVD's sign is the LAPACK
+    kernel's choice; ±φ are one motion shifted by a mesh period when ν = 2).
+
+    Parameters
+    ----------
+    problem : ReducedProblem
+        The period-ν problem at the base frequency ω / ν.
+    z1 : array_like (n, 2H₁+1)
+        The period-1 orbit: real harmonics of ω [m].
+    nu : int
+        Mesh periods of the orbit sought [-].
+
+    Returns
+    -------
+    zs, phi : ndarray (n (2H+1),)
+        The spread orbit [m] and the mode [-], flat as the problem's unknowns.
+    """
+    n, H = problem.n_coords, problem.H
+    z1 = np.atleast_2d(np.asarray(z1, dtype=float))
+    H1 = H // nu
+    zs = spread(np.pad(z1, ((0, 0), (0, max(0, 2 * H1 + 1 - z1.shape[1]))))[:, : 2 * H1 + 1], nu)
+    zs = np.pad(zs, ((0, 0), (0, 2 * H + 1 - zs.shape[1]))).reshape(-1)
+    sub = np.tile(subharmonic_mask(H, nu), n)
+    J = problem.residual_jacobian(zs)[1]
+    phi = np.zeros(zs.size)
+    phi[sub] = np.linalg.svd(J[np.ix_(sub, sub)])[2][-1]
+    return zs, phi * np.sign(phi[np.argmax(np.abs(phi))])
 
 
 @single_blas_thread
@@ -168,8 +227,7 @@ def period_sweep(
     nu = _check_period(nu)
     flips: dict[float, NDArray] = {}
     for i in range(len(period1.omega)):
-        mu = complex(period1.dominant_multiplier[i])
-        if period1.converged[i] and abs(mu.imag) <= 1e-6 * abs(mu) and mu.real < -1:
+        if period1.converged[i] and flip_unstable(period1.dominant_multiplier[i]):
             flips.setdefault(float(period1.omega[i]), period1.harmonics[i])
     kw = dict(model=model, H=H, nu=nu, flips=flips, stability=stability, tol=tol, max_iter=max_iter)
     passes = {}
