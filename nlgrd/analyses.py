@@ -223,6 +223,7 @@ def sweep(
     from nlgrd.nonlinear.tracing.harmonic_convergence import LADDER
     from nlgrd.timedomain.sweep_answers import answer_sweep
 
+    _known_options(options)
     if coexisting and not stability:
         raise ModelError("coexisting", "the coexisting branches need stability: drop stability=False")
     if coexisting and period not in ("auto", 1):
@@ -262,6 +263,26 @@ def sweep(
 
         res = dataclasses.replace(res, coexisting=found.coexisting, coexisting_note=found.coexisting_note)
     return _with_speed(res, system, rpm)
+
+
+def _known_options(options: dict) -> None:
+    """Raise ModelError naming the first of :func:`sweep`'s ``**options`` that no sweep
+    function takes (a misspelt option would otherwise fail deep inside as a TypeError)."""
+    import inspect
+
+    from nlgrd.nonlinear.models.link_model import link_sweep
+    from nlgrd.nonlinear.tracing import sweep as tracing
+    from nlgrd.nonlinear.tracing.harmonic_convergence import converged_sweep
+
+    known = {"harmonic_rtol"}
+    for f in (link_sweep, converged_sweep, tracing.sweep):
+        for name, p in inspect.signature(f).parameters.items():
+            if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD):
+                known.add(name)
+    known -= {"model", "omegas", "H", "directions", "rtol", "period", "stability", "progress"}
+    for name in options:
+        if name not in known:
+            raise ModelError(name, f"is not an option of nlgrd.sweep (options: {', '.join(sorted(known))})")
 
 
 def _matrix_sweep(m, hz, rpm, H, directions, stability, progress, coexisting, coexisting_progress, options):

@@ -117,6 +117,16 @@ def test_speeds_given_both_ways_or_neither_are_refused(clearance_model):
         nlgrd.sweep(clearance_model, hz=[-5.0])
 
 
+def test_a_misspelt_sweep_option_is_named_not_a_type_error(clearance_model):
+    """An option no sweep function takes (``harmonics=`` for ``H=``) is one ModelError
+    naming it and listing the options, before any computation (it was a TypeError from
+    deep inside the tracing); a real option (``tol``) still passes."""
+    with pytest.raises(nlgrd.ModelError, match=r"harmonics: is not an option of nlgrd.sweep .*\btol\b"):
+        nlgrd.sweep(clearance_model, hz=[1000.0, 1100.0], harmonics=5)
+    res = nlgrd.sweep(clearance_model, hz=[1000.0], H=5, directions="up", time_domain=False, tol=1e-9)
+    assert bool(res.result.converged[0])
+
+
 def test_the_readme_quick_start_runs_as_written(tmp_path, monkeypatch):
     """The README's five-line quick start, executed as it stands (from the clone's root)."""
     text = (ROOT / "README.md").read_text(encoding="utf-8")
