@@ -304,10 +304,6 @@ def toeplitz_jacobian(S: NDArray, n0: int, H: int, gain: float) -> NDArray:
         dG/dz of the real harmonics G of gain · s(θ) x(θ) with respect to the real harmonics
         z = [x_0, a_1, b_1, ..., a_H, b_H] of x, in the unit of ``gain`` times that of ``S``.
     """
-    k, m = np.arange(H + 1)[:, None], np.arange(1, H + 1)[None, :]
-    plus, minus = S[n0 + k - m], S[n0 + k + m]  # S_{k-m}, S_{k+m}: the columns ±m of S_{k-m}
-    TP = np.empty((H + 1, 2 * H + 1), dtype=complex)  # (S_{k-m}) P, P of real_complex_maps
-    TP[:, 0] = S[n0 + k[:, 0]]
-    TP[:, 1::2] = 0.5 * (plus + minus)
-    TP[:, 2::2] = 0.5j * (minus - plus)
-    return gain * complex_rows_to_real(TP)
+    P, k, m = real_complex_maps(H)
+    T = S[n0 + k[:, None] - m[None, :]]  # (H+1) x (2H+1): T[k, m] = S_{k-m}
+    return gain * complex_rows_to_real(T @ P)

@@ -29,6 +29,7 @@ from nlgrd.nonlinear.fourier.harmonics import (
     differentiate,
     evaluate,
     n_harmonics,
+    real_complex_maps,
     real_to_complex,
     resize_harmonics,
     sample,
@@ -223,22 +224,13 @@ class ContactIntervals:
 
         ``weights`` default to the contact indicator |state|.
         """
-        return self.spectra(n_max, weights)[0]
-
-    def spectra(self, n_max: int, *weights: NDArray | None) -> list[NDArray[np.complex128]]:
-        """:meth:`spectrum` for each of ``weights`` (None: the contact indicator), n =
-        -n_max..n_max, from one evaluation of e^{-inθ} at the interval bounds."""
+        w = np.abs(self.state).astype(float) if weights is None else np.asarray(weights, dtype=float)
+        keep = w != 0
+        t1, t2, w = self.start[keep], self.end[keep], w[keep]
         n = np.arange(1, n_max + 1)
-        e1, e2 = np.exp(-1j * np.outer(n, self.start)), np.exp(-1j * np.outer(n, self.end))
-        out = []
-        for wt in weights or (None,):
-            w = np.abs(self.state).astype(float) if wt is None else np.asarray(wt, dtype=float)
-            keep = w != 0
-            t1, t2, w = self.start[keep], self.end[keep], w[keep]
-            pos = ((e2[:, keep] - e1[:, keep]) @ w) * 1j / (2 * np.pi * n)
-            s0 = np.sum(w * (t2 - t1)) / (2 * np.pi)
-            out.append(np.concatenate([np.conj(pos[::-1]), [s0], pos]))
-        return out
+        pos = ((np.exp(-1j * np.outer(n, t2)) - np.exp(-1j * np.outer(n, t1))) @ w) * 1j / (2 * np.pi * n)
+        s0 = np.sum(w * (t2 - t1)) / (2 * np.pi)
+        return np.concatenate([np.conj(pos[::-1]), [s0], pos])
 
 
 def contact_intervals(x: ArrayLike, b: float, crossings: str = "auto") -> ContactIntervals:
@@ -317,11 +309,8 @@ def contact_intervals(x: ArrayLike, b: float, crossings: str = "auto") -> Contac
 def _x_complex_full(x: NDArray) -> tuple[NDArray, int]:
     """Complex coefficients c_m, m = -D..D, of real harmonics x of degree D."""
     D = n_harmonics(x)
-    c = np.empty(2 * D + 1, dtype=complex)
-    c[D] = x[0]
-    c[D + 1 :] = 0.5 * x[1::2] - 0.5j * x[2::2]  # c_{±m} = (a_m ∓ i b_m) / 2
-    c[:D] = np.conj(c[D + 1 :])[::-1]
-    return c, D
+    P, _, _ = real_complex_maps(D)
+    return P @ x, D
 
 
 def fourier_exact(
@@ -378,8 +367,8 @@ def fourier_exact(
     c, D = _x_complex_full(x)
     nmax = H + D + H
     beta = b * intervals.state.astype(float)
-    S, B = intervals.spectra(nmax, None, beta)
-    B = B[nmax - H : nmax + H + 1]
+    S = intervals.spectrum(nmax)
+    B = intervals.spectrum(H, weights=beta)
     k = np.arange(0, H + 1)
     m = np.arange(-D, D + 1)
     T = S[nmax + k[:, None] - m[None, :]]
