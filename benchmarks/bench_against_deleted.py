@@ -74,17 +74,25 @@ def child(engine: str, case: str = "b") -> None:
 
         res = link_sweep(build_link_model(base), grid, None, stability=True, period="auto").result
     cpu, wall = time.process_time() - c0, time.perf_counter() - w0
+    _emit(tree, cpu, wall, res, evals["n"], spent, stable=int(np.sum(res.stable)))
+
+
+def _emit(tree: Path, cpu: float, wall: float, res, evaluations: int, spent: dict, **extra) -> None:
+    """Print one run's JSON line: times, H, counts of points, landing evaluations and the
+    time inside the landing searches and the Floquet analyses (``extra``: case-specific)."""
+    import numpy as np
+
     out = {
         "tree": str(tree),
         "cpu": cpu,
         "wall": wall,
         "H": int(res.H),
         "converged": int(np.sum(res.converged)),
-        "stable": int(np.sum(res.stable)),
         "no_stable": int(np.sum(res.no_stable)),
-        "evaluations": evals["n"],
+        "evaluations": evaluations,
         "landing": spent["landing"],
         "floquet": spent["floquet"],
+        **extra,
     }
     print(json.dumps(out))
 
@@ -120,20 +128,7 @@ def _child_a(engine: str, tree: Path, evals: dict) -> None:
         w0, c0 = time.perf_counter(), time.process_time()
         res = link_sweep(model, grid, 5, stability=False, period=1).result
     cpu, wall = time.process_time() - c0, time.perf_counter() - w0
-    out = {
-        "tree": str(tree),
-        "cpu": cpu,
-        "wall": wall,
-        "H": int(res.H),
-        "converged": int(np.sum(res.converged)),
-        "stable": -1,
-        "no_stable": int(np.sum(res.no_stable)),
-        "evaluations": evals["n"],
-        "landing": 0.0,
-        "floquet": 0.0,
-        "dofs": system.n_dofs,
-    }
-    print(json.dumps(out))
+    _emit(tree, cpu, wall, res, evals["n"], {"landing": 0.0, "floquet": 0.0}, stable=-1, dofs=system.n_dofs)
 
 
 def _timed(module, name: str, spent: dict, key: str, users: tuple[str, ...]) -> None:
