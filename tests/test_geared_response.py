@@ -265,3 +265,39 @@ def test_no_stable_response_confirmed_by_time_integration():
     assert bool(td["converged"].iloc[0]) and not bool(td["converged"].iloc[1])
     hb_rms = hb.to_frame()["mesh0.dte_rms [um]"].iloc[0]
     assert td["mesh0.dte_rms [um]"].iloc[0] == pytest.approx(hb_rms, rel=1e-3)
+
+
+def test_bearing_outputs_of_many_points_take_each_points_speed():
+    """All points' bearing forces at once (``link_bearing_outputs_of_points``) against the
+    force of each point alone, -(K_b(s) + i k ω C_b(s)) q_k at the point's own shaft speed
+    s (``link_bearing_harmonics``), on Kubo's rig with speed-tabulated bearings (so that
+    the per-point branch runs) and on two_shaft (constant bearings: one product for all
+    points): every radial force maximum and force amplitude to 1e-12."""
+    from test_link_strategies import system as variant
+
+    from nlgrd.nonlinear.results.bearing_loads import (
+        _radial_maxima,
+        bearing_node_dofs,
+        link_bearing_harmonics,
+        link_bearing_outputs_of_points,
+    )
+
+    cases = (("kubo", "tabulated", (3000.0, 3600.0, 4200.0)), ("two_shaft", "base", (900.0, 1300.0)))
+    for name, var, hz in cases:
+        system = variant(name, var)
+        assert any(b.speed_dependent for b in system.bearings) == (var == "tabulated")
+        model = build_link_model(system)
+        om = 2 * np.pi * np.asarray(hz)
+        res = link_sweep(model, om, H=5, directions="up", stability=False, period=1).result
+        zs = list(res.harmonics)
+        rows = link_bearing_outputs_of_points(model, zs, om)
+        dofs = bearing_node_dofs(system)
+        for row, z, w in zip(rows, zs, om, strict=True):
+            Q, F = link_bearing_harmonics(model, float(w), z, dofs)
+            peak = _radial_maxima(F[None])[0]
+            for j, b in enumerate(bearing_names(system)):
+                ref_max = peak[j]
+                ref_amp = max(abs(F[1, 2 * j]), abs(F[1, 2 * j + 1]))
+                got_max, got_amp = row[f"{b}.force_max [N]"], row[f"{b}.force_amplitude [N]"]
+                assert abs(got_max - ref_max) <= 1e-12 * max(ref_max, 1.0), (name, w, b)
+                assert abs(got_amp - ref_amp) <= 1e-12 * max(ref_amp, 1.0), (name, w, b)

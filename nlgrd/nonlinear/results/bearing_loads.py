@@ -147,6 +147,13 @@ def link_bearing_harmonics(model, omega: float, harmonics: NDArray, dofs: NDArra
     F : ndarray (H+1, 2 n_bearings), complex
         Harmonics of the (y, z) force of each bearing on its node [N].
     """
+    w = float(omega)
+    Q = _bearing_displacements(model, w, harmonics, dofs)
+    return Q, bearing_forces(model.system, Q, w, model.receptance.plan.speed(w))
+
+
+def _bearing_displacements(model, omega: float, harmonics: NDArray, dofs: NDArray | None) -> NDArray:
+    """Q of :func:`link_bearing_harmonics`: the bearing nodes recovered with G = F - κ Y."""
     rec, w = model.receptance, float(omega)
     dofs = bearing_node_dofs(model.system) if dofs is None else dofs
     z = np.asarray(harmonics, dtype=float).reshape(rec.n_coords, -1)
@@ -155,8 +162,26 @@ def link_bearing_harmonics(model, omega: float, harmonics: NDArray, dofs: NDArra
     F = np.asarray(model.reduced.force(w, H), dtype=complex).reshape(H + 1, -1)
     kap = np.asarray(model.reduced.kappa(w, H), dtype=complex).reshape(H + 1, Y.shape[1], Y.shape[1])
     G = F - np.einsum("kij,kj->ki", kap, Y)
-    Q = real_to_complex(rec.recover(w, H, z, complex_to_real(G.T), dofs)).T  # (H+1, 2 n_b)
-    return Q, bearing_forces(model.system, Q, w, rec.plan.speed(w))
+    return real_to_complex(rec.recover(w, H, z, complex_to_real(G.T), dofs)).T  # (H+1, 2 n_b)
+
+
+def _forces_of_points(system, Q: NDArray, omegas: NDArray, speeds: NDArray) -> NDArray:
+    """:func:`bearing_forces` of many points at once, (p, H+1, 2 n_b): a bearing whose
+    coefficients do not depend on the speed takes one product for all points."""
+    k = np.arange(Q.shape[1])
+    kw = (1j * k)[None, :] * np.asarray(omegas, dtype=float)[:, None]  # i k ω per point
+    Fb = np.empty_like(Q)
+    for j, b in enumerate(system.bearings):
+        cols = slice(2 * j, 2 * j + 2)
+        if b.speed_dependent:
+            for p in range(Q.shape[0]):
+                s = system.shafts[b.shaft].speed_ratio * speeds[p]
+                q = Q[p, :, cols]
+                Fb[p, :, cols] = -(q @ b.stiffness(s).T + kw[p][:, None] * (q @ b.damping(s).T))
+            continue
+        q = Q[:, :, cols]
+        Fb[:, :, cols] = -(q @ b.stiffness(0.0).T + kw[:, :, None] * (q @ b.damping(0.0).T))
+    return Fb
 
 
 def link_bearing_outputs(model, harmonics: NDArray, omega: float) -> dict[str, float]:
@@ -215,9 +240,10 @@ def link_bearing_outputs_of_points(model, harmonics, omegas) -> list[dict[str, f
         rows = [i for i, z in enumerate(zs) if z.shape[1] == width]
         H = (width - 1) // 2
         Q = np.empty((len(rows), H + 1, dofs.size), dtype=complex)
-        Fb = np.empty_like(Q)
         for j, i in enumerate(rows):
-            Q[j], Fb[j] = link_bearing_harmonics(model, float(omegas[i]), zs[i], dofs)
+            Q[j] = _bearing_displacements(model, float(omegas[i]), zs[i], dofs)
+        ws = np.array([float(omegas[i]) for i in rows])
+        Fb = _forces_of_points(system, Q, ws, np.array([rec.plan.speed(w) for w in ws]))
         samples = model.output_cache.get(H, lambda H=H: _period_samples(H))
         k = model.period  # the base frequency's harmonic on the base of a period-ν model
         amp = np.zeros((len(rows), dofs.size // 2))
